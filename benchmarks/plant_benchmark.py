@@ -1,0 +1,45 @@
+"""Speed of the open-loop plant: 600 simulated seconds of the coupled full-scale system
+(tree + work-class ROV, current, sensors) at 100 Hz. Prints steps per second and the real-time
+factor, the best of several repeats (the first run also compiles, and is reported apart)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+from sim import environment as envmod
+from sim import params
+from sim.simulator import Simulator
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--duration", type=float, default=600.0, help="simulated seconds")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--params", default="full-scale")
+    args = parser.parse_args()
+    ps = params.load(args.params)
+    d = math.radians(225.0)
+    cur = envmod.CurrentParams(speed_mps=0.1, direction_rad=d, speed_min_mps=0.05,
+                               speed_max_mps=0.15, direction_min_rad=d - 0.2,
+                               direction_max_rad=d + 0.2, speed_walk_mps_per_sqrt_s=0.002,
+                               direction_walk_rad_per_sqrt_s=0.002)
+    t0 = time.perf_counter()
+    Simulator(ps, tree_depth_m=400.0, current=cur).run(1.0)
+    print(f"first run (includes compilation or cache load): {time.perf_counter() - t0:.1f} s")
+    best = math.inf
+    steps = 0
+    for _ in range(args.repeats):
+        sim = Simulator(ps, tree_depth_m=400.0, current=cur)
+        t0 = time.perf_counter()
+        traj = sim.run(args.duration)
+        best = min(best, time.perf_counter() - t0)
+        steps = len(traj.t_s)
+    print(f"{args.params}: {args.duration:.0f} s simulated, {steps} steps at 100 Hz")
+    print(f"  wall time {best:.3f} s, {steps / best:,.0f} steps/s, "
+          f"real-time factor {args.duration / best:,.0f}x")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,242 @@
+"""Guidance-navigation-control vocabulary of Fossen (2011): one small pure function per formula.
+
+Every function is compiled with numba so the plant and the control loop can call it from
+their own compiled code; each is also an ordinary Python callable. Angles are radians,
+``eta = [x, y, z, phi, theta, psi]`` (NED) and ``nu = [u, v, w, p, q, r]`` (BODY).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# Compile options for the numeric core: no Python-style zero-division checks, and the safe
+# subset of fast-math (reassociation, contraction) -- never "no NaN / no inf", because the
+# simulator relies on NaN and inf propagating to detect divergence.
+JIT = dict(cache=True, error_model="numpy", fastmath={"contract", "arcp", "nsz", "reassoc"})
+
+# Named indices into eta / nu (SNAME 1950, thesis table 2.1).
+X, Y, Z, PHI, THETA, PSI = 0, 1, 2, 3, 4, 5
+U, V, W, P, Q, R = 0, 1, 2, 3, 4, 5
+
+
+@njit(**JIT)
+def ssa(angle: float) -> float:
+    """Smallest signed angle: maps any angle [rad] into [-pi, pi)."""
+    return (angle + np.pi) % (2.0 * np.pi) - np.pi
+
+
+@njit(**JIT)
+def sat(x: float, limit: float) -> float:
+    """Saturate x into [-limit, limit]."""
+    if x > limit:
+        return limit
+    if x < -limit:
+        return -limit
+    return x
+
+
+@njit(**JIT)
+def Smtrx(a: np.ndarray) -> np.ndarray:
+    """Skew-symmetric matrix S(a) with S(a) b = a x b; S(a) = -S(a)^T."""
+    out = np.zeros((3, 3))
+    out[0, 1] = -a[2]
+    out[0, 2] = a[1]
+    out[1, 0] = a[2]
+    out[1, 2] = -a[0]
+    out[2, 0] = -a[1]
+    out[2, 1] = a[0]
+    return out
+
+
+@njit(**JIT)
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b for 3-vectors, without allocating a matrix."""
+    out = np.empty(3)
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+    return out
+
+
+@njit(**JIT)
+def Rzyx(phi: float, theta: float, psi: float) -> np.ndarray:
+    """R_nb: rotation BODY -> NED, zyx Euler angles (Fossen 2011 eq. 2.18; thesis eq. 2.3 is
+    misprinted). Orthonormal with det 1; R_nb^T = R_bn."""
+    cphi, sphi = np.cos(phi), np.sin(phi)
+    cth, sth = np.cos(theta), np.sin(theta)
+    cpsi, spsi = np.cos(psi), np.sin(psi)
+    out = np.empty((3, 3))
+    out[0, 0] = cpsi * cth
+    out[0, 1] = -spsi * cphi + cpsi * sth * sphi
+    out[0, 2] = spsi * sphi + cpsi * cphi * sth
+    out[1, 0] = spsi * cth
+    out[1, 1] = cpsi * cphi + sphi * sth * spsi
+    out[1, 2] = -cpsi * sphi + sth * spsi * cphi
+    out[2, 0] = -sth
+    out[2, 1] = cth * sphi
+    out[2, 2] = cth * cphi
+    return out
+
+
+@njit(**JIT)
+def Tzyx(phi: float, theta: float) -> np.ndarray:
+    """T_Theta: body angular rates -> Euler angle rates (thesis eq. 2.4).
+
+    Singular at theta = +-90 deg."""
+    cphi, sphi = np.cos(phi), np.sin(phi)
+    cth, tth = np.cos(theta), np.tan(theta)
+    out = np.empty((3, 3))
+    out[0, 0] = 1.0
+    out[0, 1] = sphi * tth
+    out[0, 2] = cphi * tth
+    out[1, 0] = 0.0
+    out[1, 1] = cphi
+    out[1, 2] = -sphi
+    out[2, 0] = 0.0
+    out[2, 1] = sphi / cth
+    out[2, 2] = cphi / cth
+    return out
+
+
+@njit(**JIT)
+def Hmtrx(r: np.ndarray) -> np.ndarray:
+    """System transformation matrix H(r) = [[I, S(r)^T], [0, I]] (Fossen 2011 ch. 7.5).
+
+    nu at a point displaced by r (body axes) is H(r) nu; inv(H(r)) = H(-r)."""
+    out = np.eye(6)
+    out[0:3, 3:6] = Smtrx(r).T
+    return out
+
+
+@njit(**JIT)
+def m2c(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """Coriolis-centripetal matrix C(nu) from a 6x6 mass matrix M (Fossen 2011 eq. 3.46).
+
+    Skew-symmetric parametrisation, so nu^T C(nu) nu = 0 for any nu."""
+    Ms = 0.5 * (M + M.T)
+    M11, M12 = Ms[0:3, 0:3], Ms[0:3, 3:6]
+    M21, M22 = Ms[3:6, 0:3], Ms[3:6, 3:6]
+    nu1 = np.ascontiguousarray(nu[0:3])
+    nu2 = np.ascontiguousarray(nu[3:6])
+    a = M11 @ nu1 + M12 @ nu2
+    b = M21 @ nu1 + M22 @ nu2
+    C = np.zeros((6, 6))
+    C[0:3, 3:6] = -Smtrx(a)
+    C[3:6, 0:3] = -Smtrx(a)
+    C[3:6, 3:6] = -Smtrx(b)
+    return C
+
+
+@njit(**JIT)
+def coriolis_force(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """C(nu) nu for the parametrisation of m2c, computed without building C (cheaper).
+    M must be symmetric (every mass matrix of the plant is, checked on load)."""
+    a = np.zeros(3)
+    b = np.zeros(3)
+    for i in range(3):
+        sa = 0.0
+        sb = 0.0
+        for j in range(6):
+            sa += M[i, j] * nu[j]
+            sb += M[3 + i, j] * nu[j]
+        a[i] = sa
+        b[i] = sb
+    out = np.empty(6)
+    out[0] = -(a[1] * nu[5] - a[2] * nu[4])
+    out[1] = -(a[2] * nu[3] - a[0] * nu[5])
+    out[2] = -(a[0] * nu[4] - a[1] * nu[3])
+    out[3] = -(a[1] * nu[2] - a[2] * nu[1]) - (b[1] * nu[5] - b[2] * nu[4])
+    out[4] = -(a[2] * nu[0] - a[0] * nu[2]) - (b[2] * nu[3] - b[0] * nu[5])
+    out[5] = -(a[0] * nu[1] - a[1] * nu[0]) - (b[0] * nu[4] - b[1] * nu[3])
+    return out
+
+
+@njit(**JIT)
+def gvect(W: float, B: float, theta: float, phi: float, r_bg: np.ndarray,
+          r_bb: np.ndarray) -> np.ndarray:
+    """Restoring vector g(eta) of weight W at r_bg and buoyancy B at r_bb, both in body axes
+    (Fossen 2011 eq. 4.6, the 6-row form; thesis eq. 2.9 is printed with 7 rows)."""
+    sth, cth = np.sin(theta), np.cos(theta)
+    sphi, cphi = np.sin(phi), np.cos(phi)
+    g = np.empty(6)
+    g[0] = (W - B) * sth
+    g[1] = -(W - B) * cth * sphi
+    g[2] = -(W - B) * cth * cphi
+    g[3] = -(r_bg[1] * W - r_bb[1] * B) * cth * cphi + (r_bg[2] * W - r_bb[2] * B) * cth * sphi
+    g[4] = (r_bg[2] * W - r_bb[2] * B) * sth + (r_bg[0] * W - r_bb[0] * B) * cth * cphi
+    g[5] = -(r_bg[0] * W - r_bb[0] * B) * cth * sphi - (r_bg[1] * W - r_bb[1] * B) * sth
+    return g
+
+
+@njit(**JIT)
+def rotation_to_vector(Rm: np.ndarray) -> np.ndarray:
+    """Small-angle rotation vector of a rotation matrix: vee((R - R^T)/2) = sin(angle) * axis."""
+    out = np.empty(3)
+    out[0] = 0.5 * (Rm[2, 1] - Rm[1, 2])
+    out[1] = 0.5 * (Rm[0, 2] - Rm[2, 0])
+    out[2] = 0.5 * (Rm[1, 0] - Rm[0, 1])
+    return out
+
+
+@njit(**JIT)
+def euler_from_rotation(Rm: np.ndarray) -> np.ndarray:
+    """zyx Euler angles [phi, theta, psi] of R_nb (inverse of Rzyx away from theta = +-90 deg)."""
+    out = np.empty(3)
+    out[0] = np.arctan2(Rm[2, 1], Rm[2, 2])
+    out[1] = -np.arcsin(min(1.0, max(-1.0, Rm[2, 0])))
+    out[2] = np.arctan2(Rm[1, 0], Rm[0, 0])
+    return out
+
+
+@njit(**JIT)
+def mv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """A @ x with explicit loops: for the small matrices of the plant this is several times
+    faster in compiled code than a BLAS call."""
+    n, m = A.shape
+    out = np.zeros(n)
+    for i in range(n):
+        s = 0.0
+        for j in range(m):
+            s += A[i, j] * x[j]
+        out[i] = s
+    return out
+
+
+@njit(**JIT)
+def mtv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """A^T @ x with explicit loops."""
+    n, m = A.shape
+    out = np.zeros(m)
+    for j in range(m):
+        s = 0.0
+        for i in range(n):
+            s += A[i, j] * x[i]
+        out[j] = s
+    return out
+
+
+@njit(**JIT)
+def mtm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """A^T @ B for 3x3 matrices with explicit loops."""
+    out = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            s = 0.0
+            for k in range(3):
+                s += A[k, i] * B[k, j]
+            out[i, j] = s
+    return out
+
+
+@njit(**JIT)
+def mm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """A @ B for 3x3 matrices with explicit loops."""
+    out = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            s = 0.0
+            for k in range(3):
+                s += A[i, k] * B[k, j]
+            out[i, j] = s
+    return out
