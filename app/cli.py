@@ -126,6 +126,79 @@ def simulation_summary(sim, traj, wall_s: float) -> dict:  # type: ignore[no-unt
     }
 
 
+SCENARIO_HELP = "name of a scenario in the mission library (see --list)"
+
+
+@app.command()
+def scenario(
+    name: Annotated[str | None, typer.Argument(help=SCENARIO_HELP)] = None,
+    list_: Annotated[bool, typer.Option("--list", help="list the scenario names")] = False,
+    json_out: Annotated[bool, typer.Option("--json", help="one JSON object instead of a "
+                                                          "table")] = False,
+    seed: Annotated[int | None, typer.Option(help="random seed (default: the file's)")] = None,
+    allocation: Annotated[str | None, typer.Option(
+        help="pinv | priority | qp (default: the file's)")] = None,
+    feedback: Annotated[str | None, typer.Option(
+        help="perfect | ekf (default: the file's)")] = None,
+) -> None:
+    """Run one named scenario of thesis chapter 4 and print its figures."""
+    from missions import runner, schema
+
+    if list_ or name is None:
+        for n in schema.library_names():
+            typer.echo(f"{n:28s} {schema.load_mission(n).description}")
+        return
+    if allocation is not None and allocation not in ("pinv", "priority", "qp"):
+        raise typer.BadParameter(f"--allocation must be pinv, priority or qp, got {allocation!r}")
+    if feedback is not None and feedback not in ("perfect", "ekf"):
+        raise typer.BadParameter(f"--feedback must be perfect or ekf, got {feedback!r}")
+    try:
+        mission = schema.load_mission(name)
+        t0 = time.perf_counter()
+        result = runner.run_mission(mission, seed=seed, allocation=allocation,
+                                    feedback=feedback)
+        wall = time.perf_counter() - t0
+    except ValueError as err:
+        _fail(str(err))
+        return
+    summary = result.summary()
+    sim_time = float(result.log.t_s[-1]) if result.log is not None and len(result.log.t_s) else 0
+    summary["simulated_s"] = round(sim_time, 2)
+    summary["real_time_factor"] = round(sim_time / wall, 1) if wall > 0 else None
+    if json_out:
+        typer.echo(json.dumps(summary, indent=2))
+    else:
+        _print_result_table(summary)
+
+
+def _print_result_table(summary: dict) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=f"{summary['name']}  (simulated {summary['simulated_s']:.0f} s, "
+                        f"{summary['real_time_factor']}x real time)")
+    for col in ("leg", "type", "duration s", "RMS N m", "RMS E m", "RMS psi deg", "max util",
+                "saturated s"):
+        table.add_column(col, justify="right")
+    for leg in summary["legs"]:
+        table.add_row(f"{leg['index']} {leg['name']}", leg["type"], f"{leg['duration_s']:.0f}",
+                      f"{leg['rms_north_m']:.4f}", f"{leg['rms_east_m']:.4f}",
+                      f"{leg['rms_heading_deg']:.3f}", f"{leg['max_utilisation']:.2f}",
+                      f"{leg['saturated_s']:.1f}" + (" TIMEOUT" if leg["timed_out"] else ""))
+    table.add_row("scored", "", "", f"{summary['rms_north_m']:.4f}",
+                  f"{summary['rms_east_m']:.4f}", f"{summary['rms_heading_deg']:.3f}",
+                  f"{summary['max_thruster_utilisation']:.2f}",
+                  f"{summary['saturated_time_s']:.1f}", style="bold")
+    console = Console(width=120)
+    console.print(table)
+    final = summary["final_eta_n"]
+    console.print(f"final tree pose: N {final[0]:.3f} m, E {final[1]:.3f} m, D {final[2]:.2f} m, "
+                  f"heading {final[5]:.2f} deg; settling time "
+                  f"{summary['settling_time_s']} s; diverged: {summary['diverged']}")
+    for w in summary["warnings"]:
+        console.print(f"[bold red]WARNING[/]: {w}")
+
+
 def main() -> None:
     """Entry point of the ``rov-console`` script."""
     try:

@@ -188,6 +188,32 @@ class GainsSpec(_Strict):
                                                                          max_length=3)]
 
 
+class ReferenceSpec(_Strict):
+    """Reference-model limits (section 3.3), [north/east, yaw]."""
+
+    max_speed_mps: float = Field(gt=0.0, le=1.0, description="translation speed limit [m/s]")
+    max_accel_mps2: float = Field(gt=0.0, le=1.0, description="translation accel limit [m/s^2]")
+    max_yaw_rate_deg_s: float = Field(gt=0.0, le=30.0, description="turn rate limit [deg/s]")
+    max_yaw_accel_deg_s2: float = Field(gt=0.0, le=10.0, description="turn accel limit [deg/s^2]")
+    bandwidth_rad_s: float = Field(gt=0.0, le=5.0, description="omega of the models [rad/s]")
+    accel_time_constant_s: float = Field(default=3.0, gt=0.0, le=60.0,
+                                         description="third order: acceleration lag [s]")
+
+
+class ObserverSpec(_Strict):
+    """EKF tuning (table 3.1), [surge, sway, yaw]."""
+
+    process_force_std: Annotated[list[Annotated[float, Field(gt=0.0, le=1e7)]],
+                                 Field(min_length=3, max_length=3)] = Field(
+        description="unmodelled force noise intensity [N, N, N m per sqrt(Hz)]")
+    bias_drive_std: Annotated[list[Annotated[float, Field(gt=0.0, le=1e7)]],
+                              Field(min_length=3, max_length=3)] = Field(
+        description="bias random-walk intensity [N, N, N m per sqrt(s)]")
+    bias_time_constant_s: Annotated[list[Annotated[float, Field(gt=1.0, le=1e6)]],
+                                    Field(min_length=3, max_length=3)] = Field(
+        description="T_b of eq. 2.48b [s]")
+
+
 class ParameterSetSpec(_Strict):
     """A whole parameter set as it stands in a file."""
 
@@ -200,6 +226,8 @@ class ParameterSetSpec(_Strict):
     coupling: CouplingSpec = CouplingSpec()
     sensors: SensorsSpec
     gains: GainsSpec
+    reference: ReferenceSpec
+    observer: ObserverSpec
 
 
 # --------------------------------------------------------------------------------------------

@@ -49,7 +49,8 @@ E_KH = 10  # horizontal wire stiffness at the load [N/m] (eq. 2.30, corrected)
 E_KZ = 11  # vertical wire stiffness [N/m] (eq. 2.25)
 E_OFF = 12  # 12:14 drag offset of the wire's equilibrium point, NED north/east [m] (eq. 2.29)
 E_PUSH = 14  # 14:17 external force on the tree's centre, NED [N]
-N_ENV = 17
+E_GRIP = 17  # 1 while the ROV grips the tree (coupling spring engaged), 0 when released
+N_ENV = 18
 
 
 class PlantArrays(NamedTuple):
@@ -249,9 +250,10 @@ def rhs(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays) -> np
     if P.has_rov:
         R_r = Rzyx(x[15], x[16], x[17])
         tau_r = rov_wrench(x, n_rps, env, P, R_r)
-        w_rov, w_tree = coupling_wrench(x, P, R_t, R_r)
-        tau_r += w_rov
-        tau_t += w_tree
+        if env[E_GRIP] > 0.0:
+            w_rov, w_tree = coupling_wrench(x, P, R_t, R_r)
+            tau_r += w_rov
+            tau_t += w_tree
         xdot[12:18] = _kinematics(x[12:18], x[18:24], R_r)
         xdot[18:24] = mv(P.rov_M_inv, tau_r)
     xdot[0:6] = _kinematics(x[0:6], x[6:12], R_t)

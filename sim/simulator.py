@@ -97,6 +97,7 @@ class Simulator:
         self.sensor_cfg = sensors.sensor_config(ps.sensors, dt_s)
         self.thruster_speeds_rps = np.zeros(ps.rov.thrusters.T.shape[1])
         self.push_n = np.zeros(3)
+        self.gripping = has_rov
         tree_pos = np.array([self.crane_tip_n[0], self.crane_tip_n[1], tree_depth_m])
         self.x = initial_state(ps, tree_pos, tree_heading_rad, has_rov)
         self.held_y = sensors.true_outputs(self.x)
@@ -123,7 +124,7 @@ class Simulator:
         self.wire_length_m = float(length_m)
 
     # ---- stepping ----
-    def _environment_chunk(self, n: int) -> tuple[FloatArray, FloatArray]:
+    def environment_chunk(self, n: int) -> tuple[FloatArray, FloatArray]:
         self.current_state, speeds, dirs = envmod.advance_current(
             self.current_state, self.current_params, self.dt_s, n, self.rng)
         water_n = envmod.current_velocity_n(speeds, dirs)
@@ -137,6 +138,7 @@ class Simulator:
         base = site.wire_environment(self.ps, self.wire_length_m, self.crane_tip_n,
                                      float(np.mean(speeds)), float(np.mean(dirs)))
         base[plant.E_PUSH:plant.E_PUSH + 3] = self.push_n
+        base[plant.E_GRIP] = 1.0 if self.gripping else 0.0
         env = np.repeat(base[None, :], n, axis=0)
         env[:, plant.E_VC:plant.E_VC + 3] = water_n
         env[:, plant.E_AC:plant.E_AC + 3] = accel_n
@@ -154,7 +156,7 @@ class Simulator:
         done = 0
         while done < total:
             n = min(self.chunk_steps, total - done)
-            env, water_n = self._environment_chunk(n)
+            env, water_n = self.environment_chunk(n)
             noise = sensors.draw_noise(self.sensor_cfg, self.rng, self.step_index, n)
             states, ok = plant.advance(self.x, self.thruster_speeds_rps, env, self.arrays,
                                        self.dt_s)

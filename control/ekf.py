@@ -1,0 +1,118 @@
+"""Extended Kalman filter on the control plant model (thesis section 3.1.1, table 3.1).
+
+State (9): ``[north, east, psi, u, v, r, b_north, b_east, b_psi]``: the tree origin's pose
+(NED), its body velocity in surge, sway and yaw, and a slowly varying bias force (NED axes)
+that absorbs the current and what the model misses (eq. 2.48b).
+
+Model (eq. 2.48):
+    eta_dot = R(psi) nu
+    M nu_dot + C(nu) nu + D(nu) nu + R(psi)^T K_h (p - p_eq) = tau + R(psi)^T b
+    b_dot = -b / T_b + w_b
+
+The filter predicts at the plant rate with forward Euler (eq. 3.1-3.3) and corrects with each
+sensor when, and only when, that sensor delivers a fresh sample; it coasts on the model when
+position fixes drop out. The ROV's measurements are first moved to the tree's origin
+(eq. 3.4-3.6, see ``control.loop``). Covariance updates use the Joseph form of table 3.1.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from sim.gnc import JIT, ssa
+
+N_X = 9
+NORTH, EAST, PSI, SURGE, SWAY, YAW_RATE, B_N, B_E, B_PSI = range(9)
+
+
+@njit(**JIT)
+def coriolis3(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """C(nu) nu of a 3-DOF (surge, sway, yaw) mass matrix, the skew-symmetric form of m2c."""
+    ax = M[0, 0] * nu[0] + M[0, 1] * nu[1] + M[0, 2] * nu[2]
+    ay = M[1, 0] * nu[0] + M[1, 1] * nu[1] + M[1, 2] * nu[2]
+    out = np.empty(3)
+    out[0] = -ay * nu[2]
+    out[1] = ax * nu[2]
+    out[2] = ay * nu[0] - ax * nu[1]
+    return out
+
+
+@njit(**JIT)
+def model_rhs(x: np.ndarray, tau: np.ndarray, M_inv: np.ndarray, M: np.ndarray,
+              D_l: np.ndarray, D_nl: np.ndarray, k_h: float, p_eq: np.ndarray,
+              T_b: np.ndarray) -> np.ndarray:
+    """f(x, tau) of the control plant model; tau in tree axes [N, N, N m]."""
+    c, s = np.cos(x[2]), np.sin(x[2])
+    nu = x[3:6]
+    xdot = np.empty(9)
+    xdot[0] = c * nu[0] - s * nu[1]
+    xdot[1] = s * nu[0] + c * nu[1]
+    xdot[2] = nu[2]
+    # NED-frame forces: wire spring and bias, rotated into the tree's axes
+    fn = -k_h * (x[0] - p_eq[0]) + x[6]
+    fe = -k_h * (x[1] - p_eq[1]) + x[7]
+    force = np.empty(3)
+    force[0] = tau[0] + c * fn + s * fe
+    force[1] = tau[1] - s * fn + c * fe
+    force[2] = tau[2] + x[8]
+    cor = coriolis3(M, nu)
+    for i in range(3):
+        force[i] -= cor[i] + (D_l[i] + D_nl[i] * abs(nu[i])) * nu[i]
+    for i in range(3):
+        acc = 0.0
+        for j in range(3):
+            acc += M_inv[i, j] * force[j]
+        xdot[3 + i] = acc
+        xdot[6 + i] = -x[6 + i] / T_b[i]
+    return xdot
+
+
+@njit(**JIT)
+def predict(x: np.ndarray, P: np.ndarray, tau: np.ndarray, dt: float, M_inv: np.ndarray,
+            M: np.ndarray, D_l: np.ndarray, D_nl: np.ndarray, k_h: float, p_eq: np.ndarray,
+            T_b: np.ndarray, GQG: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One prediction step (table 3.1): x+ = x + h f(x, u); P+ = Phi P Phi^T + Gamma Q Gamma^T
+    with Phi = I + h df/dx (forward-difference Jacobian, step 1e-6 scaled to each state)."""
+    f0 = model_rhs(x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+    phi = np.eye(9)
+    for j in range(9):
+        eps = 1e-6 * max(1.0, abs(x[j]))
+        xp = x.copy()
+        xp[j] += eps
+        fj = model_rhs(xp, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+        for i in range(9):
+            phi[i, j] += dt * (fj[i] - f0[i]) / eps
+    x_new = x + dt * f0
+    P_new = phi @ P @ phi.T + GQG
+    return x_new, 0.5 * (P_new + P_new.T)
+
+
+@njit(**JIT)
+def correct(x: np.ndarray, P: np.ndarray, z: np.ndarray, rows: np.ndarray, r_var: np.ndarray,
+            angle_row: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Correct with a measurement of the states ``rows`` (a selection, so H is rows of I).
+
+    ``angle_row`` is the index within ``rows`` whose innovation is an angle (wrapped with ssa),
+    or -1. Returns (x, P, normalised innovation squared per row) -- the last is what the
+    operator's "observer innovation" alarm watches."""
+    m = rows.shape[0]
+    H = np.zeros((m, 9))
+    innov = np.empty(m)
+    for i in range(m):
+        H[i, rows[i]] = 1.0
+        innov[i] = z[i] - x[rows[i]]
+    if angle_row >= 0:
+        innov[angle_row] = ssa(innov[angle_row])
+    S = H @ P @ H.T
+    for i in range(m):
+        S[i, i] += r_var[i]
+    K = P @ H.T @ np.linalg.inv(S)
+    x_new = x + K @ innov
+    IKH = np.eye(9) - K @ H
+    Rm = np.diag(r_var)
+    P_new = IKH @ P @ IKH.T + K @ Rm @ K.T
+    nis = np.empty(m)
+    for i in range(m):
+        nis[i] = innov[i] * innov[i] / S[i, i]
+    return x_new, 0.5 * (P_new + P_new.T), nis

@@ -1,0 +1,369 @@
+"""The closed loop: plant, sensors, signal checks, observer, reference, controller, allocation.
+
+One compiled kernel (``run_chunk``) advances everything for a chunk of plant steps with the
+mission's target held; Python handles commands (targets, gains, modes) between chunks, so the
+loop stays fast and commands are applied only between steps. The fixed order within a step is
+
+    sensors -> quality checks -> observer (EKF) -> reference model -> controller (supervisor:
+    tree PID or free-ROV PID) -> thrust allocation -> thrusters -> plant (RK4)
+
+Every step writes one row of the log (see the ``L_*`` column indices).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from control import ekf, pid, quality, refkernel
+from control.allocation import _priority_forces
+from sim import plant, sensors
+from sim.gnc import JIT
+
+EYE3 = np.eye(3)
+
+# --- modes, allocation kinds, reference kinds ---
+MODE_TREE, MODE_FREE = 0, 1
+ALLOC_PINV, ALLOC_PRIORITY, ALLOC_EXTERNAL = 0, 1, 2
+REF_FIRST, REF_THIRD = 0, 1
+
+# --- controller state vector layout (flat float array) ---
+CS_I = 0  # 0:3 tree integral, NED forces and yaw moment
+CS_E = 3  # 3:6 last pose error
+CS_DE = 6  # 6:9 last error rate
+CS_REF = 9  # 9:18 reference state (see control.reference)
+CS_TAU = 18  # 18:24 last commanded ROV wrench (6)
+CS_FI = 24  # 24:28 free-ROV integral
+CS_FSP = 28  # 28:32 free-ROV set point [north, east, down, psi]
+CS_MODE = 32
+CS_LAST_MODE = 33
+CS_ALLOC_F = 34  # 34:34+M_MAX externally allocated thruster forces (ALLOC_EXTERNAL)
+M_MAX = 8
+N_CS = CS_ALLOC_F + M_MAX
+
+# --- log columns ---
+L_T = 0
+L_TREE = 1  # 1:7 true tree eta (NED, rad)
+L_ROV = 7  # 7:13 true ROV eta
+L_ETA_HAT = 13  # 13:16 estimated tree [north, east, psi]
+L_NU_HAT = 16  # 16:19 estimated tree [u, v, r]
+L_BIAS = 19  # 19:22 estimated bias
+L_ETA_D = 22  # 22:25 reference pose
+L_DETA_D = 25  # 25:28 reference rate
+L_TAU_TREE = 28  # 28:31 commanded force on the tree (tree axes)
+L_TAU_ROV = 31  # 31:37 commanded ROV wrench
+L_TAU_ACH = 37  # 37:43 achieved ROV wrench
+L_F = 43  # 43:43+M_MAX thruster forces
+L_N = L_F + M_MAX  # propeller speeds [rev/s]
+L_UTIL = L_N + M_MAX  # utilisation 0..1
+L_TERMS = L_UTIL + M_MAX  # 12: P, I, D, FF parts of tau_tree
+L_Y = L_TERMS + 12  # 11 held sensor values
+L_MODE = L_Y + 11
+L_NIS = L_MODE + 1  # 3: normalised innovation squared of position (2) and heading
+L_ACCEPT = L_NIS + 3  # 5: 1 where a fresh sample was accepted this step
+N_LOG = L_ACCEPT + 5
+
+
+class ControlArrays(NamedTuple):
+    """Compiled configuration of the control system."""
+
+    feedback_ekf: bool
+    use_ff: bool
+    ref_kind: int
+    ref_params: np.ndarray  # (4, 3): see control.reference.pack_params
+    Kp: np.ndarray
+    Ki: np.ndarray
+    Kd: np.ndarray
+    M: np.ndarray
+    M_inv: np.ndarray
+    D_l: np.ndarray
+    D_nl: np.ndarray
+    k_h: float
+    p_eq: np.ndarray
+    A: np.ndarray
+    A_inv: np.ndarray
+    i_limit: np.ndarray
+    heave_n: float
+    r_mount: np.ndarray
+    psi_rel: float
+    alloc_kind: int
+    pinv_T: np.ndarray
+    pinv_rows: np.ndarray
+    prio_A: np.ndarray
+    prio_D: np.ndarray
+    prio_R: np.ndarray
+    prio_rows: np.ndarray
+    f_lo: np.ndarray
+    f_hi: np.ndarray
+    alloc_tol: float
+    k_pos: np.ndarray
+    k_neg: np.ndarray
+    n_max: np.ndarray
+    T6: np.ndarray
+    rov_to_tree: np.ndarray
+    GQG: np.ndarray
+    T_b: np.ndarray
+    r_pos: float
+    r_psi: float
+    r_dvl: float
+    r_gyro: float
+    q_lo: np.ndarray
+    q_hi: np.ndarray
+    q_wild: np.ndarray
+    q_rate: np.ndarray
+    q_frozen: np.ndarray
+    q_var: np.ndarray
+    free_Kp: np.ndarray
+    free_Ki: np.ndarray
+    free_Kd: np.ndarray
+
+
+class QualityState(NamedTuple):
+    """Mutable state of the signal checks (see control.quality)."""
+
+    last: np.ndarray  # (11,)
+    last_t: np.ndarray  # (5,)
+    repeat: np.ndarray  # (5,) int
+    hist: np.ndarray  # (11, WINDOW)
+    counters: np.ndarray  # (5, 4) int
+
+
+@njit(**JIT)
+def allocate(tau6: np.ndarray, C: ControlArrays) -> np.ndarray:
+    """Thruster forces for an ROV wrench (pinv or priority, see control.allocation)."""
+    if C.alloc_kind == ALLOC_PRIORITY:
+        rows = np.empty(C.prio_rows.shape[0])
+        for i in range(rows.shape[0]):
+            rows[i] = tau6[C.prio_rows[i]]
+        return _priority_forces(C.prio_A, C.prio_D, C.prio_R, rows, C.f_lo, C.f_hi,
+                                C.alloc_tol)
+    m = C.pinv_T.shape[0]
+    f = np.zeros(m)
+    for i in range(m):
+        s = 0.0
+        for j in range(C.pinv_rows.shape[0]):
+            s += C.pinv_T[i, j] * tau6[C.pinv_rows[j]]
+        f[i] = min(max(s, C.f_lo[i]), C.f_hi[i])
+    return f
+
+
+@njit(**JIT)
+def speeds_from_forces(f: np.ndarray, C: ControlArrays) -> np.ndarray:
+    """Inverse thruster model (eq. 3.22) with the direction-dependent coefficient."""
+    n = np.empty(f.shape[0])
+    for i in range(f.shape[0]):
+        if f[i] >= 0.0:
+            n[i] = min(np.sqrt(f[i] / C.k_pos[i]), C.n_max[i])
+        else:
+            n[i] = -min(np.sqrt(-f[i] / C.k_neg[i]), C.n_max[i])
+    return n
+
+
+@njit(**JIT)
+def tree_measurements(y: np.ndarray, psi_hat: float, C: ControlArrays):
+    """Move the ROV's measurements to the tree's origin (eq. 3.4-3.6), with the configured
+    mounting vector r and relative heading. Returns (north_east (2), psi, u_v (2), r)."""
+    c, s = np.cos(psi_hat), np.sin(psi_hat)
+    r = C.r_mount
+    ne = np.empty(2)
+    ne[0] = y[0] - (c * r[0] - s * r[1])
+    ne[1] = y[1] - (s * r[0] + c * r[1])
+    psi = y[4] - C.psi_rel
+    cr, sr = np.cos(C.psi_rel), np.sin(C.psi_rel)
+    u_t = cr * y[5] - sr * y[6]
+    v_t = sr * y[5] + cr * y[6]
+    rate = y[10]
+    uv = np.empty(2)
+    uv[0] = u_t + rate * r[1]
+    uv[1] = v_t - rate * r[0]
+    return ne, psi, uv, rate
+
+
+@njit(**JIT)
+def _truth_tree(x: np.ndarray):
+    """Perfect feedback: the tree's [north, east, psi] and their NED rates."""
+    eta = np.array([x[0], x[1], x[5]])
+    c, s = np.cos(x[5]), np.sin(x[5])
+    deta = np.array([c * x[6] - s * x[7], s * x[6] + c * x[7], x[11]])
+    return eta, deta
+
+
+@njit(**JIT)
+def _rov_pose(x: np.ndarray, y: np.ndarray, use_truth: bool):
+    """The ROV's [north, east, down, psi] and rates for the free-ROV controller."""
+    eta4 = np.empty(4)
+    deta4 = np.empty(4)
+    if use_truth:
+        eta4[0:3] = x[12:15]
+        eta4[3] = x[17]
+        c, s = np.cos(x[17]), np.sin(x[17])
+        deta4[0] = c * x[18] - s * x[19]
+        deta4[1] = s * x[18] + c * x[19]
+        deta4[2] = x[20]
+        deta4[3] = x[23]
+    else:
+        eta4[0:3] = y[0:3]
+        eta4[2] = y[3]
+        eta4[3] = y[4]
+        c, s = np.cos(y[4]), np.sin(y[4])
+        deta4[0] = c * y[5] - s * y[6]
+        deta4[1] = s * y[5] + c * y[6]
+        deta4[2] = y[7]
+        deta4[3] = y[10]
+    return eta4, deta4
+
+
+@njit(**JIT)
+def _observe(k_step: int, t: float, y: np.ndarray, fresh: np.ndarray, xhat: np.ndarray,
+             P: np.ndarray, tau_tree_ach: np.ndarray, C: ControlArrays, Q: QualityState,
+             dt: float, log_row: np.ndarray):
+    """Signal checks, then EKF correction with each accepted fresh sample, then prediction."""
+    accepted = np.zeros(5, dtype=np.bool_)
+    for k in range(5):
+        if fresh[k]:
+            accepted[k] = quality.check_sample(
+                k, y, t, Q.last, Q.last_t, Q.repeat, Q.hist, Q.counters, C.q_lo, C.q_hi,
+                C.q_wild, C.q_rate, C.q_frozen, C.q_var, sensors.Y_SENSOR)
+    ne, psi_m, uv, rate = tree_measurements(y, xhat[2], C)
+    if accepted[sensors.COMPASS]:
+        xhat, P, nis = ekf.correct(xhat, P, np.array([psi_m]), np.array([2]),
+                                   np.array([C.r_psi]), 0)
+        log_row[L_NIS + 2] = nis[0]
+    if accepted[sensors.POSITION]:
+        ne, psi_m, uv, rate = tree_measurements(y, xhat[2], C)
+        xhat, P, nis = ekf.correct(xhat, P, ne, np.array([0, 1]),
+                                   np.array([C.r_pos, C.r_pos]), -1)
+        log_row[L_NIS] = nis[0]
+        log_row[L_NIS + 1] = nis[1]
+    if accepted[sensors.GYRO]:
+        xhat, P, _ = ekf.correct(xhat, P, np.array([rate]), np.array([5]),
+                                 np.array([C.r_gyro]), -1)
+    if accepted[sensors.DVL]:
+        xhat, P, _ = ekf.correct(xhat, P, uv, np.array([3, 4]),
+                                 np.array([C.r_dvl, C.r_dvl]), -1)
+    for k in range(5):
+        log_row[L_ACCEPT + k] = 1.0 if accepted[k] else 0.0
+    return xhat, P
+
+
+@njit(**JIT)
+def control_step(k: int, t: float, x: np.ndarray, y: np.ndarray, fresh: np.ndarray,
+                 xhat: np.ndarray, Pc: np.ndarray, cs: np.ndarray, target: np.ndarray,
+                 C: ControlArrays, Q: QualityState, dt: float, log_row: np.ndarray):
+    """Observer, reference, supervisor and controller for one step. Returns
+    (tau_rov6, xhat, Pc, cs). ``cs`` is a fresh copy, updated."""
+    cs = cs.copy()
+    if C.feedback_ekf:
+        xhat, Pc = _observe(k, t, y, fresh, xhat, Pc, np.zeros(3), C, Q, dt, log_row)
+        eta = xhat[0:3].copy()
+        c, s = np.cos(eta[2]), np.sin(eta[2])
+        deta = np.array([c * xhat[3] - s * xhat[4], s * xhat[3] + c * xhat[4], xhat[5]])
+    else:
+        eta, deta = _truth_tree(x)
+    mode = int(cs[CS_MODE])
+    ref = cs[CS_REF:CS_REF + 9].copy()
+    if mode == MODE_TREE and int(cs[CS_LAST_MODE]) != MODE_TREE:
+        ref[:] = 0.0
+        ref[0:3] = eta
+        cs[CS_I:CS_I + 3] = pid.bumpless_tree_integral(
+            np.array([cs[CS_TAU], cs[CS_TAU + 1], cs[CS_TAU + 5]]), eta, deta, eta,
+            np.zeros(3), np.zeros(3), C.Kp, C.Kd, C.use_ff, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq,
+            C.A_inv)
+    ref = refkernel.reference_step(C.ref_kind, ref, target, dt, C.ref_params)
+    cs[CS_REF:CS_REF + 9] = ref
+    tau6 = np.zeros(6)
+    if mode == MODE_TREE:
+        tau_tree, i_next, terms, e, de = pid.tree_pid(
+            eta, deta, ref[0:3], ref[3:6], ref[6:9], cs[CS_I:CS_I + 3].copy(), C.Kp, C.Ki,
+            C.Kd, C.use_ff, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, EYE3, EYE3, C.i_limit, dt)
+        cs[CS_I:CS_I + 3] = i_next
+        cs[CS_E:CS_E + 3] = e
+        cs[CS_DE:CS_DE + 3] = de
+        # allocation works on the tree's origin (see closed_loop.system_thruster_config)
+        tau6[0] = tau_tree[0]
+        tau6[1] = tau_tree[1]
+        tau6[2] = C.heave_n
+        tau6[5] = tau_tree[2]
+        tau3 = C.A @ tau_tree
+        log_row[L_TAU_ROV:L_TAU_ROV + 6] = np.array([tau3[0], tau3[1], C.heave_n, 0.0, 0.0,
+                                                     tau3[2]])
+        log_row[L_TAU_TREE:L_TAU_TREE + 3] = tau_tree
+        for j in range(4):
+            log_row[L_TERMS + 3 * j:L_TERMS + 3 * j + 3] = terms[j]
+    else:
+        eta4, deta4 = _rov_pose(x, y, not C.feedback_ekf)
+        if int(cs[CS_LAST_MODE]) != MODE_FREE:
+            cs[CS_FSP:CS_FSP + 4] = eta4
+            cs[CS_FI:CS_FI + 4] = pid.bumpless_free_integral(
+                cs[CS_TAU:CS_TAU + 6].copy(), eta4, deta4, eta4, C.free_Kp, C.free_Kd)
+        tau_rov6, fi, _ = pid.free_rov_pid(eta4, deta4, cs[CS_FSP:CS_FSP + 4].copy(),
+                                           cs[CS_FI:CS_FI + 4].copy(), C.free_Kp, C.free_Ki,
+                                           C.free_Kd, dt)
+        cs[CS_FI:CS_FI + 4] = fi
+        log_row[L_TAU_ROV:L_TAU_ROV + 6] = tau_rov6
+        tau6 = C.rov_to_tree @ tau_rov6
+    cs[CS_LAST_MODE] = mode
+    cs[CS_TAU:CS_TAU + 6] = log_row[L_TAU_ROV:L_TAU_ROV + 6]
+    log_row[L_ETA_HAT:L_ETA_HAT + 3] = eta
+    log_row[L_NU_HAT:L_NU_HAT + 3] = xhat[3:6] if C.feedback_ekf else np.array(
+        [x[6], x[7], x[11]])
+    log_row[L_BIAS:L_BIAS + 3] = xhat[6:9]
+    log_row[L_ETA_D:L_ETA_D + 3] = ref[0:3]
+    log_row[L_DETA_D:L_DETA_D + 3] = ref[3:6]
+    log_row[L_MODE] = mode
+    return tau6, xhat, Pc, cs
+
+
+@njit(**JIT)
+def finish_step(x: np.ndarray, f: np.ndarray, env_k: np.ndarray, xhat: np.ndarray,
+                Pc: np.ndarray, C: ControlArrays, P: plant.PlantArrays, dt: float,
+                log_row: np.ndarray):
+    """Thrusters, plant step and observer prediction, given the allocated forces f.
+    Returns (x_next, xhat, Pc)."""
+    n = speeds_from_forces(f, C)
+    ach = C.T6 @ f
+    m = f.shape[0]
+    for i in range(m):
+        lim = C.f_hi[i] if f[i] >= 0.0 else -C.f_lo[i]
+        log_row[L_F + i] = f[i]
+        log_row[L_N + i] = n[i]
+        log_row[L_UTIL + i] = min(abs(f[i]) / lim, 1.0)
+    log_row[L_TAU_ACH:L_TAU_ACH + 6] = ach
+    x_next = plant.rk4_step(x, n, env_k, P, dt)
+    if C.feedback_ekf:
+        # the observer's input: the achieved wrench moved to the tree (eq. 3.6)
+        tau_tree = C.A_inv @ np.array([ach[0], ach[1], ach[5]])
+        if int(log_row[L_MODE]) != MODE_TREE:
+            tau_tree[:] = 0.0
+        xhat, Pc = ekf.predict(xhat, Pc, tau_tree, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h,
+                               C.p_eq, C.T_b, C.GQG)
+    return x_next, xhat, Pc
+
+
+@njit(**JIT)
+def run_chunk(k0: int, x: np.ndarray, held_y: np.ndarray, xhat: np.ndarray, Pc: np.ndarray,
+              cs: np.ndarray, target: np.ndarray, env: np.ndarray, noise: np.ndarray,
+              fresh: np.ndarray, P: plant.PlantArrays, C: ControlArrays, Q: QualityState,
+              dt: float):
+    """Advance len(env) steps with the target held. Returns
+    (x, held_y, xhat, Pc, cs, log (n, N_LOG), n_done); n_done < n when the plant diverged."""
+    n = env.shape[0]
+    log = np.zeros((n, N_LOG))
+    for j in range(n):
+        k = k0 + j
+        t = k * dt
+        row = log[j]
+        held_y = sensors.sample(x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
+        tau6, xhat, Pc, cs = control_step(k, t, x, held_y, fresh[j], xhat, Pc, cs, target, C,
+                                          Q, dt, row)
+        f = allocate(tau6, C)
+        x, xhat, Pc = finish_step(x, f, env[j], xhat, Pc, C, P, dt, row)
+        row[L_T] = t + dt
+        row[L_TREE:L_TREE + 6] = x[0:6]
+        row[L_ROV:L_ROV + 6] = x[12:18]
+        row[L_Y:L_Y + 11] = held_y
+        if not np.all(np.isfinite(x)):
+            return x, held_y, xhat, Pc, cs, log, j
+    return x, held_y, xhat, Pc, cs, log, n

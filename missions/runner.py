@@ -1,0 +1,327 @@
+"""Run a mission on the closed loop and score it.
+
+Each leg type has an executor in ``LEG_EXECUTORS`` (a registry, not a chain of ifs). An
+executor sets targets on the ``ClosedLoop`` and advances it until its end condition (the
+reference has arrived and the settle time has passed, or a fixed duration), never longer than
+the leg's timeout. The runner slices the log per leg and computes the figures of chapter 4:
+RMS of north, east and heading error against the reference, largest thruster utilisation,
+time in saturation, and settling.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from control import loop
+from control.closed_loop import ClosedLoop, ControlSettings, Gains, LoopLog
+from missions import schema
+from sim import environment as envmod
+from sim import params as params_mod
+from sim.gnc import ssa
+from sim.simulator import SimulationDiverged
+
+FloatArray = NDArray[np.float64]
+CHUNK_S = 1.0
+ARRIVED_M = 1e-3
+ARRIVED_RAD = math.radians(0.01)
+SATURATED = 0.99
+"""Utilisation at or above which a thruster counts as saturated."""
+
+
+@dataclass(frozen=True)
+class LegResult:
+    """Figures of one leg."""
+
+    index: int
+    type: str
+    name: str
+    start_s: float
+    duration_s: float
+    rms_north_m: float
+    rms_east_m: float
+    rms_heading_deg: float
+    max_utilisation: float
+    saturated_s: float
+    timed_out: bool
+
+
+@dataclass
+class MissionResult:
+    """Figures of a whole mission (the scored legs, or all legs if none is scored)."""
+
+    name: str
+    legs: list[LegResult]
+    rms_north_m: float
+    rms_east_m: float
+    rms_heading_deg: float
+    max_thruster_utilisation: float
+    saturated_time_s: float
+    settling_time_s: float | None
+    final_eta_n: list[float]
+    diverged: bool
+    warnings: list[str]
+    quality_counters: dict[str, dict[str, int]]
+    log: LoopLog | None = field(default=None, repr=False)
+
+    def summary(self) -> dict:
+        """JSON-ready figures."""
+        return {
+            "name": self.name, "rms_north_m": self.rms_north_m, "rms_east_m": self.rms_east_m,
+            "rms_heading_deg": self.rms_heading_deg,
+            "max_thruster_utilisation": self.max_thruster_utilisation,
+            "saturated_time_s": self.saturated_time_s, "settling_time_s": self.settling_time_s,
+            "final_eta_n": self.final_eta_n, "diverged": self.diverged,
+            "warnings": self.warnings, "quality_counters": self.quality_counters,
+            "legs": [vars(leg) for leg in self.legs],
+        }
+
+
+class MissionContext:
+    """What an executor works with: the loop, the log so far, the present target."""
+
+    def __init__(self, cl: ClosedLoop) -> None:
+        self.cl = cl
+        self.chunks: list[FloatArray] = []
+        eta = cl.eta_estimate
+        self.target = np.array([eta[0], eta[1], eta[2]])
+
+    def advance(self, seconds: float) -> None:
+        self.chunks.append(self.cl.run(seconds).data)
+
+    def set_target(self, north: float, east: float, psi: float) -> None:
+        self.target = np.array([north, east, psi])
+        self.cl.set_target(north, east, psi, heading_mode="absolute")
+
+    def reference_arrived(self) -> bool:
+        ref = self.cl.cs[loop.CS_REF:loop.CS_REF + 6]
+        return (abs(ref[0] - self.target[0]) < ARRIVED_M and
+                abs(ref[1] - self.target[1]) < ARRIVED_M and
+                abs(ref[2] - self.target[2]) < ARRIVED_RAD and
+                np.all(np.abs(ref[3:5]) < 1e-4) and abs(ref[5]) < 1e-5)
+
+    def go_and_settle(self, north: float, east: float, psi: float, settle_s: float,
+                      deadline_s: float) -> bool:
+        """Set the target, advance until the reference arrives, then settle. False on
+        timeout."""
+        self.set_target(north, east, psi)
+        while not self.reference_arrived():
+            if self.cl.t_s >= deadline_s:
+                return False
+            self.advance(CHUNK_S)
+        if settle_s > 0:
+            self.advance(min(settle_s, max(deadline_s - self.cl.t_s, 0.0)) or CHUNK_S)
+        return True
+
+
+def _hold(ctx: MissionContext, leg: schema.HoldLeg, deadline: float) -> bool:
+    ctx.advance(min(leg.duration_s, deadline - ctx.cl.t_s))
+    return leg.duration_s <= leg.timeout_s
+
+
+def _rotate(ctx: MissionContext, leg: schema.RotateLeg, deadline: float) -> bool:
+    t = ctx.target
+    return ctx.go_and_settle(t[0], t[1], t[2] + math.radians(leg.angle_deg), leg.settle_s,
+                             deadline)
+
+
+def _heading(ctx: MissionContext, heading_deg: float | None) -> float:
+    """A heading from a file, taken the short way from the present target."""
+    psi = ctx.target[2]
+    if heading_deg is None:
+        return psi
+    return psi + ssa(math.radians(heading_deg) - psi)
+
+
+def _move(ctx: MissionContext, leg: schema.MoveLeg, deadline: float) -> bool:
+    t = ctx.target
+    n, e = (t[0] + leg.north_m, t[1] + leg.east_m) if leg.relative else (leg.north_m, leg.east_m)
+    return ctx.go_and_settle(n, e, _heading(ctx, leg.heading_deg), leg.settle_s, deadline)
+
+
+def _step(ctx: MissionContext, leg: schema.StepLeg, deadline: float) -> bool:
+    t = ctx.target
+    n, e = (t[0] + leg.north_m, t[1] + leg.east_m) if leg.relative else (leg.north_m, leg.east_m)
+    ctx.set_target(n, e, _heading(ctx, leg.heading_deg))
+    ctx.advance(min(leg.duration_s, deadline - ctx.cl.t_s))
+    return leg.duration_s <= leg.timeout_s
+
+
+def _corners(side: float, clockwise: bool) -> list[tuple[float, float]]:
+    """Square corners relative to the start: north first, then east (clockwise seen from
+    above in NED) or west."""
+    e = side if clockwise else -side
+    return [(side, 0.0), (side, e), (0.0, e), (0.0, 0.0)]
+
+
+def _square(ctx: MissionContext, leg: schema.SquareLeg, deadline: float) -> bool:
+    start = ctx.target.copy()
+    psi = _heading(ctx, leg.heading_deg)
+    for dn, de in _corners(leg.side_m, leg.clockwise):
+        if not ctx.go_and_settle(start[0] + dn, start[1] + de, psi, leg.settle_s, deadline):
+            return False
+    return True
+
+
+def _waypoints(ctx: MissionContext, leg: schema.WaypointsLeg, deadline: float) -> bool:
+    start = ctx.target.copy()
+    for n, e in leg.points_ne_m:
+        tn, te = (start[0] + n, start[1] + e) if leg.relative else (n, e)
+        if not ctx.go_and_settle(tn, te, start[2], leg.settle_s, deadline):
+            return False
+    return True
+
+
+def _gains(ctx: MissionContext, leg: schema.GainsLeg, deadline: float) -> bool:
+    ctx.cl.set_gains(Gains(tuple(leg.kp), tuple(leg.ki), tuple(leg.kd)))
+    return True
+
+
+def _mode(ctx: MissionContext, leg: schema.ModeLeg, deadline: float) -> bool:
+    if leg.grip is not None:
+        ctx.cl.set_grip(leg.grip)
+    ctx.cl.set_mode(leg.mode)
+    return True
+
+
+LEG_EXECUTORS: dict[str, Callable[[MissionContext, object, float], bool]] = {
+    "hold": _hold, "rotate": _rotate, "move": _move, "step": _step, "square": _square,
+    "waypoints": _waypoints, "gains": _gains, "mode": _mode,
+}
+
+
+def build_loop(mission: schema.Mission, seed: int | None = None,
+               allocation: str | None = None, feedback: str | None = None) -> ClosedLoop:
+    """The ClosedLoop a mission's set-up describes (options override the file)."""
+    s = mission.setup
+    ps = params_mod.load(s.params)
+    plant_ps = None
+    if s.plant.mass_scale != 1.0 or s.plant.weight_scale != 1.0:
+        plant_ps = vary_tree(ps, s.plant.mass_scale, s.plant.weight_scale)
+    d = math.radians(s.current.direction_deg)
+    db = math.radians(s.current.direction_band_deg)
+    cur = envmod.CurrentParams(
+        speed_mps=s.current.speed_mps, direction_rad=d,
+        speed_min_mps=max(s.current.speed_mps - s.current.speed_band_mps, 0.0),
+        speed_max_mps=s.current.speed_mps + s.current.speed_band_mps,
+        direction_min_rad=d - db, direction_max_rad=d + db,
+        speed_walk_mps_per_sqrt_s=s.current.speed_walk_mps_per_sqrt_s,
+        direction_walk_rad_per_sqrt_s=math.radians(s.current.direction_walk_deg_per_sqrt_s))
+    waves = None
+    if s.waves is not None:
+        waves = envmod.WaveParams(significant_height_m=s.waves.significant_height_m,
+                                  peak_period_s=s.waves.peak_period_s,
+                                  direction_rad=math.radians(s.waves.direction_deg))
+    settings = ControlSettings(
+        feedback=feedback or s.feedback, allocation=allocation or s.allocation,
+        reference=s.reference, feedforward=s.feedforward, heave_force_n=s.heave_force_n,
+        r_mount_config_m=None if s.r_mount_config_m is None else tuple(s.r_mount_config_m))
+    return ClosedLoop(ps, tree_depth_m=s.depth_m, settings=settings,
+                      crane_tip_n=np.array([*s.crane_tip_n, 0.0]), current=cur, waves=waves,
+                      seed=s.seed if seed is None else seed,
+                      tree_heading_rad=math.radians(s.heading_deg), plant_ps=plant_ps)
+
+
+def vary_tree(ps: params_mod.ParameterSet, mass_scale: float,
+              weight_scale: float) -> params_mod.ParameterSet:
+    """The same parameter set with the tree's mass (rigid-body mass and inertia) and submerged
+    weight scaled: the plant of the robustness study (thesis 4.2.3)."""
+    tree = ps.spec.tree
+    w0 = tree.submerged_weight_n or ps.tree.submerged_weight_n
+    new_tree = tree.model_copy(update=dict(
+        mass_kg=tree.mass_kg * mass_scale,
+        rigid_body_inertia=[v * mass_scale for v in tree.rigid_body_inertia],
+        submerged_weight_n=w0 * weight_scale))
+    return params_mod.build(ps.spec.model_copy(update=dict(tree=new_tree)))
+
+
+def _rms(values: FloatArray) -> float:
+    return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
+
+
+def _leg_figures(data: FloatArray, m: int, dt: float) -> tuple[float, float, float, float, float]:
+    err_n = data[:, loop.L_TREE] - data[:, loop.L_ETA_D]
+    err_e = data[:, loop.L_TREE + 1] - data[:, loop.L_ETA_D + 1]
+    err_psi = np.array([ssa(v) for v in data[:, loop.L_TREE + 5] - data[:, loop.L_ETA_D + 2]])
+    util = data[:, loop.L_UTIL:loop.L_UTIL + m]
+    umax = float(util.max()) if util.size else 0.0
+    sat = float(np.sum(np.any(util >= SATURATED, axis=1)) * dt) if util.size else 0.0
+    return _rms(err_n), _rms(err_e), math.degrees(_rms(err_psi)), umax, sat
+
+
+def settling_time(data: FloatArray, dt: float, tol_m: float, tol_deg: float) -> float | None:
+    """Time from the last change of the reference until the tree stays within tol of it."""
+    ref = data[:, loop.L_ETA_D:loop.L_ETA_D + 3]
+    moving = np.any(np.abs(np.diff(ref, axis=0)) > 1e-9, axis=1)
+    last_change = int(np.flatnonzero(moving)[-1]) + 1 if moving.any() else 0
+    err_pos = np.hypot(data[:, loop.L_TREE] - ref[:, 0], data[:, loop.L_TREE + 1] - ref[:, 1])
+    err_psi = np.degrees(np.abs([ssa(v) for v in data[:, loop.L_TREE + 5] - ref[:, 2]]))
+    outside = (err_pos > tol_m) | (err_psi > tol_deg)
+    out_idx = np.flatnonzero(outside[last_change:])
+    if out_idx.size == 0:
+        return 0.0
+    last_out = last_change + int(out_idx[-1])
+    if last_out >= len(outside) - 1:
+        return None
+    return (last_out + 1 - last_change) * dt
+
+
+def run_mission(mission: schema.Mission, seed: int | None = None, allocation: str | None = None,
+                feedback: str | None = None,
+                progress: Callable[[int, int, str], None] | None = None) -> MissionResult:
+    """Execute all legs and score them."""
+    cl = build_loop(mission, seed=seed, allocation=allocation, feedback=feedback)
+    ctx = MissionContext(cl)
+    m = cl.ps.rov.thrusters.T.shape[1]
+    bounds: list[tuple[int, int, bool]] = []
+    diverged = False
+    for i, leg in enumerate(mission.legs):
+        if progress:
+            progress(i, len(mission.legs), leg.type)
+        start_rows = sum(len(c) for c in ctx.chunks)
+        deadline = cl.t_s + leg.timeout_s
+        try:
+            ok = LEG_EXECUTORS[leg.type](ctx, leg, deadline)
+        except SimulationDiverged:
+            diverged, ok = True, False
+        end_rows = sum(len(c) for c in ctx.chunks)
+        bounds.append((start_rows, end_rows, not ok))
+        if diverged:
+            break
+    data = np.vstack(ctx.chunks) if ctx.chunks else np.zeros((0, loop.N_LOG))
+    return _score(mission, cl, data, bounds, m, diverged)
+
+
+def _score(mission: schema.Mission, cl: ClosedLoop, data: FloatArray,
+           bounds: list[tuple[int, int, bool]], m: int, diverged: bool) -> MissionResult:
+    dt = cl.dt_s
+    legs = []
+    scored_rows = []
+    for i, (a, b, timed_out) in enumerate(bounds):
+        leg = mission.legs[i]
+        fig = _leg_figures(data[a:b], m, dt)
+        legs.append(LegResult(i + 1, leg.type, leg.name, a * dt, (b - a) * dt, *fig, timed_out))
+        if leg.score:
+            scored_rows.append(data[a:b])
+    scored = np.vstack(scored_rows) if scored_rows else data
+    rms_n, rms_e, rms_psi, _, _ = _leg_figures(scored, m, dt)
+    full = _leg_figures(data, m, dt)
+    final = data[-1, loop.L_TREE:loop.L_TREE + 6] if len(data) else np.zeros(6)
+    final_eta = [float(v) for v in final[:3]] + [math.degrees(ssa(float(v))) for v in final[3:]]
+    tol_m = 0.1 * max(1.0, cl.ps.tree.dimensions_m.max() / 3.6)
+    counters = {name: {check: int(cl.Q.counters[k, j]) for j, check in
+                       enumerate(("range", "wild_point", "frozen", "variance"))}
+                for k, name in enumerate(("position", "depth", "compass", "dvl", "gyro"))}
+    warnings = list(cl.startup.warnings)
+    if any(leg.timed_out for leg in legs):
+        warnings.append("a leg timed out before its reference arrived: see legs[].timed_out")
+    return MissionResult(
+        name=mission.name, legs=legs, rms_north_m=rms_n, rms_east_m=rms_e,
+        rms_heading_deg=rms_psi, max_thruster_utilisation=full[3], saturated_time_s=full[4],
+        settling_time_s=settling_time(data, dt, tol_m, 2.0) if len(data) else None,
+        final_eta_n=[round(v, 6) for v in final_eta], diverged=diverged, warnings=warnings,
+        quality_counters=counters, log=LoopLog(data, m, cl.Q.counters.copy()))
