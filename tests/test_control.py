@@ -1,0 +1,181 @@
+"""Control-system behaviours: bumpless gain changes and mode switches, heading-only mode, the
+observer coasting through dropouts, signal checks, the system model and the r check."""
+
+import math
+
+import numpy as np
+import pytest
+
+from control import loop, model, quality
+from control.closed_loop import ClosedLoop, ControlSettings, Gains
+from control.startup import check_mount_vector
+from sim import environment as envmod
+from sim import params
+from sim.gnc import Hmtrx
+from sim.sensors import Y_SENSOR
+
+MODEL = params.load("model-scale")
+FULL = params.load("full-scale")
+
+
+def current(speed=0.1, direction_deg=225.0):
+    d = math.radians(direction_deg)
+    return envmod.CurrentParams(speed_mps=speed, direction_rad=d, speed_min_mps=speed,
+                                speed_max_mps=speed, direction_min_rad=d, direction_max_rad=d)
+
+
+def test_system_model_mass_is_spd_and_wrench_map_is_the_lever_arm():
+    sysm = model.system_model(FULL, 397.0)
+    np.testing.assert_allclose(sysm.M, sysm.M.T)
+    assert np.linalg.eigvalsh(sysm.M).min() > 0
+    # an ROV sway force Y at r = [-2, 0, 0] gives the tree the same Y and a yaw moment
+    # r x f = -2 Y (eq. 3.6); the inverse map (eq. 3.7) gives it back
+    tau_tree = sysm.rov_to_tree @ np.array([0, 100.0, 0, 0, 0, 0])
+    np.testing.assert_allclose(tau_tree[[0, 1, 5]], [0, 100.0, -200.0], atol=1e-9)
+    np.testing.assert_allclose(sysm.tree_to_rov @ tau_tree, [0, 100.0, 0, 0, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(np.linalg.inv(Hmtrx(sysm.r_rov_from_tree_tree_m)),
+                               Hmtrx(-sysm.r_rov_from_tree_tree_m), atol=1e-12)
+
+
+def test_capacity_matches_the_thrusters():
+    """Surge alone with the work-class ROV: the two vectored thrusters at full power give
+    2 x 0.9063 x 6550 N; their sway parts cancel and yaw is trimmed by the lateral one."""
+    thr = FULL.rov.thrusters
+    cap = model.dof_capacity(thr.T, thr.f_max_neg, thr.f_max_pos)
+    assert cap[0] == pytest.approx(2 * 0.9063 * thr.f_max_pos[2], rel=1e-3)
+
+
+def test_gain_change_is_bumpless():
+    cl = ClosedLoop(MODEL, tree_depth_m=100.0, current=current())
+    cl.run(60.0)
+    cl.set_target(1.5, 1.0, 0.3)  # a moving reference: errors and rates are not zero
+    before = cl.run(20.0).tau_tree[-1].copy()
+    g = cl.gains
+    integral_before = cl.cs[loop.CS_I:loop.CS_I + 3].copy()
+    cl.set_gains(Gains(tuple(2 * v for v in g.kp), g.ki, tuple(3 * v for v in g.kd)))
+    after = cl.run(0.01).tau_tree[0]
+    # one step later the command may only move by what one 10 ms step moves it
+    assert np.abs(after - before).max() < 0.02 * np.abs(before).max() + 0.5
+    assert np.array_equal(cl.C.Kp, 2 * np.array(g.kp))
+    # the jump that would have happened went into the integral instead (so the test is not
+    # passing merely because the errors were zero)
+    absorbed = np.abs(cl.cs[loop.CS_I:loop.CS_I + 3] - integral_before).max()
+    assert absorbed > 5.0
+    assert np.abs(after - before).max() < 0.1 * absorbed
+
+
+def test_bad_gains_are_refused_with_the_range():
+    with pytest.raises(ValueError, match=r"gains.kp\[1\] must be in \[0, 1e\+07\]"):
+        Gains((1.0, -2.0, 1.0), (0, 0, 0), (0, 0, 0))
+    with pytest.raises(ValueError, match=r"gains.kd\[0\] must be in"):
+        Gains((1.0, 1.0, 1.0), (0, 0, 0), (float("nan"), 0, 0))
+
+
+def test_supervisor_switch_to_free_rov_has_no_thrust_jump_and_keeps_station():
+    cl = ClosedLoop(MODEL, tree_depth_m=100.0, current=current(0.05))
+    cl.run(90.0)
+    before = cl.run(1.0).data[-1, loop.L_TAU_ROV:loop.L_TAU_ROV + 6]
+    cl.set_grip(False)
+    cl.set_mode("free")
+    log = cl.run(60.0)
+    first = log.data[0, loop.L_TAU_ROV:loop.L_TAU_ROV + 6]
+    assert np.abs(first - before).max() < 2.0  # N, N m: no jump at the hand-over
+    assert np.all(log.data[:, loop.L_MODE] == loop.MODE_FREE)
+    rov = log.rov_eta_n
+    # free-flying ROV holds its position (the released tree swings away on its own)
+    assert np.hypot(rov[-1, 0] - rov[0, 0], rov[-1, 1] - rov[0, 1]) < 0.3
+    assert abs(rov[-1, 2] - rov[0, 2]) < 0.3
+    # and back onto the tree: the tree controller takes over from the free one without a jump
+    cl.set_mode("tree")
+    back = cl.run(0.01).data[0, loop.L_TAU_ROV:loop.L_TAU_ROV + 6]
+    last_free = log.data[-1, loop.L_TAU_ROV:loop.L_TAU_ROV + 6]
+    assert np.abs(back[[0, 1, 5]] - last_free[[0, 1, 5]]).max() < 2.0
+
+
+def test_heading_only_mode_holds_heading_and_lets_position_go():
+    gains = Gains(tuple(MODEL.gains.kp), tuple(MODEL.gains.ki), tuple(MODEL.gains.kd))
+    cl = ClosedLoop(MODEL, tree_depth_m=100.0, current=current(0.1, 90.0),
+                    settings=ControlSettings(gains=gains.heading_only()))
+    cl.set_target(1.0, 1.0, math.radians(30.0))
+    log = cl.run(300.0)
+    assert abs(math.degrees(log.tree_eta_n[-1, 5]) - 30.0) < 2.0
+    # no position control: the current (towards east) carries the tree downstream
+    assert log.tree_eta_n[-1, 1] - 1.0 > 0.3
+    assert np.all(log.col(loop.L_TERMS, 2) == 0.0)  # no proportional surge/sway action
+
+
+def test_observer_coasts_through_position_dropouts():
+    spec = MODEL.spec
+    sensors = spec.sensors.model_copy(update={"position": spec.sensors.position.model_copy(
+        update={"dropout_probability": 0.97})})
+    ps = params.build(spec.model_copy(update={"sensors": sensors}))
+    cl = ClosedLoop(ps, tree_depth_m=100.0, current=current(),
+                    settings=ControlSettings(feedback="ekf"), seed=3)
+    log = cl.run(300.0)
+    fixes = log.col(loop.L_ACCEPT + 0).sum()
+    assert fixes < 20  # 300 fixes due, 97 % lost
+    err = np.hypot(log.eta_hat[:, 0] - log.tree_eta_n[:, 0],
+                   log.eta_hat[:, 1] - log.tree_eta_n[:, 1])
+    # DVL, gyro and compass keep the estimate within 0.3 m without position fixes
+    assert err[3000:].max() < 0.3
+    assert np.hypot(*(log.tree_eta_n[-1, 0:2] - 1.0)) < 0.5
+
+
+def test_signal_checks_count_each_failure():
+    noise = np.full(11, 0.1)
+    cfg = quality.quality_config(noise, 0.01)
+    last = np.zeros(11)
+    last_t = -np.ones(5)
+    repeat = np.zeros(5, np.int64)
+    hist = np.zeros((11, quality.WINDOW))
+    counters = np.zeros((5, 4), np.int64)
+
+    def check(k, y, t):
+        return quality.check_sample(k, y, t, last, last_t, repeat, hist, counters, cfg.lo,
+                                    cfg.hi, cfg.wild_jump, cfg.max_rate, cfg.frozen_count,
+                                    cfg.variance_limit, Y_SENSOR)
+
+    y = np.zeros(11)
+    y[0:3] = [10.0, 5.0, 100.0]
+    assert check(0, y, 0.0)
+    y2 = y.copy()
+    y2[0] = 13.0  # a 3 m jump in 1 s: beyond 8 sigma + 2 m/s
+    assert not check(0, y2, 1.0)
+    assert counters[0, quality.WILD] == 1
+    y3 = y.copy()
+    y3[2] = 7000.0  # deeper than any plausible site
+    assert not check(0, y3, 2.0)
+    assert counters[0, quality.RANGE] == 1
+    for i in range(6):  # the same value again and again: frozen
+        ok = check(0, y, 3.0 + i)
+    assert not ok and counters[0, quality.FROZEN] >= 1
+    rng = np.random.default_rng(0)
+    for i in range(12):  # wildly varying but plausible: flagged, still used
+        yv = y.copy()
+        yv[0] += rng.normal(0, 1.5)
+        check(0, yv, 20.0 + 2 * i)
+    assert counters[0, quality.VARIANCE] >= 1
+
+
+def test_startup_check_accepts_the_right_r_and_flags_the_flipped_one():
+    r = np.array([-2.0, 0.0, 0.0])
+    y = np.zeros(11)
+    y[0:2] = [1.0 - 2.0, 1.0]  # ROV 2 m south of the tree hanging at the crane tip, heading 0
+    ok = check_mount_vector(y, r, np.array([1.0, 1.0, 0.0]), 197.0, MODEL, 0.1)
+    assert ok.checked and not ok.warnings
+    bad = check_mount_vector(y, -r, np.array([1.0, 1.0, 0.0]), 197.0, MODEL, 0.1)
+    assert bad.residual_m == pytest.approx(4.0) and bad.residual_flipped_m == pytest.approx(0.0)
+    assert "wrong sign" in bad.warnings[0]
+
+
+def test_full_turn_is_possible_and_short_way_is_default():
+    cl = ClosedLoop(FULL, tree_depth_m=400.0)
+    cl.run(1.0)
+    cl.set_target(1.0, 1.0, math.radians(350.0))  # short way: -10 deg
+    assert cl.target[2] == pytest.approx(math.radians(-10.0))
+    cl.set_target(1.0, 1.0, 2 * math.pi, heading_mode="absolute")
+    assert cl.target[2] == pytest.approx(2 * math.pi)
+    with pytest.raises(ValueError, match="heading_mode must be"):
+        cl.set_target(1.0, 1.0, 0.0, heading_mode="sideways")
+    with pytest.raises(ValueError, match="target north_m must be finite"):
+        cl.set_target(float("nan"), 1.0, 0.0)
