@@ -140,6 +140,9 @@ def scenario(
         help="pinv | priority | qp (default: the file's)")] = None,
     feedback: Annotated[str | None, typer.Option(
         help="perfect | ekf (default: the file's)")] = None,
+    law: Annotated[str | None, typer.Option(
+        help="thesis (eq. 3.9 alone) | feedforward (with reference feedforward); "
+             "default: the file's")] = None,
 ) -> None:
     """Run one named scenario of thesis chapter 4 and print its figures."""
     from missions import runner, schema
@@ -152,11 +155,14 @@ def scenario(
         raise typer.BadParameter(f"--allocation must be pinv, priority or qp, got {allocation!r}")
     if feedback is not None and feedback not in ("perfect", "ekf"):
         raise typer.BadParameter(f"--feedback must be perfect or ekf, got {feedback!r}")
+    if law is not None and law not in ("thesis", "feedforward"):
+        raise typer.BadParameter(f"--law must be thesis or feedforward, got {law!r}")
     try:
         mission = schema.load_mission(name)
         t0 = time.perf_counter()
         result = runner.run_mission(mission, seed=seed, allocation=allocation,
-                                    feedback=feedback)
+                                    feedback=feedback,
+                                    feedforward=None if law is None else law == "feedforward")
         wall = time.perf_counter() - t0
     except ValueError as err:
         _fail(str(err))

@@ -11,7 +11,7 @@ time in saturation, and settling.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -82,16 +82,17 @@ class MissionResult:
 
 
 class MissionContext:
-    """What an executor works with: the loop, the log so far, the present target."""
+    """What an executor works with: the loop and the present target.
+
+    Executors are generators: they set targets and ``yield`` how many seconds the loop should
+    run next; whoever drives them (the headless runner at full speed, the console's real-time
+    loop in small steps) runs the loop that long and resumes them. Their return value says
+    whether the leg finished in time."""
 
     def __init__(self, cl: ClosedLoop) -> None:
         self.cl = cl
-        self.chunks: list[FloatArray] = []
         eta = cl.eta_estimate
         self.target = np.array([eta[0], eta[1], eta[2]])
-
-    def advance(self, seconds: float) -> None:
-        self.chunks.append(self.cl.run(seconds).data)
 
     def set_target(self, north: float, east: float, psi: float) -> None:
         self.target = np.array([north, east, psi])
@@ -99,34 +100,42 @@ class MissionContext:
 
     def reference_arrived(self) -> bool:
         ref = self.cl.cs[loop.CS_REF:loop.CS_REF + 6]
-        return (abs(ref[0] - self.target[0]) < ARRIVED_M and
-                abs(ref[1] - self.target[1]) < ARRIVED_M and
-                abs(ref[2] - self.target[2]) < ARRIVED_RAD and
-                np.all(np.abs(ref[3:5]) < 1e-4) and abs(ref[5]) < 1e-5)
+        return bool(abs(ref[0] - self.target[0]) < ARRIVED_M and
+                    abs(ref[1] - self.target[1]) < ARRIVED_M and
+                    abs(ref[2] - self.target[2]) < ARRIVED_RAD and
+                    np.all(np.abs(ref[3:5]) < 1e-4) and abs(ref[5]) < 1e-5)
+
+    def wait(self, seconds: float, deadline_s: float) -> Iterator[float]:
+        """Run for ``seconds``, cut at the deadline."""
+        remaining = min(seconds, deadline_s - self.cl.t_s)
+        if remaining > 0:
+            yield remaining
 
     def go_and_settle(self, north: float, east: float, psi: float, settle_s: float,
-                      deadline_s: float) -> bool:
-        """Set the target, advance until the reference arrives, then settle. False on
+                      deadline_s: float) -> Iterator[float]:
+        """Set the target, run until the reference arrives, then settle. Returns False on
         timeout."""
         self.set_target(north, east, psi)
         while not self.reference_arrived():
             if self.cl.t_s >= deadline_s:
                 return False
-            self.advance(CHUNK_S)
-        if settle_s > 0:
-            self.advance(min(settle_s, max(deadline_s - self.cl.t_s, 0.0)) or CHUNK_S)
+            yield CHUNK_S
+        yield from self.wait(settle_s, deadline_s)
         return True
 
 
-def _hold(ctx: MissionContext, leg: schema.HoldLeg, deadline: float) -> bool:
-    ctx.advance(min(leg.duration_s, deadline - ctx.cl.t_s))
+Executor = Callable[[MissionContext, object, float], Generator[float, None, bool]]
+
+
+def _hold(ctx: MissionContext, leg: schema.HoldLeg, deadline: float):
+    yield from ctx.wait(leg.duration_s, deadline)
     return leg.duration_s <= leg.timeout_s
 
 
-def _rotate(ctx: MissionContext, leg: schema.RotateLeg, deadline: float) -> bool:
+def _rotate(ctx: MissionContext, leg: schema.RotateLeg, deadline: float):
     t = ctx.target
-    return ctx.go_and_settle(t[0], t[1], t[2] + math.radians(leg.angle_deg), leg.settle_s,
-                             deadline)
+    return (yield from ctx.go_and_settle(t[0], t[1], t[2] + math.radians(leg.angle_deg),
+                                         leg.settle_s, deadline))
 
 
 def _heading(ctx: MissionContext, heading_deg: float | None) -> float:
@@ -137,17 +146,18 @@ def _heading(ctx: MissionContext, heading_deg: float | None) -> float:
     return psi + ssa(math.radians(heading_deg) - psi)
 
 
-def _move(ctx: MissionContext, leg: schema.MoveLeg, deadline: float) -> bool:
+def _move(ctx: MissionContext, leg: schema.MoveLeg, deadline: float):
     t = ctx.target
     n, e = (t[0] + leg.north_m, t[1] + leg.east_m) if leg.relative else (leg.north_m, leg.east_m)
-    return ctx.go_and_settle(n, e, _heading(ctx, leg.heading_deg), leg.settle_s, deadline)
+    return (yield from ctx.go_and_settle(n, e, _heading(ctx, leg.heading_deg), leg.settle_s,
+                                         deadline))
 
 
-def _step(ctx: MissionContext, leg: schema.StepLeg, deadline: float) -> bool:
+def _step(ctx: MissionContext, leg: schema.StepLeg, deadline: float):
     t = ctx.target
     n, e = (t[0] + leg.north_m, t[1] + leg.east_m) if leg.relative else (leg.north_m, leg.east_m)
     ctx.set_target(n, e, _heading(ctx, leg.heading_deg))
-    ctx.advance(min(leg.duration_s, deadline - ctx.cl.t_s))
+    yield from ctx.wait(leg.duration_s, deadline)
     return leg.duration_s <= leg.timeout_s
 
 
@@ -158,44 +168,123 @@ def _corners(side: float, clockwise: bool) -> list[tuple[float, float]]:
     return [(side, 0.0), (side, e), (0.0, e), (0.0, 0.0)]
 
 
-def _square(ctx: MissionContext, leg: schema.SquareLeg, deadline: float) -> bool:
+def _square(ctx: MissionContext, leg: schema.SquareLeg, deadline: float):
     start = ctx.target.copy()
     psi = _heading(ctx, leg.heading_deg)
     for dn, de in _corners(leg.side_m, leg.clockwise):
-        if not ctx.go_and_settle(start[0] + dn, start[1] + de, psi, leg.settle_s, deadline):
+        ok = yield from ctx.go_and_settle(start[0] + dn, start[1] + de, psi, leg.settle_s,
+                                          deadline)
+        if not ok:
             return False
     return True
 
 
-def _waypoints(ctx: MissionContext, leg: schema.WaypointsLeg, deadline: float) -> bool:
+def _waypoints(ctx: MissionContext, leg: schema.WaypointsLeg, deadline: float):
     start = ctx.target.copy()
     for n, e in leg.points_ne_m:
         tn, te = (start[0] + n, start[1] + e) if leg.relative else (n, e)
-        if not ctx.go_and_settle(tn, te, start[2], leg.settle_s, deadline):
+        ok = yield from ctx.go_and_settle(tn, te, start[2], leg.settle_s, deadline)
+        if not ok:
             return False
     return True
 
 
-def _gains(ctx: MissionContext, leg: schema.GainsLeg, deadline: float) -> bool:
+def _gains(ctx: MissionContext, leg: schema.GainsLeg, deadline: float):
     ctx.cl.set_gains(Gains(tuple(leg.kp), tuple(leg.ki), tuple(leg.kd)))
     return True
+    yield  # a generator that runs no time
 
 
-def _mode(ctx: MissionContext, leg: schema.ModeLeg, deadline: float) -> bool:
+def _mode(ctx: MissionContext, leg: schema.ModeLeg, deadline: float):
     if leg.grip is not None:
         ctx.cl.set_grip(leg.grip)
     ctx.cl.set_mode(leg.mode)
     return True
+    yield  # a generator that runs no time
 
 
-LEG_EXECUTORS: dict[str, Callable[[MissionContext, object, float], bool]] = {
+LEG_EXECUTORS: dict[str, Executor] = {
     "hold": _hold, "rotate": _rotate, "move": _move, "step": _step, "square": _square,
     "waypoints": _waypoints, "gains": _gains, "mode": _mode,
 }
 
 
+class MissionExecution:
+    """A mission in progress, driven one request at a time.
+
+    ``next_request()`` returns how many seconds the loop should run next (None when the
+    mission is over); the driver runs the loop, hands the log to ``record()`` and asks again.
+    ``abort()`` ends it early. ``result()`` scores what was run."""
+
+    def __init__(self, mission: schema.Mission, cl: ClosedLoop) -> None:
+        self.mission = mission
+        self.cl = cl
+        self.ctx = MissionContext(cl)
+        self.leg_index = -1
+        self.chunks: list[FloatArray] = []
+        self.rows = 0
+        self.bounds: list[tuple[int, int, bool]] = []
+        self.diverged = False
+        self.aborted = False
+        self._gen: Generator[float, None, bool] | None = None
+        self._leg_start = 0
+
+    @property
+    def done(self) -> bool:
+        return self.leg_index >= len(self.mission.legs) or self.aborted or self.diverged
+
+    @property
+    def current_leg(self) -> schema.Leg | None:
+        if 0 <= self.leg_index < len(self.mission.legs):
+            return self.mission.legs[self.leg_index]
+        return None
+
+    def _start_leg(self) -> None:
+        self.leg_index += 1
+        self._leg_start = self.rows
+        if self.leg_index < len(self.mission.legs):
+            leg = self.mission.legs[self.leg_index]
+            deadline = self.cl.t_s + leg.timeout_s
+            self._gen = LEG_EXECUTORS[leg.type](self.ctx, leg, deadline)
+
+    def _end_leg(self, ok: bool) -> None:
+        self.bounds.append((self._leg_start, self.rows, not ok))
+
+    def next_request(self) -> float | None:
+        """Seconds to run next, or None when the mission is over."""
+        if self.leg_index < 0:
+            self._start_leg()
+        while not self.done:
+            try:
+                return float(next(self._gen))
+            except StopIteration as stop:
+                self._end_leg(bool(stop.value))
+                self._start_leg()
+        return None
+
+    def record(self, log: LoopLog) -> None:
+        """Keep the log of the time just run."""
+        self.chunks.append(log.data)
+        self.rows += len(log.data)
+
+    def mark_diverged(self) -> None:
+        self.diverged = True
+        self._end_leg(False)
+
+    def abort(self) -> None:
+        if not self.done:
+            self._end_leg(False)
+        self.aborted = True
+
+    def result(self) -> MissionResult:
+        data = np.vstack(self.chunks) if self.chunks else np.zeros((0, loop.N_LOG))
+        m = self.cl.ps.rov.thrusters.T.shape[1]
+        return _score(self.mission, self.cl, data, self.bounds, m, self.diverged)
+
+
 def build_loop(mission: schema.Mission, seed: int | None = None,
-               allocation: str | None = None, feedback: str | None = None) -> ClosedLoop:
+               allocation: str | None = None, feedback: str | None = None,
+               feedforward: bool | None = None) -> ClosedLoop:
     """The ClosedLoop a mission's set-up describes (options override the file)."""
     s = mission.setup
     ps = params_mod.load(s.params)
@@ -218,7 +307,8 @@ def build_loop(mission: schema.Mission, seed: int | None = None,
                                   direction_rad=math.radians(s.waves.direction_deg))
     settings = ControlSettings(
         feedback=feedback or s.feedback, allocation=allocation or s.allocation,
-        reference=s.reference, feedforward=s.feedforward, heave_force_n=s.heave_force_n,
+        reference=s.reference, feedforward=s.feedforward if feedforward is None else feedforward,
+        heave_force_n=s.heave_force_n,
         r_mount_config_m=None if s.r_mount_config_m is None else tuple(s.r_mount_config_m))
     return ClosedLoop(ps, tree_depth_m=s.depth_m, settings=settings,
                       crane_tip_n=np.array([*s.crane_tip_n, 0.0]), current=cur, waves=waves,
@@ -271,29 +361,20 @@ def settling_time(data: FloatArray, dt: float, tol_m: float, tol_deg: float) -> 
 
 
 def run_mission(mission: schema.Mission, seed: int | None = None, allocation: str | None = None,
-                feedback: str | None = None,
-                progress: Callable[[int, int, str], None] | None = None) -> MissionResult:
-    """Execute all legs and score them."""
-    cl = build_loop(mission, seed=seed, allocation=allocation, feedback=feedback)
-    ctx = MissionContext(cl)
-    m = cl.ps.rov.thrusters.T.shape[1]
-    bounds: list[tuple[int, int, bool]] = []
-    diverged = False
-    for i, leg in enumerate(mission.legs):
-        if progress:
-            progress(i, len(mission.legs), leg.type)
-        start_rows = sum(len(c) for c in ctx.chunks)
-        deadline = cl.t_s + leg.timeout_s
+                feedback: str | None = None, feedforward: bool | None = None,
+                progress: Callable[[MissionExecution], None] | None = None) -> MissionResult:
+    """Execute all legs as fast as the machine allows and score them."""
+    cl = build_loop(mission, seed=seed, allocation=allocation, feedback=feedback,
+                    feedforward=feedforward)
+    exe = MissionExecution(mission, cl)
+    while (seconds := exe.next_request()) is not None:
         try:
-            ok = LEG_EXECUTORS[leg.type](ctx, leg, deadline)
+            exe.record(cl.run(seconds))
         except SimulationDiverged:
-            diverged, ok = True, False
-        end_rows = sum(len(c) for c in ctx.chunks)
-        bounds.append((start_rows, end_rows, not ok))
-        if diverged:
-            break
-    data = np.vstack(ctx.chunks) if ctx.chunks else np.zeros((0, loop.N_LOG))
-    return _score(mission, cl, data, bounds, m, diverged)
+            exe.mark_diverged()
+        if progress:
+            progress(exe)
+    return exe.result()
 
 
 def _score(mission: schema.Mission, cl: ClosedLoop, data: FloatArray,
@@ -302,6 +383,8 @@ def _score(mission: schema.Mission, cl: ClosedLoop, data: FloatArray,
     legs = []
     scored_rows = []
     for i, (a, b, timed_out) in enumerate(bounds):
+        if i >= len(mission.legs):
+            break
         leg = mission.legs[i]
         fig = _leg_figures(data[a:b], m, dt)
         legs.append(LegResult(i + 1, leg.type, leg.name, a * dt, (b - a) * dt, *fig, timed_out))

@@ -21,7 +21,8 @@ def run_cli(*args, check=True):
 
 def test_simulate_prints_the_documented_json():
     out = json.loads(run_cli("simulate", "--params", "model-scale", "--depth", "100",
-                             "--duration", "90", "--push", "20@90", "--current", "0@0", "--seed", "4").stdout)
+                             "--duration", "90", "--push", "20@90", "--current", "0@0",
+                             "--seed", "4").stdout)
     for key in ("tree_eta_n", "rov_eta_n", "crane_tip_n", "horizontal_offset_m", "heading_deg",
                 "wire_tension_n", "settled", "real_time_factor"):
         assert key in out
