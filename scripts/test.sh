@@ -1,6 +1,20 @@
 #!/usr/bin/env bash
 # Set up (if needed) and run the default test suite. Extra arguments go to pytest.
+# Installs what the tests need beyond Python packages: Debian's chromium (the console is tested
+# in a real headless browser) and the JavaScript MCAP reader used to cross-check our logs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh --test
+if ! command -v chromium >/dev/null 2>&1; then
+  if [[ $(id -u) -eq 0 ]]; then
+    echo "test: installing Debian's chromium" >&2
+    apt-get update -qq >&2 && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >&2
+  else
+    echo "test: chromium missing and not root: browser tests will fail" >&2
+  fi
+fi
+if [[ -f tests/js/package.json && ! -d tests/js/node_modules ]]; then
+  echo "test: installing the JavaScript test packages" >&2
+  (cd tests/js && npm ci --no-audit --no-fund --loglevel=error >&2)
+fi
 exec .venv/bin/python -m pytest "$@"

@@ -214,6 +214,32 @@ class ObserverSpec(_Strict):
         description="T_b of eq. 2.48b [s]")
 
 
+class DockingSpec(_Strict):
+    """Guideposts on the docking frame and funnels on the tree (thesis chapter 5)."""
+
+    post_xy_m: list[Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]] = Field(
+        min_length=1, max_length=8, description="post positions in the frame's axes [m]")
+    post_height_m: float = Field(gt=0.0, le=10.0)
+    post_radius_m: float = Field(gt=0.0, le=1.0)
+    funnel_mouth_radius_m: float = Field(gt=0.0, le=2.0)
+    max_landing_speed_mps: float = Field(gt=0.0, le=2.0)
+    frame_size_m: Annotated[list[Annotated[float, Field(gt=0.0, le=50.0)]],
+                            Field(min_length=2, max_length=2)]
+
+    @model_validator(mode="after")
+    def _mouth_wider_than_post(self) -> DockingSpec:
+        if self.funnel_mouth_radius_m <= self.post_radius_m:
+            raise ValueError("funnel_mouth_radius_m must be larger than post_radius_m")
+        return self
+
+    def to_numeric(self):  # noqa: ANN201
+        from sim.docking import DockingLayout
+
+        return DockingLayout(np.asarray(self.post_xy_m, float), self.post_height_m,
+                             self.post_radius_m, self.funnel_mouth_radius_m,
+                             self.max_landing_speed_mps, np.asarray(self.frame_size_m, float))
+
+
 class ParameterSetSpec(_Strict):
     """A whole parameter set as it stands in a file."""
 
@@ -228,6 +254,7 @@ class ParameterSetSpec(_Strict):
     gains: GainsSpec
     reference: ReferenceSpec
     observer: ObserverSpec
+    docking: DockingSpec
 
 
 # --------------------------------------------------------------------------------------------

@@ -1,0 +1,137 @@
+"""Speed of the closed loop: plant, sensors, signal checks, EKF, reference, controller and
+allocation at 100 Hz, model scale with sensor feedback (the most expensive configuration).
+
+Prints the real-time factor and steps per second of the whole loop (best of several repeats),
+then the cost of each component measured alone in compiled code, so one can see what
+dominates."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+from numba import njit
+
+from control import ekf, loop, pid, refkernel
+from control.closed_loop import ClosedLoop, ControlSettings
+from sim import environment as envmod
+from sim import params, plant, sensors
+
+
+def thesis_current() -> envmod.CurrentParams:
+    d = math.radians(225.0)
+    return envmod.CurrentParams(speed_mps=0.1, direction_rad=d, speed_min_mps=0.1,
+                                speed_max_mps=0.1, direction_min_rad=d, direction_max_rad=d)
+
+
+@njit(cache=True)
+def _time_plant(x, n, env, P, dt, reps):  # noqa: ANN001, ANN202
+    for _ in range(reps):
+        x = plant.rk4_step(x, n, env, P, dt)
+    return x
+
+
+@njit(cache=True)
+def _time_sensors(x, held, noise, fresh, reps):  # noqa: ANN001, ANN202
+    for _ in range(reps):
+        held = sensors.sample(x, held, noise, fresh, sensors.Y_SENSOR)
+    return held
+
+
+@njit(cache=True)
+def _time_ekf(xh, Pc, C, dt, reps):  # noqa: ANN001, ANN202
+    tau = np.zeros(3)
+    for _ in range(reps):
+        xh, Pc = ekf.predict(xh, Pc, tau, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq,
+                             C.T_b, C.GQG)
+    return xh
+
+
+@njit(cache=True)
+def _time_ekf_correct(xh, Pc, reps):  # noqa: ANN001, ANN202
+    z = xh[0:2].copy()
+    rows = np.array([0, 1])
+    r = np.array([0.01, 0.01])
+    for _ in range(reps):
+        xh, Pc, _ = ekf.correct(xh, Pc, z, rows, r, -1)
+    return xh
+
+
+@njit(cache=True)
+def _time_reference(state, target, params_, reps):  # noqa: ANN001, ANN202
+    for _ in range(reps):
+        state = refkernel.third_order_step(state, target, 0.01, params_)
+    return state
+
+
+@njit(cache=True)
+def _time_controller(C, reps):  # noqa: ANN001, ANN202
+    eta = np.array([0.1, 0.2, 0.3])
+    i_n = np.zeros(3)
+    z = np.zeros(3)
+    for _ in range(reps):
+        tau, i_n, terms, e, de = pid.tree_pid(eta, z, z, z, z, i_n, C.Kp, C.Ki, C.Kd, True,
+                                              C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, loop.EYE3,
+                                              loop.EYE3, C.i_limit, 0.01)
+    return i_n
+
+
+@njit(cache=True)
+def _time_allocation(C, reps):  # noqa: ANN001, ANN202
+    tau = np.array([30.0, -20.0, 0.0, 0.0, 0.0, 15.0])
+    f = np.zeros(C.f_lo.shape[0])
+    for _ in range(reps):
+        f = loop.allocate(tau, C)
+    return f
+
+
+def _per_call(fn, *args, reps: int = 20000) -> float:  # noqa: ANN001
+    fn(*args, 10)
+    t0 = time.perf_counter()
+    fn(*args, reps)
+    return (time.perf_counter() - t0) / reps * 1e6
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--duration", type=float, default=300.0)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    ps = params.load("model-scale")
+    settings = ControlSettings(feedback="ekf", allocation="priority", feedforward=True)
+    ClosedLoop(ps, tree_depth_m=400.0, current=thesis_current(), settings=settings).run(1.0)
+    best = math.inf
+    for _ in range(args.repeats):
+        cl = ClosedLoop(ps, tree_depth_m=400.0, current=thesis_current(), settings=settings)
+        cl.set_target(2.0, 2.0, 0.5)
+        t0 = time.perf_counter()
+        cl.run(args.duration)
+        best = min(best, time.perf_counter() - t0)
+    steps = int(args.duration / 0.01)
+    print(f"closed loop (model scale, EKF, priority allocation, feedforward): "
+          f"{args.duration:.0f} s simulated in {best:.3f} s")
+    print(f"  {steps / best:,.0f} steps/s, real-time factor {args.duration / best:,.0f}x, "
+          f"{best / steps * 1e6:.1f} us per step")
+    C = cl.C
+    env = cl.sim.environment_chunk(1)[0][0]
+    n = np.zeros(ps.rov.thrusters.T.shape[1])
+    cost = {
+        "plant RK4 step (4 rhs)": _per_call(_time_plant, cl.sim.x, n, env, cl.sim.arrays, 0.01),
+        "sensor sampling": _per_call(_time_sensors, cl.sim.x, cl.sim.held_y, np.zeros(11),
+                                     np.ones(5, dtype=np.bool_)),
+        "EKF predict": _per_call(_time_ekf, cl.xhat, cl.P_cov, C, 0.01),
+        "EKF correct (position)": _per_call(_time_ekf_correct, cl.xhat, cl.P_cov),
+        "reference (3rd order)": _per_call(_time_reference, np.zeros(9), np.ones(3),
+                                           C.ref_params),
+        "controller (PID + FF)": _per_call(_time_controller, C),
+        "allocation (priority)": _per_call(_time_allocation, C),
+    }
+    print("cost per call, measured alone (us):")
+    for name, us in cost.items():
+        print(f"  {name:26s} {us:7.2f}")
+
+
+if __name__ == "__main__":
+    main()
