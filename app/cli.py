@@ -6,6 +6,7 @@ import json
 import math
 import sys
 import time
+from pathlib import Path
 from typing import Annotated
 
 import numpy as np
@@ -203,6 +204,164 @@ def _print_result_table(summary: dict) -> None:
                   f"{summary['settling_time_s']} s; diverged: {summary['diverged']}")
     for w in summary["warnings"]:
         console.print(f"[bold red]WARNING[/]: {w}")
+
+
+def _validate_choice(name: str, value: str | None, allowed: tuple[str, ...]) -> None:
+    if value is not None and value not in allowed:
+        raise typer.BadParameter(f"{name} must be one of {', '.join(allowed)}, got {value!r}")
+
+
+@app.command()
+def run(
+    mission: Annotated[str, typer.Argument(help="mission file (TOML) or a library name")],
+    json_out: Annotated[bool, typer.Option("--json", help="one JSON object")] = False,
+    log: Annotated[str | None, typer.Option(help="write the session to this MCAP file")] = None,
+    plots: Annotated[str | None, typer.Option(help="write PNG figures into this folder")] = None,
+    seed: Annotated[int | None, typer.Option(help="random seed (default: the file's)")] = None,
+    allocation: Annotated[str | None, typer.Option(help="pinv | priority | qp")] = None,
+    feedback: Annotated[str | None, typer.Option(help="perfect | ekf")] = None,
+    law: Annotated[str | None, typer.Option(help="thesis | feedforward")] = None,
+    progress: Annotated[bool, typer.Option(help="show a progress bar")] = True,
+) -> None:
+    """Run a mission headless, faster than real time; exit 1 if it failed."""
+    from missions import runner, schema
+
+    _validate_choice("--allocation", allocation, ("pinv", "priority", "qp"))
+    _validate_choice("--feedback", feedback, ("perfect", "ekf"))
+    _validate_choice("--law", law, ("thesis", "feedforward"))
+    try:
+        spec = schema.load_mission(mission)
+        cl = runner.build_loop(spec, seed=seed, allocation=allocation, feedback=feedback,
+                               feedforward=None if law is None else law == "feedforward")
+    except ValueError as err:
+        _fail(str(err))
+        return
+    exe = runner.MissionExecution(spec, cl)
+    recorder = _open_recorder(log, spec, cl, seed) if log else None
+    t0 = time.perf_counter()
+    try:
+        _drive(exe, cl, recorder, show=progress and not json_out)
+    finally:
+        if recorder is not None:
+            for event in exe.ctx.events:
+                recorder.event(event["t_s"], event["kind"], event["text"], event["data"])
+            recorder.close()
+    wall = time.perf_counter() - t0
+    result = exe.result()
+    summary = result.summary()
+    summary["simulated_s"] = round(cl.t_s, 2)
+    summary["real_time_factor"] = round(cl.t_s / wall, 1) if wall > 0 else None
+    summary["events"] = result.events
+    if log:
+        summary["log"] = log
+    if plots:
+        from app.plots import mission_figures
+
+        summary["plots"] = [str(p) for p in mission_figures(result, Path(plots),
+                                                               cl.sim.crane_tip_n)]
+    if json_out:
+        typer.echo(json.dumps(summary, indent=2, default=_json_default))
+    else:
+        _print_result_table(summary)
+        _print_landings(summary)
+    if result.failed:
+        raise typer.Exit(code=1)
+
+
+def _json_default(value: object) -> object:
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return str(value)
+
+
+def _drive(exe, cl, recorder, show: bool) -> None:  # type: ignore[no-untyped-def]
+    """Run the mission to its end, with a progress bar over its legs."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from sim.simulator import SimulationDiverged
+
+    columns = (TextColumn("{task.description}"), BarColumn(),
+               TextColumn("leg {task.completed:.0f}/{task.total:.0f}"),
+               TextColumn("sim {task.fields[sim]:7.0f} s"), TimeElapsedColumn())
+    with Progress(*columns, disable=not show, transient=True) as bar:
+        task = bar.add_task(exe.mission.name, total=len(exe.mission.legs), sim=0.0)
+        while (seconds := exe.next_request()) is not None:
+            try:
+                log = cl.run(seconds)
+            except SimulationDiverged:
+                exe.mark_diverged()
+                break
+            exe.record(log)
+            if recorder is not None:
+                recorder.write_log(log.data, crane_tip_n=cl.sim.crane_tip_n,
+                                   wire_length_m=cl.sim.wire_length_m)
+            leg = exe.current_leg
+            bar.update(task, completed=max(exe.leg_index, 0), sim=cl.t_s,
+                       description=f"{exe.mission.name}: {leg.type if leg else 'done'}")
+
+
+def _open_recorder(path: str, spec, cl, seed):  # type: ignore[no-untyped-def]
+    from importlib.metadata import version
+
+    from app.recording import SessionRecorder
+    from missions import schema
+
+    metadata = {
+        "mission": schema.dump_mission(spec),
+        "mission_name": spec.name,
+        "params": cl.ps.spec.model_dump(mode="json"),
+        "gains": {"kp": list(cl.gains.kp), "ki": list(cl.gains.ki), "kd": list(cl.gains.kd)},
+        "seed": str(spec.setup.seed if seed is None else seed),
+        "settings": {k: str(v) for k, v in vars(cl.settings).items()},
+        "software_version": version("rov-console"),
+    }
+    frame = cl.sim.docking_frame
+    return SessionRecorder(path, metadata=metadata, params=cl.ps,
+                           n_thrusters=cl.ps.rov.thrusters.T.shape[1], docking=frame)
+
+
+def _print_landings(summary: dict) -> None:
+    for i, landing in enumerate(summary.get("landings", []), start=1):
+        verdict = "LANDED" if landing["success"] else "FAILED"
+        typer.echo(f"landing {i}: {verdict} - miss {landing['miss_m']:.3f} m, heading error "
+                   f"{landing['heading_error_deg']:.2f} deg, contact speed "
+                   f"{landing['contact_speed_mps']:.3f} m/s, rests on the {landing['rests_on']}")
+    if summary.get("failed"):
+        typer.echo("mission FAILED", err=True)
+
+
+@app.command()
+def study(
+    name: Annotated[str, typer.Argument(help="table-4.1 (waves) or table-4.2 (robustness)")],
+    duration: Annotated[float, typer.Option(help="table-4.1: seconds per run")] = 600.0,
+    seed: Annotated[int, typer.Option(help="random seed")] = 0,
+    json_out: Annotated[bool, typer.Option("--json")] = False,
+) -> None:
+    """Rerun one of the thesis's studies and print our numbers beside the thesis's."""
+    from missions import studies
+
+    if name not in studies.STUDIES:
+        raise typer.BadParameter(f"study must be one of {', '.join(studies.STUDIES)}, "
+                                 f"got {name!r}")
+    rows = studies.table_4_1(duration, seed) if name == "table-4.1" else studies.table_4_2(seed)
+    if json_out:
+        typer.echo(json.dumps([{"case": r.label, "ours": r.ours, "thesis": r.thesis}
+                               for r in rows], indent=2))
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=f"{name}: RMS of north [m], east [m], heading [deg] - ours | thesis")
+    for col in ("case", "N ours", "N thesis", "E ours", "E thesis", "psi ours", "psi thesis"):
+        table.add_column(col, justify="right")
+    for r in rows:
+        table.add_row(r.label, f"{r.ours[0]:.4f}", f"{r.thesis[0]:.4f}", f"{r.ours[1]:.4f}",
+                      f"{r.thesis[1]:.4f}", f"{r.ours[2]:.4f}", f"{r.thesis[2]:.4f}")
+    Console(width=130).print(table)
 
 
 def main() -> None:

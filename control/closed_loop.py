@@ -16,10 +16,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from control import allocation as alloc
-from control import loop, model, quality
+from control import loop, model, quality, reference, refkernel
 from control.startup import StartupReport, check_mount_vector
 from sim import environment as envmod
 from sim import plant, sensors
+from sim import wire as wm
 from sim.gnc import ssa
 from sim.params import ParameterSet
 from sim.simulator import SimulationDiverged, Simulator
@@ -137,16 +138,17 @@ class LoopLog:
 
 
 def _ref_params(ps: ParameterSet, kind: Reference) -> FloatArray:
+    """The parameter set's reference limits as the packed array of control.refkernel."""
     r = ps.spec.reference
-    out = np.zeros((4, 3))
-    out[0] = r.bandwidth_rad_s
-    out[1] = [r.max_speed_mps, r.max_speed_mps, math.radians(r.max_yaw_rate_deg_s)]
-    out[2] = [r.max_accel_mps2, r.max_accel_mps2, math.radians(r.max_yaw_accel_deg_s2)]
-    out[3] = r.accel_time_constant_s
+    speed = [r.max_speed_mps, r.max_speed_mps, math.radians(r.max_yaw_rate_deg_s)]
     if kind == "first":
-        # thesis fig. 3.5: first-order low pass (time constant 1/omega) with saturated rate
-        out[2] = np.inf
-    return out
+        # thesis fig. 3.5: first-order low pass (time constant 1 / omega) with saturated rate
+        return refkernel.pack_first_order(reference.FirstOrderParams(
+            time_constant_s=1.0 / r.bandwidth_rad_s, max_rate=speed))
+    return refkernel.pack_third_order(reference.ThirdOrderParams(
+        natural_frequency_rad_s=r.bandwidth_rad_s, damping_ratio=r.damping_ratio,
+        max_speed=speed,
+        max_accel=[r.max_accel_mps2, r.max_accel_mps2, math.radians(r.max_yaw_accel_deg_s2)]))
 
 
 def _free_gains(ps: ParameterSet) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -232,7 +234,7 @@ class ClosedLoop:
                  current: envmod.CurrentParams | None = None,
                  waves: envmod.WaveParams | None = None, seed: int = 0, dt_s: float = 0.01,
                  tree_heading_rad: float = 0.0, chunk_steps: int = 100,
-                 plant_ps: ParameterSet | None = None) -> None:
+                 plant_ps: ParameterSet | None = None, start_gripping: bool = True) -> None:
         """``ps`` is what the control system is configured with; ``plant_ps`` (default: the
         same) is the physical truth the plant simulates, for robustness studies."""
         self.ps = ps
@@ -251,8 +253,16 @@ class ClosedLoop:
         self.thruster_config = system_thruster_config(ps, self.sysm)
         self.C = control_arrays(ps, self.sysm, self.settings, self.gains,
                                 self.sim.crane_tip_n[0:2], dt_s)
+        if not start_gripping:
+            # the ROV waits free, 3 m further back and 1 m above its mount (a hook-up to come)
+            x = self.sim.x.copy()
+            c, s = math.cos(x[5]), math.sin(x[5])
+            x[12:15] += np.array([-3.0 * c, -3.0 * s, -1.0])
+            self.sim.x = x
+            self.sim.held_y = sensors.true_outputs(x)
+            self.sim.gripping = False
         self.cs = np.zeros(loop.N_CS)
-        self.cs[loop.CS_MODE] = loop.MODE_TREE
+        self.cs[loop.CS_MODE] = loop.MODE_TREE if start_gripping else loop.MODE_FREE
         self.cs[loop.CS_LAST_MODE] = -1.0  # first step initialises the reference bumplessly
         self.xhat, self.P_cov = self._initial_estimate()
         w = quality.WINDOW
@@ -260,9 +270,7 @@ class ClosedLoop:
                                    np.zeros((sensors.N_Y, w)), np.zeros((5, 4), np.int64))
         eta0 = self.xhat[0:3] if self.settings.feedback == "ekf" else self.sim.x[[0, 1, 5]]
         self.target = np.array(eta0, float)
-        self.startup: StartupReport = check_mount_vector(
-            self.sim.held_y, self.sysm.r_rov_from_tree_tree_m, self.sim.crane_tip_n,
-            self.sim.wire_length_m, ps, self.sim.current_state.speed_mps)
+        self.startup = self.check_mount() if start_gripping else StartupReport(False, 0.0, 0.0)
 
     # ------------------------------------------------------------------ set-up helpers
     def _initial_estimate(self) -> tuple[FloatArray, FloatArray]:
@@ -330,6 +338,40 @@ class ClosedLoop:
         """Physically grip (True) or release (False) the tree."""
         self.sim.gripping = bool(gripping)
 
+    def set_heave_force(self, force_n: float) -> None:
+        """Constant heave force of the ROV while on the tree (positive = down) [N]."""
+        if not (math.isfinite(force_n) and abs(force_n) <= 1e5):
+            raise ValueError(f"heave force must be in [-1e5, 1e5] N, got {force_n}")
+        self.C = self.C._replace(heave_n=float(force_n))
+        self.settings = replace(self.settings, heave_force_n=float(force_n))
+
+    def set_free_setpoint(self, north_m: float, east_m: float, down_m: float,
+                          psi_rad: float) -> None:
+        """Where the free-flying ROV should hold station (supervisor's free mode)."""
+        values = np.array([north_m, east_m, down_m, psi_rad], float)
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"free-ROV set point must be finite, got {values.tolist()}")
+        self.cs[loop.CS_FSP:loop.CS_FSP + 4] = values
+
+    def check_mount(self) -> StartupReport:
+        """The start-up check of the mount vector against the measured geometry."""
+        return check_mount_vector(self.sim.held_y, self.sysm.r_rov_from_tree_tree_m,
+                                  self.sim.crane_tip_n, self.sim.wire_length_m, self.ps,
+                                  self.sim.current_state.speed_mps)
+
+    def reset_observer(self) -> None:
+        """Restart the EKF from the present measurements (after hook-up)."""
+        self.xhat, self.P_cov = self._initial_estimate()
+
+    def mount_pose_n(self) -> FloatArray:
+        """Where the ROV's origin belongs on the tree now: [north, east, down, psi] (truth of
+        the tree's pose, as the pilot sees it on the camera, and the configured r)."""
+        x = self.sim.x
+        c, s = math.cos(x[5]), math.sin(x[5])
+        r = self.sysm.r_rov_from_tree_tree_m
+        return np.array([x[0] + c * r[0] - s * r[1], x[1] + s * r[0] + c * r[1], x[2] + r[2],
+                         x[5] + self.sysm.psi_rov_from_tree_rad])
+
     def set_allocation(self, kind: Allocation) -> None:
         kinds = {"pinv": loop.ALLOC_PINV, "priority": loop.ALLOC_PRIORITY,
                  "qp": loop.ALLOC_EXTERNAL}
@@ -353,8 +395,18 @@ class ClosedLoop:
         m = self.ps.rov.thrusters.T.shape[1]
         return LoopLog(out, m, self.Q.counters.copy())
 
+    def _sync_site(self) -> None:
+        """The vessel's position and the wire length are known on board: keep the control
+        plant model's wire spring (equilibrium point and stiffness) up to date."""
+        sim = self.sim
+        k_h = wm.horizontal_stiffness(sim.ps.wire.submerged_weight_per_length(),
+                                      self.ps.tree.submerged_weight_n, sim.wire_length_m)
+        if (k_h != self.C.k_h) or np.any(self.C.p_eq != sim.crane_tip_n[0:2]):
+            self.C = self.C._replace(k_h=float(k_h), p_eq=sim.crane_tip_n[0:2].copy())
+
     def _chunk(self, n: int) -> FloatArray:
         sim = self.sim
+        self._sync_site()
         env, _ = sim.environment_chunk(n)
         noise = sensors.draw_noise(sim.sensor_cfg, sim.rng, sim.step_index, n)
         if self.C.alloc_kind == loop.ALLOC_EXTERNAL:

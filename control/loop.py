@@ -72,7 +72,7 @@ class ControlArrays(NamedTuple):
     feedback_ekf: bool
     use_ff: bool
     ref_kind: int
-    ref_params: np.ndarray  # (4, 3): see control.reference.pack_params
+    ref_params: np.ndarray  # (5, 3): see control.refkernel
     Kp: np.ndarray
     Ki: np.ndarray
     Kd: np.ndarray

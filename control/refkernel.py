@@ -1,26 +1,20 @@
 """Compiled reference-model steps used inside the closed-loop kernel.
 
-State per axis [north, east, psi]: position, velocity, acceleration (9 numbers, laid out as
-pos (3), vel (3), acc (3)). Parameters ``params`` (4, 3): rows
+The models themselves (equations, limits, proofs of the limits, tests) are in
+``control.reference``; this module compiles their kernels with numba and packs their
+parameters into one array so the loop can carry them.
 
-    0: omega [1/s]   bandwidth (first order: 1 / time constant)
-    1: v_max         speed limit [m/s, rad/s]
-    2: a_max         acceleration limit [m/s^2, rad/s^2] (third order only)
-    3: t_acc [s]     time constant of the acceleration (third order only)
+State (9): reference position, velocity, acceleration per axis [north, east, psi]. Parameters
+``params`` (5, 3), rows:
 
-First order (thesis section 3.3, fig. 3.5): pos_dot = sat(omega (target - pos), v_max).
+    0: k_pos (third order) or 1 / T (first order)   [1/s]
+    1: k_vel (third order)                           [1/s]
+    2: k_acc (third order)                           [1/s]
+    3: max speed (third order) or max rate (first)   [m/s, rad/s]
+    4: max acceleration (third order)                [m/s^2, rad/s^2]
 
-Third order (the better choice the thesis names, after Fernandes et al. 2012): a velocity
-planner with the speed limit and a braking curve, an acceleration loop with its limit, and a
-first-order lag on the acceleration (so the jerk is finite):
-
-    v_cmd = sign(e) min(v_max, omega |e|, 0.8 sqrt(2 a_max |e|)),   e = target - pos
-    a_cmd = sat(omega_v (v_cmd - vel), a_max),                      omega_v = 2 omega ... 4 omega
-    acc_dot = (a_cmd - acc) / t_acc
-
-The braking curve lets the reference stop at the target from full speed without overshoot;
-for small steps the model is linear and third order. Headings arrive already unwrapped as the
-target (the caller chooses the short way or an absolute, multi-turn target).
+The target's heading arrives already chosen by the caller (the short way round, or an
+absolute multi-turn target), so the kernels take the plain difference.
 """
 
 from __future__ import annotations
@@ -28,50 +22,49 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from control import reference
 from sim.gnc import JIT
+
+_first_kernel = njit(**JIT)(reference.first_order_kernel)
+_third_kernel = njit(**JIT)(reference.third_order_kernel)
+_ZERO3 = np.zeros(3)
+
+
+def pack_first_order(p: reference.FirstOrderParams) -> np.ndarray:
+    out = np.zeros((5, 3))
+    out[0] = 1.0 / p.time_constant_s
+    out[3] = p.max_rate
+    return out
+
+
+def pack_third_order(p: reference.ThirdOrderParams) -> np.ndarray:
+    return np.vstack([p.k_pos, p.k_vel, p.k_acc, p.max_speed, p.max_accel])
 
 
 @njit(**JIT)
 def first_order_step(state: np.ndarray, target: np.ndarray, dt: float,
                      params: np.ndarray) -> np.ndarray:
-    """One step of the saturated first-order reference (exact for the linear part)."""
-    out = np.zeros(9)
-    for i in range(3):
-        e = target[i] - state[i]
-        omega = params[0, i]
-        vmax = params[1, i]
-        rate = omega * e
-        if abs(rate) <= vmax:
-            # exact exponential decay over the step
-            new = target[i] - e * np.exp(-omega * dt)
-            out[3 + i] = (new - state[i]) / dt
-        else:
-            step = vmax * dt if e > 0 else -vmax * dt
-            new = state[i] + step if abs(step) < abs(e) else target[i]
-            out[3 + i] = (new - state[i]) / dt
-        out[i] = new
+    """One exact step of the saturated first-order model (thesis section 3.3)."""
+    error = target - state[0:3]
+    new_error, rate, accel = _first_kernel(error, 1.0 / params[0], params[3], dt)
+    out = np.empty(9)
+    out[0:3] = target - new_error
+    out[3:6] = rate
+    out[6:9] = accel
     return out
 
 
 @njit(**JIT)
 def third_order_step(state: np.ndarray, target: np.ndarray, dt: float,
                      params: np.ndarray) -> np.ndarray:
-    """One step of the speed- and acceleration-limited third-order reference."""
+    """One step of the speed- and acceleration-limited third-order model."""
+    error = target - state[0:3]
+    delta, vel, acc = _third_kernel(error, state[3:6].copy(), state[6:9].copy(), _ZERO3,
+                                    params[0], params[1], params[2], params[3], params[4], dt)
     out = np.empty(9)
-    for i in range(3):
-        pos, vel, acc = state[i], state[3 + i], state[6 + i]
-        omega, vmax, amax, tacc = params[0, i], params[1, i], params[2, i], params[3, i]
-        e = target[i] - pos
-        mag = min(vmax, omega * abs(e), 0.8 * np.sqrt(2.0 * amax * abs(e)))
-        v_cmd = mag if e >= 0 else -mag
-        a_cmd = 3.0 * omega * (v_cmd - vel)
-        a_cmd = min(max(a_cmd, -amax), amax)
-        acc_new = acc + dt * (a_cmd - acc) / tacc if tacc > dt else a_cmd
-        acc_new = min(max(acc_new, -amax), amax)
-        vel_new = min(max(vel + dt * acc_new, -vmax), vmax)
-        out[i] = pos + dt * vel_new
-        out[3 + i] = vel_new
-        out[6 + i] = acc_new
+    out[0:3] = state[0:3] + delta
+    out[3:6] = vel
+    out[6:9] = acc
     return out
 
 

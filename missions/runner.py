@@ -20,8 +20,10 @@ from numpy.typing import NDArray
 from control import loop
 from control.closed_loop import ClosedLoop, ControlSettings, Gains, LoopLog
 from missions import schema
+from sim import docking, site
 from sim import environment as envmod
 from sim import params as params_mod
+from sim.docking import DockingFrame, DockingLayout
 from sim.gnc import ssa
 from sim.simulator import SimulationDiverged
 
@@ -66,7 +68,15 @@ class MissionResult:
     diverged: bool
     warnings: list[str]
     quality_counters: dict[str, dict[str, int]]
+    landings: list[LandingResult] = field(default_factory=list)
+    events: list[dict] = field(default_factory=list)
     log: LoopLog | None = field(default=None, repr=False)
+
+    @property
+    def failed(self) -> bool:
+        """A mission fails when it diverged, a leg timed out or a landing failed."""
+        return (self.diverged or any(leg.timed_out for leg in self.legs) or
+                any(not landing.success for landing in self.landings))
 
     def summary(self) -> dict:
         """JSON-ready figures."""
@@ -78,6 +88,8 @@ class MissionResult:
             "final_eta_n": self.final_eta_n, "diverged": self.diverged,
             "warnings": self.warnings, "quality_counters": self.quality_counters,
             "legs": [vars(leg) for leg in self.legs],
+            "landings": [vars(landing) for landing in self.landings],
+            "failed": self.failed,
         }
 
 
@@ -93,6 +105,14 @@ class MissionContext:
         self.cl = cl
         eta = cl.eta_estimate
         self.target = np.array([eta[0], eta[1], eta[2]])
+        self.last_log: FloatArray = np.zeros((0, loop.N_LOG))
+        self.events: list[dict] = []
+        self.landings: list[LandingResult] = []
+
+    def event(self, kind: str, text: str, **data: object) -> None:
+        """Note something for the log (leg changes, landings, gain changes)."""
+        self.events.append({"t_s": round(self.cl.t_s, 3), "kind": kind, "text": text,
+                            "data": data})
 
     def set_target(self, north: float, east: float, psi: float) -> None:
         self.target = np.array([north, east, psi])
@@ -203,9 +223,182 @@ def _mode(ctx: MissionContext, leg: schema.ModeLeg, deadline: float):
     yield  # a generator that runs no time
 
 
+def _winch_done(cl: ClosedLoop) -> bool:
+    return abs(cl.sim.wire_length_m - cl.sim.wire_target_m) < 1e-6
+
+
+def _wire(ctx: MissionContext, leg: schema.WireLeg, deadline: float):
+    sim = ctx.cl.sim
+    sim.winch_to(sim.wire_length_m + leg.change_m, leg.rate_mps)
+    while not _winch_done(ctx.cl):
+        if ctx.cl.t_s >= deadline:
+            return False
+        yield CHUNK_S
+    yield from ctx.wait(leg.settle_s, deadline)
+    return True
+
+
+def _vessel(ctx: MissionContext, leg: schema.VesselLeg, deadline: float):
+    sim = ctx.cl.sim
+    target = np.array([leg.north_m, leg.east_m, 0.0])
+    if leg.relative:
+        target[0:2] += sim.crane_tip_n[0:2]
+    sim.move_crane_tip(target, leg.speed_mps)
+    while np.linalg.norm(sim.crane_tip_n - target) > 1e-6:
+        if ctx.cl.t_s >= deadline:
+            return False
+        yield CHUNK_S
+    yield from ctx.wait(leg.settle_s, deadline)
+    return True
+
+
+def _heave(ctx: MissionContext, leg: schema.HeaveLeg, deadline: float):
+    ctx.cl.set_heave_force(leg.force_n)
+    ctx.event("heave", f"heave force {leg.force_n:g} N")
+    return True
+    yield  # a generator that runs no time
+
+
+def _hookup(ctx: MissionContext, leg: schema.HookupLeg, deadline: float):
+    cl = ctx.cl
+    cl.set_grip(False)
+    cl.set_mode("free")
+    yield 0.01  # the supervisor hands over to the free-ROV controller
+    while True:
+        mount = cl.mount_pose_n()
+        cl.set_free_setpoint(*mount)
+        rov = cl.sim.x[12:18]
+        miss = float(np.linalg.norm(rov[0:3] - mount[0:3]))
+        if miss <= leg.grip_tolerance_m and abs(ssa(rov[5] - mount[3])) < math.radians(2.0):
+            break
+        if cl.t_s >= deadline:
+            return False
+        yield CHUNK_S
+    cl.set_grip(True)
+    cl.reset_observer()
+    cl.set_mode("tree")
+    report = cl.check_mount()
+    for w in report.warnings:
+        ctx.event("alarm", w)
+    ctx.event("hookup", f"ROV gripped the tree ({miss:.3f} m from the mount)", miss_m=miss)
+    eta = cl.eta_estimate
+    ctx.target = eta.copy()
+    yield from ctx.wait(5.0, deadline)
+    return True
+
+
+@dataclass(frozen=True)
+class LandingResult:
+    """One landing on the docking frame (thesis chapter 5)."""
+
+    success: bool
+    miss_m: float
+    """Largest funnel-to-post distance when the funnels reached the post tops [m]."""
+    heading_error_deg: float
+    contact_speed_mps: float
+    """Vertical speed of the tree at that moment [m/s]."""
+    rests_on: str
+    """"frame" (funnels over the posts, down on the landing surface) or "posts"."""
+    t_contact_s: float
+
+
+def _depth_wire(cl: ClosedLoop, cg_depth: float) -> float:
+    return site.wire_length_for_depth(cl.sim.ps, cg_depth, cl.sim.crane_tip_n[2],
+                                      cl.sim.current_state.speed_mps)
+
+
+def _aligned(cl: ClosedLoop, frame: DockingFrame, layout: DockingLayout,
+             leg: schema.DockLeg) -> bool:
+    """Alignment as the operator sees it (the controller's estimate of the tree's pose)."""
+    eta = cl.eta_estimate
+    pose = np.array([eta[0], eta[1], 0.0, 0.0, 0.0, eta[2]])
+    chk = docking.check_alignment(pose, frame, layout)
+    return chk.miss_m <= leg.align_tolerance_m and abs(chk.heading_error_deg) <= \
+        leg.align_tolerance_deg
+
+
+def _first_contact(rows: FloatArray, post_top: float, half_h: float) -> int | None:
+    bottom = rows[:, loop.L_TREE + 2] + half_h
+    hits = np.flatnonzero(bottom >= post_top)
+    return int(hits[0]) if hits.size else None
+
+
+def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float):
+    cl = ctx.cl
+    frame = cl.sim.docking_frame
+    layout = cl.ps.spec.docking.to_numeric()
+    half_h = float(cl.sim.ps.tree.dimensions_m[2]) / 2.0
+    post_top = frame.post_top_depth_m(layout)
+    cl.sim.winch_to(_depth_wire(cl, post_top - leg.hover_m - half_h), 0.1)
+    psi = ctx.target[2] + ssa(frame.heading_rad - ctx.target[2])
+    ok = yield from ctx.go_and_settle(frame.center_n[0], frame.center_n[1], psi, 0.0, deadline)
+    while ok and not (_winch_done(cl) and _aligned(cl, frame, layout, leg)):
+        if cl.t_s >= deadline:
+            ok = False
+            break
+        yield CHUNK_S
+    if not ok:
+        ctx.event("landing", "landing abandoned: not aligned over the frame in time")
+        return False
+    ctx.event("dock", "aligned over the frame: lowering")
+    cl.sim.winch_to(_depth_wire(cl, frame.landing_depth_m - half_h) + 0.3, leg.lower_rate_mps)
+    contact: tuple[int, FloatArray, FloatArray] | None = None
+    while not _winch_done(cl):
+        if cl.t_s >= deadline:
+            return False
+        yield 0.5
+        rows = ctx.last_log
+        k = _first_contact(rows, post_top, half_h) if contact is None else None
+        if k is not None:
+            prev = rows[k - 1] if k > 0 else rows[k]
+            contact = (k, rows[k].copy(), prev.copy())
+    yield from ctx.wait(leg.settle_s, deadline)
+    result = _landing_result(cl, frame, layout, contact)
+    ctx.landings.append(result)
+    verdict = "landed" if result.success else "FAILED landing"
+    ctx.event("landing", f"{verdict}: miss {result.miss_m:.3f} m, heading error "
+                         f"{result.heading_error_deg:.2f} deg, contact speed "
+                         f"{result.contact_speed_mps:.3f} m/s, rests on the {result.rests_on}",
+              **vars(result))
+    return True
+
+
+def _landing_result(cl: ClosedLoop, frame: DockingFrame, layout: DockingLayout,
+                    contact: tuple[int, FloatArray, FloatArray] | None) -> LandingResult:
+    if contact is None:
+        return LandingResult(False, math.inf, math.nan, 0.0, "nothing", cl.t_s)
+    _, row, prev = contact
+    pose = row[loop.L_TREE:loop.L_TREE + 6]
+    chk = docking.check_alignment(pose, frame, layout)
+    speed = float((row[loop.L_TREE + 2] - prev[loop.L_TREE + 2]) / cl.dt_s)
+    bottom = cl.sim.x[2] + float(cl.sim.ps.tree.dimensions_m[2]) / 2.0
+    on_frame = bottom > frame.landing_depth_m - 0.2 * layout.post_height_m
+    success = chk.captured and speed <= layout.max_landing_speed_mps and on_frame
+    return LandingResult(bool(success), chk.miss_m, chk.heading_error_deg, speed,
+                         "frame" if on_frame else "posts", float(row[loop.L_T]))
+
+
+def _lift(ctx: MissionContext, leg: schema.LiftLeg, deadline: float):
+    cl = ctx.cl
+    frame = cl.sim.docking_frame
+    layout = cl.ps.spec.docking.to_numeric()
+    half_h = float(cl.sim.ps.tree.dimensions_m[2]) / 2.0
+    post_top = frame.post_top_depth_m(layout)
+    cl.sim.winch_to(_depth_wire(cl, post_top - leg.height_m - half_h), leg.rate_mps)
+    while not _winch_done(cl):
+        if cl.t_s >= deadline:
+            return False
+        yield CHUNK_S
+    ctx.event("lift", "tree lifted off the frame")
+    yield from ctx.wait(leg.settle_s, deadline)
+    return True
+
+
 LEG_EXECUTORS: dict[str, Executor] = {
-    "hold": _hold, "rotate": _rotate, "move": _move, "step": _step, "square": _square,
-    "waypoints": _waypoints, "gains": _gains, "mode": _mode,
+    "hold": _hold, "wait": _hold, "rotate": _rotate, "move": _move, "step": _step,
+    "square": _square, "waypoints": _waypoints, "gains": _gains, "mode": _mode,
+    "wire": _wire, "vessel": _vessel, "heave": _heave, "hookup": _hookup, "dock": _dock,
+    "lift": _lift,
 }
 
 
@@ -244,6 +437,9 @@ class MissionExecution:
         self._leg_start = self.rows
         if self.leg_index < len(self.mission.legs):
             leg = self.mission.legs[self.leg_index]
+            self.ctx.event("leg", f"leg {self.leg_index + 1}/{len(self.mission.legs)}: "
+                                  f"{leg.type} {leg.name}".strip(), index=self.leg_index + 1,
+                           type=leg.type)
             deadline = self.cl.t_s + leg.timeout_s
             self._gen = LEG_EXECUTORS[leg.type](self.ctx, leg, deadline)
 
@@ -265,6 +461,7 @@ class MissionExecution:
     def record(self, log: LoopLog) -> None:
         """Keep the log of the time just run."""
         self.chunks.append(log.data)
+        self.ctx.last_log = log.data
         self.rows += len(log.data)
 
     def mark_diverged(self) -> None:
@@ -279,7 +476,10 @@ class MissionExecution:
     def result(self) -> MissionResult:
         data = np.vstack(self.chunks) if self.chunks else np.zeros((0, loop.N_LOG))
         m = self.cl.ps.rov.thrusters.T.shape[1]
-        return _score(self.mission, self.cl, data, self.bounds, m, self.diverged)
+        result = _score(self.mission, self.cl, data, self.bounds, m, self.diverged)
+        result.landings = list(self.ctx.landings)
+        result.events = list(self.ctx.events)
+        return result
 
 
 def build_loop(mission: schema.Mission, seed: int | None = None,
@@ -310,10 +510,16 @@ def build_loop(mission: schema.Mission, seed: int | None = None,
         reference=s.reference, feedforward=s.feedforward if feedforward is None else feedforward,
         heave_force_n=s.heave_force_n,
         r_mount_config_m=None if s.r_mount_config_m is None else tuple(s.r_mount_config_m))
-    return ClosedLoop(ps, tree_depth_m=s.depth_m, settings=settings,
-                      crane_tip_n=np.array([*s.crane_tip_n, 0.0]), current=cur, waves=waves,
-                      seed=s.seed if seed is None else seed,
-                      tree_heading_rad=math.radians(s.heading_deg), plant_ps=plant_ps)
+    cl = ClosedLoop(ps, tree_depth_m=s.depth_m, settings=settings,
+                    crane_tip_n=np.array([*s.crane_tip_n, 0.0]), current=cur, waves=waves,
+                    seed=s.seed if seed is None else seed,
+                    tree_heading_rad=math.radians(s.heading_deg), plant_ps=plant_ps,
+                    start_gripping=s.start_gripping)
+    if s.docking_frame is not None:
+        cl.sim.set_docking_frame(DockingFrame(np.asarray(s.docking_frame.center_ne_m, float),
+                                              math.radians(s.docking_frame.heading_deg),
+                                              s.docking_frame.landing_depth_m))
+    return cl
 
 
 def vary_tree(ps: params_mod.ParameterSet, mass_scale: float,

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import tomli_w
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 FORMAT_VERSION = 1
 LIBRARY_DIR = Path(__file__).with_name("library")
@@ -56,6 +56,16 @@ class PlantVariation(_Model):
                                 description="tree submerged weight factor")
 
 
+class DockingFrameSetup(_Model):
+    """Where the docking frame stands; its posts come from the parameter set."""
+
+    center_ne_m: Annotated[list[Finite], Field(min_length=2, max_length=2)] = Field(
+        description="north, east of the frame's centre [m]")
+    heading_deg: float = Field(ge=-360.0, le=360.0, description="heading the tree must land at")
+    landing_depth_m: float = Field(gt=5.0, le=4000.0,
+                                   description="depth of the landing surface (seabed) [m]")
+
+
 class Setup(_Model):
     params: str = Field(description="parameter set name or file")
     depth_m: float = Field(gt=5.0, le=4000.0, description="tree depth [m]")
@@ -72,6 +82,9 @@ class Setup(_Model):
         default=None, description="mount vector the controller is configured with "
                                   "(default: the parameter set's)")
     plant: PlantVariation = PlantVariation()
+    docking_frame: DockingFrameSetup | None = None
+    start_gripping: bool = Field(default=True, description="false: the ROV starts free, "
+                                 "beside the tree, and a hookup leg brings it on")
     seed: int = Field(default=0, ge=0, le=2**31 - 1)
 
 
@@ -144,8 +157,75 @@ class ModeLeg(_Leg):
     grip: bool | None = Field(default=None, description="also grip (true) or release (false)")
 
 
+class WaitLeg(_Leg):
+    type: Literal["wait"]
+    duration_s: float = Field(gt=0.0, le=86400.0)
+
+
+class WireLeg(_Leg):
+    """Lower (positive) or raise (negative) the tree with the winch."""
+
+    type: Literal["wire"]
+    change_m: float = Field(ge=-500.0, le=500.0, description="pay out (+) or haul in (-) [m]")
+    rate_mps: float = Field(default=0.1, gt=0.0, le=1.0, description="winch speed [m/s]")
+    settle_s: float = Field(default=20.0, ge=0.0, le=3600.0)
+
+
+class VesselLeg(_Leg):
+    """Move the vessel, and with it the crane tip the wire hangs from."""
+
+    type: Literal["vessel"]
+    north_m: float = Field(ge=-1000.0, le=1000.0)
+    east_m: float = Field(ge=-1000.0, le=1000.0)
+    relative: bool = True
+    speed_mps: float = Field(default=0.1, gt=0.0, le=3.0)
+    settle_s: float = Field(default=30.0, ge=0.0, le=3600.0)
+
+
+class DockLeg(_Leg):
+    """Land the tree on the docking frame: align over it at a hover height, lower, and check
+    the funnels over the posts at contact."""
+
+    type: Literal["dock"]
+    hover_m: float = Field(default=1.0, gt=0.0, le=50.0,
+                           description="clearance of the tree's bottom over the post tops")
+    lower_rate_mps: float = Field(default=0.05, gt=0.0, le=0.5, description="winch speed down")
+    align_tolerance_m: float = Field(default=0.05, gt=0.0, le=1.0,
+                                     description="start lowering when aligned this well")
+    align_tolerance_deg: float = Field(default=1.0, gt=0.0, le=30.0)
+    settle_s: float = Field(default=30.0, ge=0.0, le=3600.0)
+
+
+class LiftLeg(_Leg):
+    """Lift the tree off the frame (haul in) back to a hover height."""
+
+    type: Literal["lift"]
+    height_m: float = Field(default=1.0, gt=0.0, le=50.0,
+                            description="clearance of the bottom over the post tops")
+    rate_mps: float = Field(default=0.05, gt=0.0, le=0.5)
+    settle_s: float = Field(default=30.0, ge=0.0, le=3600.0)
+
+
+class HookupLeg(_Leg):
+    """The free-flying ROV flies onto its mount on the tree, grips it, and the supervisor
+    switches to the tree controller (appendix C step 4)."""
+
+    type: Literal["hookup"]
+    grip_tolerance_m: float = Field(default=0.05, gt=0.0, le=1.0)
+
+
+class HeaveLeg(_Leg):
+    """Set the ROV's constant heave force while on the tree (appendix C step 4.iii)."""
+
+    type: Literal["heave"]
+    force_n: float = Field(ge=-1.0e5, le=1.0e5, description="positive = downwards [N]")
+
+
 Leg = Annotated[HoldLeg | RotateLeg | MoveLeg | StepLeg | SquareLeg | WaypointsLeg | GainsLeg |
-                ModeLeg, Field(discriminator="type")]
+                ModeLeg | WaitLeg | WireLeg | VesselLeg | DockLeg | LiftLeg | HookupLeg |
+                HeaveLeg, Field(discriminator="type")]
+LEG_TYPES = ("hold", "rotate", "move", "step", "square", "waypoints", "gains", "mode", "wait",
+             "wire", "vessel", "dock", "lift", "hookup", "heave")
 
 
 class Mission(_Model):
@@ -154,6 +234,18 @@ class Mission(_Model):
     description: str = ""
     setup: Setup
     legs: list[Leg] = Field(min_length=1, max_length=1000)
+
+    @model_validator(mode="after")
+    def _frame_for_docking(self) -> Mission:
+        if self.setup.docking_frame is None:
+            for i, leg in enumerate(self.legs):
+                if leg.type in ("dock", "lift"):
+                    raise ValueError(f"legs[{i + 1}] ({leg.type}) needs setup.docking_frame")
+        if self.setup.docking_frame is not None and \
+                self.setup.docking_frame.landing_depth_m <= self.setup.depth_m:
+            raise ValueError("setup.docking_frame.landing_depth_m must be deeper than "
+                             "setup.depth_m (the tree starts above the frame)")
+        return self
 
 
 def _where(data: dict, loc: tuple) -> str:
@@ -167,41 +259,75 @@ def _where(data: dict, loc: tuple) -> str:
             parts[-1] = f"{parts[-1]}[{p + 1}]" + (f" ({kind})" if kind else "")
             node = node[p] if isinstance(node, list) and p < len(node) else None
         else:
-            if str(p) in ("hold", "rotate", "move", "step", "square", "waypoints", "gains",
-                          "mode"):
+            if str(p) in LEG_TYPES:
                 continue  # discriminator tag, already shown
             parts.append(str(p))
             node = node.get(p) if isinstance(node, dict) else None
     return ".".join(parts)
 
 
-def parse_mission(data: dict, source: str = "<mission>") -> Mission:
-    """Validate a mission dictionary; raise MissionError naming file, field and range."""
+def _line_of(text: str, loc: tuple) -> int | None:
+    """Line number (1-based) in a TOML text where the field at ``loc`` is written, if found."""
+    lines = text.splitlines()
+    start, end = 0, len(lines)
+    keys = [p for p in loc if not (isinstance(p, str) and p in LEG_TYPES)]
+    if keys and keys[0] == "legs" and len(keys) > 1 and isinstance(keys[1], int):
+        headers = [i for i, ln in enumerate(lines) if ln.strip() == "[[legs]]"]
+        if keys[1] >= len(headers):
+            return None
+        start = headers[keys[1]]
+        end = headers[keys[1] + 1] if keys[1] + 1 < len(headers) else len(lines)
+        keys = keys[2:]
+        if not keys:
+            return start + 1
+    elif keys and isinstance(keys[0], str) and len(keys) > 1:
+        section = "[" + ".".join(str(k) for k in keys[:-1] if isinstance(k, str)) + "]"
+        for i, ln in enumerate(lines):
+            if ln.strip() == section:
+                start = i
+                break
+        keys = keys[-1:]
+    for k in keys:
+        if isinstance(k, str):
+            for i in range(start, end):
+                if lines[i].split("=")[0].strip() == k:
+                    return i + 1
+    return None
+
+
+def parse_mission(data: dict, source: str = "<mission>", text: str | None = None) -> Mission:
+    """Validate a mission dictionary; raise MissionError naming file, line (when the TOML text
+    is given), field and allowed values."""
     try:
         return Mission.model_validate(data)
     except ValidationError as err:
         lines = [f"invalid mission {source}:"]
         for e in err.errors():
-            lines.append(f"  {_where(data, e['loc'])}: {e['msg']} (got {e.get('input')!r})")
+            line = _line_of(text, e["loc"]) if text is not None else None
+            where = f"line {line}: " if line else ""
+            lines.append(f"  {where}{_where(data, e['loc'])}: {e['msg']} "
+                         f"(got {e.get('input')!r})")
         raise MissionError("\n".join(lines)) from None
 
 
 def load_mission(path_or_name: str | Path) -> Mission:
     """Load a mission file, or a library mission by name."""
     path = Path(path_or_name)
-    if not path.suffix:
+    if not path.is_file():
         candidate = LIBRARY_DIR / f"{path_or_name}.toml"
-        if not candidate.exists():
-            raise MissionError(f"unknown mission {path_or_name!r}; the library has: "
+        if candidate.is_file():
+            path = candidate
+        elif path.suffix == ".toml" or "/" in str(path_or_name):
+            raise MissionError(f"mission file not found: {path}")
+        else:
+            raise MissionError(f"unknown mission {str(path_or_name)!r}; the library has: "
                                f"{', '.join(library_names())}")
-        path = candidate
-    if not path.exists():
-        raise MissionError(f"mission file not found: {path}")
+    text = path.read_text()
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise MissionError(f"cannot parse {path}: {err}") from None
-    return parse_mission(data, str(path))
+    return parse_mission(data, str(path), text)
 
 
 def dump_mission(mission: Mission) -> str:

@@ -196,8 +196,8 @@ class ReferenceSpec(_Strict):
     max_yaw_rate_deg_s: float = Field(gt=0.0, le=30.0, description="turn rate limit [deg/s]")
     max_yaw_accel_deg_s2: float = Field(gt=0.0, le=10.0, description="turn accel limit [deg/s^2]")
     bandwidth_rad_s: float = Field(gt=0.0, le=5.0, description="omega of the models [rad/s]")
-    accel_time_constant_s: float = Field(default=3.0, gt=0.0, le=60.0,
-                                         description="third order: acceleration lag [s]")
+    damping_ratio: float = Field(default=1.0, ge=0.5, le=3.0,
+                                 description="third order: relative damping (>= 1: no overshoot)")
 
 
 class ObserverSpec(_Strict):
@@ -232,7 +232,7 @@ class DockingSpec(_Strict):
             raise ValueError("funnel_mouth_radius_m must be larger than post_radius_m")
         return self
 
-    def to_numeric(self):  # noqa: ANN201
+    def to_numeric(self):
         from sim.docking import DockingLayout
 
         return DockingLayout(np.asarray(self.post_xy_m, float), self.post_height_m,

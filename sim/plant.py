@@ -50,7 +50,13 @@ E_KZ = 11  # vertical wire stiffness [N/m] (eq. 2.25)
 E_OFF = 12  # 12:14 drag offset of the wire's equilibrium point, NED north/east [m] (eq. 2.29)
 E_PUSH = 14  # 14:17 external force on the tree's centre, NED [N]
 E_GRIP = 17  # 1 while the ROV grips the tree (coupling spring engaged), 0 when released
-N_ENV = 18
+E_FRAME = 18  # 18:20 docking frame centre, NED north/east [m]
+E_FRAME_PSI = 20  # docking frame heading [rad]
+E_LAND = 21  # depth of the frame's landing surface and the seabed around it [m]; 0: no bottom
+N_ENV = 22
+
+# Contact outcome codes (see contact_state)
+CONTACT_NONE, CONTACT_GUIDED, CONTACT_ON_POSTS, CONTACT_LANDED = 0, 1, 2, 3
 
 
 class PlantArrays(NamedTuple):
@@ -81,6 +87,17 @@ class PlantArrays(NamedTuple):
     coupling_K: np.ndarray
     coupling_C: np.ndarray
     has_rov: bool
+    dock_xy: np.ndarray  # (k, 2) funnels in tree axes = posts in frame axes [m]
+    dock_post_height: float  # post top above the landing surface [m]
+    dock_tolerance: float  # capture radius of a funnel around its post [m]
+    dock_skirt: float  # outer radius of a funnel's skirt: a miss inside it lands on the post [m]
+    tree_half_height: float  # [m]
+    tree_footprint: np.ndarray  # (2,) length and width of the tree's bottom [m]
+    contact_k: float  # vertical contact stiffness [N/m]
+    contact_c: float  # vertical contact damping [N s/m]
+    guide_k: float  # post guidance stiffness per funnel [N/m]
+    guide_c: float  # post guidance damping per funnel [N s/m]
+    friction_mu: float  # friction coefficient on the landing surface / post tops [-]
 
 
 def plant_arrays(ps: ParameterSet, has_rov: bool = True,
@@ -103,7 +120,32 @@ def plant_arrays(ps: ParameterSet, has_rov: bool = True,
         mount_r=np.asarray(r_mount, dtype=float).copy(),
         mount_R=Rzyx(0.0, 0.0, ps.mount.psi_rov_from_tree_rad),
         coupling_K=ps.coupling.stiffness.copy(), coupling_C=ps.coupling.damping.copy(),
-        has_rov=bool(has_rov))
+        has_rov=bool(has_rov), **_contact_params(ps))
+
+
+def _contact_params(ps: ParameterSet) -> dict:
+    """Contact with the docking frame: stiff enough that the tree sinks 2 % of its height into
+    the contact under its own weight, damped at zeta 0.7 on the tree's heave mass; the
+    resulting contact mode (about 9 rad/s full scale, 15 rad/s model scale) is resolved by RK4
+    at 100 Hz. The posts guide the funnels with a spring of 5 % of the height per W0, damped
+    at zeta 0.7."""
+    layout = ps.spec.docking.to_numeric()
+    m_heave = ps.tree.M_rb[2, 2] + ps.tree.M_a[2, 2]
+    height = float(ps.tree.dimensions_m[2])
+    k = ps.tree.submerged_weight_n / (0.02 * height)
+    omega = (k / m_heave) ** 0.5
+    # a post in its funnel: the same stiffness sideways, damped like the support
+    k_guide = ps.tree.submerged_weight_n / (0.05 * height)
+    m_surge = ps.tree.M_rb[0, 0] + ps.tree.M_a[0, 0]
+    n_posts = layout.post_xy_m.shape[0]
+    return dict(
+        dock_xy=np.ascontiguousarray(layout.post_xy_m, dtype=float),
+        dock_post_height=float(layout.post_height_m), dock_tolerance=float(layout.tolerance_m),
+        dock_skirt=float(3.0 * layout.funnel_mouth_radius_m), tree_half_height=height / 2.0,
+        tree_footprint=np.array(ps.tree.dimensions_m[0:2], dtype=float),
+        contact_k=float(k), contact_c=float(2.0 * 0.7 * omega * m_heave),
+        guide_k=float(k_guide), guide_c=float(2.0 * 0.7 * (k_guide * m_surge / n_posts) ** 0.5),
+        friction_mu=0.3)
 
 
 @njit(**JIT)
@@ -213,6 +255,90 @@ def _kinematics(eta: np.ndarray, nu: np.ndarray, R_nb: np.ndarray) -> np.ndarray
 
 
 @njit(**JIT)
+def contact_state(x: np.ndarray, env: np.ndarray, P: PlantArrays) -> tuple[int, float, float]:
+    """Where the tree's bottom is against the docking frame: (code, penetration [m], largest
+    funnel miss [m]). GUIDED: every funnel is within the capture tolerance of its post and the
+    bottom is below the post tops (the posts steer it); ON_POSTS: a funnel is off its post but
+    over it and the bottom reached the post tops; LANDED: the bottom reached the landing
+    surface (or the seabed away from the posts)."""
+    if env[E_LAND] <= 0.0:
+        return CONTACT_NONE, 0.0, 0.0
+    bottom = x[2] + P.tree_half_height
+    post_top = env[E_LAND] - P.dock_post_height
+    c, s = np.cos(x[5]), np.sin(x[5])
+    cf, sf = np.cos(env[E_FRAME_PSI]), np.sin(env[E_FRAME_PSI])
+    worst = 0.0
+    nearest = 1e9
+    for i in range(P.dock_xy.shape[0]):
+        fx = x[0] + c * P.dock_xy[i, 0] - s * P.dock_xy[i, 1]
+        fy = x[1] + s * P.dock_xy[i, 0] + c * P.dock_xy[i, 1]
+        px = env[E_FRAME] + cf * P.dock_xy[i, 0] - sf * P.dock_xy[i, 1]
+        py = env[E_FRAME + 1] + sf * P.dock_xy[i, 0] + cf * P.dock_xy[i, 1]
+        d = np.sqrt((fx - px) ** 2 + (fy - py) ** 2)
+        worst = max(worst, d)
+        nearest = min(nearest, d)
+    if bottom <= post_top:
+        return CONTACT_NONE, 0.0, worst
+    # captured: within the tolerance at the post tops, or already deeper in the funnels than a
+    # tree standing on the post tops ever sinks (three times its static contact penetration,
+    # 0.02 of its height): a state reachable only through the funnels, so no memory is needed
+    deep = bottom - post_top > 0.06 * 2.0 * P.tree_half_height
+    if worst <= P.dock_tolerance or (deep and worst <= P.dock_skirt):
+        pen = bottom - env[E_LAND]
+        return (CONTACT_LANDED if pen > 0.0 else CONTACT_GUIDED), pen, worst
+    if nearest <= P.dock_skirt:
+        return CONTACT_ON_POSTS, bottom - post_top, worst
+    pen = bottom - env[E_LAND]
+    return (CONTACT_LANDED if pen > 0.0 else CONTACT_NONE), pen, worst
+
+
+@njit(**JIT)
+def contact_force_n(x: np.ndarray, env: np.ndarray, P: PlantArrays) -> np.ndarray:
+    """Force (NED, 0:3) and moment (NED axes, about the centre, 3:6) of the frame on the tree:
+    a stiff, damped support under the bottom with smooth Coulomb friction on it, and, while the
+    funnels ride down the posts, a guidance spring pulling each funnel onto its post."""
+    out = np.zeros(6)
+    code, pen, worst = contact_state(x, env, P)
+    if code == CONTACT_NONE:
+        return out
+    R = Rzyx(x[3], x[4], x[5])
+    v_n = mv(R, x[6:9])
+    captured = worst <= P.dock_skirt  # guided or landed inside the funnels
+    if captured and (code == CONTACT_GUIDED or code == CONTACT_LANDED):
+        c, s = np.cos(x[5]), np.sin(x[5])
+        cf, sf = np.cos(env[E_FRAME_PSI]), np.sin(env[E_FRAME_PSI])
+        for i in range(P.dock_xy.shape[0]):
+            ax_, ay = c * P.dock_xy[i, 0] - s * P.dock_xy[i, 1], s * P.dock_xy[i, 0] + \
+                c * P.dock_xy[i, 1]
+            px = env[E_FRAME] + cf * P.dock_xy[i, 0] - sf * P.dock_xy[i, 1]
+            py = env[E_FRAME + 1] + sf * P.dock_xy[i, 0] + cf * P.dock_xy[i, 1]
+            vfx = v_n[0] - x[11] * ay
+            vfy = v_n[1] + x[11] * ax_
+            fx = -P.guide_k * (x[0] + ax_ - px) - P.guide_c * vfx
+            fy = -P.guide_k * (x[1] + ay - py) - P.guide_c * vfy
+            out[0] += fx
+            out[1] += fy
+            out[5] += ax_ * fy - ay * fx
+    if pen > 0.0:
+        normal = P.contact_k * pen + P.contact_c * v_n[2]
+        if normal > 0.0:
+            out[2] -= normal
+            speed = np.sqrt(v_n[0] ** 2 + v_n[1] ** 2)
+            scale = P.friction_mu * normal * np.tanh(speed / 0.005) / max(speed, 1e-9)
+            out[0] -= scale * v_n[0]
+            out[1] -= scale * v_n[1]
+            r_turn = np.tanh(x[11] / 0.002)
+            out[5] -= P.friction_mu * normal * 0.5 * P.tree_half_height * r_turn
+            # a flat bottom on a flat support resists roll and pitch: the support's stiffness
+            # spread over the footprint gives k W^2 / 12 (roll) and k L^2 / 12 (pitch)
+            roll_k = P.tree_footprint[1] ** 2 / 12.0
+            pitch_k = P.tree_footprint[0] ** 2 / 12.0
+            out[3] -= roll_k * (P.contact_k * x[3] + P.contact_c * x[9])
+            out[4] -= pitch_k * (P.contact_k * x[4] + P.contact_c * x[10])
+    return out
+
+
+@njit(**JIT)
 def tree_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays,
                 R_t: np.ndarray) -> np.ndarray:
     """Net weight, wire, push and hydrodynamic forces on the tree, tree axes (eq. 2.44)."""
@@ -226,6 +352,13 @@ def tree_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays,
     f_wire_b = mtv(R_t, wire_force_n(p_att_n, env, P.tree_W0))
     tau[0:3] += f_wire_b
     tau[3:6] += cross(P.tree_r_att, f_wire_b)
+    if env[E_LAND] > 0.0:
+        contact = contact_force_n(x, env, P)
+        # the support acts at the bottom: its horizontal friction also tilts the tree
+        f_b = mtv(R_t, contact[0:3])
+        tau[0:3] += f_b
+        bottom = np.array([0.0, 0.0, P.tree_half_height])
+        tau[3:6] += cross(bottom, f_b) + mtv(R_t, contact[3:6])
     return tau
 
 

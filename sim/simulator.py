@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from sim import environment as envmod
 from sim import plant, sensors, site
+from sim.docking import DockingFrame
 from sim.gnc import Rzyx
 from sim.params import ParameterSet
 
@@ -98,6 +99,11 @@ class Simulator:
         self.thruster_speeds_rps = np.zeros(ps.rov.thrusters.T.shape[1])
         self.push_n = np.zeros(3)
         self.gripping = has_rov
+        self.crane_target_n = self.crane_tip_n.copy()
+        self.crane_speed_mps = 0.0
+        self.wire_target_m = self.wire_length_m
+        self.wire_rate_mps = 0.0
+        self.docking_frame: DockingFrame | None = None
         tree_pos = np.array([self.crane_tip_n[0], self.crane_tip_n[1], tree_depth_m])
         self.x = initial_state(ps, tree_pos, tree_heading_rad, has_rov)
         self.held_y = sensors.true_outputs(self.x)
@@ -116,12 +122,51 @@ class Simulator:
         self.push_n = check_finite_vector("push force [N]", force_n, 3)
 
     def set_crane_tip(self, crane_tip_n: FloatArray) -> None:
+        """Put the crane tip somewhere at once (a jump: use ``move_crane_tip`` while running)."""
         self.crane_tip_n = check_finite_vector("crane_tip_n", crane_tip_n, 3)
+        self.crane_target_n = self.crane_tip_n.copy()
 
     def set_wire_length(self, length_m: float) -> None:
+        """Set the unstretched wire length at once (a jump: use ``winch_to`` while running)."""
         if not (math.isfinite(length_m) and 1.0 <= length_m <= 5000.0):
             raise ValueError(f"wire length must be in [1, 5000] m, got {length_m}")
         self.wire_length_m = float(length_m)
+        self.wire_target_m = float(length_m)
+
+    def winch_to(self, length_m: float, rate_mps: float) -> None:
+        """Pay out (or haul in) the wire smoothly to ``length_m`` at ``rate_mps``."""
+        if not (math.isfinite(length_m) and 1.0 <= length_m <= 5000.0):
+            raise ValueError(f"wire length must be in [1, 5000] m, got {length_m}")
+        if not (math.isfinite(rate_mps) and 0.0 < rate_mps <= 2.0):
+            raise ValueError(f"winch rate must be in (0, 2] m/s, got {rate_mps}")
+        self.wire_target_m = float(length_m)
+        self.wire_rate_mps = float(rate_mps)
+
+    def move_crane_tip(self, target_n: FloatArray, speed_mps: float) -> None:
+        """Move the vessel (the crane tip) smoothly to ``target_n`` at ``speed_mps``."""
+        target = check_finite_vector("crane tip target", target_n, 3)
+        if not (math.isfinite(speed_mps) and 0.0 < speed_mps <= 5.0):
+            raise ValueError(f"vessel speed must be in (0, 5] m/s, got {speed_mps}")
+        self.crane_target_n = target
+        self.crane_speed_mps = float(speed_mps)
+
+    def set_docking_frame(self, frame: DockingFrame | None) -> None:
+        """Put a docking frame (and the seabed) under the tree, or take it away."""
+        self.docking_frame = frame
+
+    def _ramp(self, start: float, target: float, rate: float, n: int) -> FloatArray:
+        """Values after each of n steps moving from start towards target at rate."""
+        steps = np.arange(1, n + 1) * self.dt_s * rate
+        return start + np.sign(target - start) * np.minimum(steps, abs(target - start))
+
+    def _crane_path(self, n: int) -> FloatArray:
+        """(n, 3) crane-tip positions over the next n steps."""
+        delta = self.crane_target_n - self.crane_tip_n
+        dist = float(np.linalg.norm(delta))
+        if dist < 1e-12 or self.crane_speed_mps <= 0.0:
+            return np.repeat(self.crane_tip_n[None, :], n, axis=0)
+        frac = self._ramp(0.0, dist, self.crane_speed_mps, n) / dist
+        return self.crane_tip_n[None, :] + frac[:, None] * delta[None, :]
 
     # ---- stepping ----
     def environment_chunk(self, n: int) -> tuple[FloatArray, FloatArray]:
@@ -139,9 +184,20 @@ class Simulator:
                                      float(np.mean(speeds)), float(np.mean(dirs)))
         base[plant.E_PUSH:plant.E_PUSH + 3] = self.push_n
         base[plant.E_GRIP] = 1.0 if self.gripping else 0.0
+        if self.docking_frame is not None:
+            base[plant.E_FRAME:plant.E_FRAME + 2] = self.docking_frame.center_n
+            base[plant.E_FRAME_PSI] = self.docking_frame.heading_rad
+            base[plant.E_LAND] = self.docking_frame.landing_depth_m
         env = np.repeat(base[None, :], n, axis=0)
         env[:, plant.E_VC:plant.E_VC + 3] = water_n
         env[:, plant.E_AC:plant.E_AC + 3] = accel_n
+        # winch and vessel move smoothly within the chunk
+        lengths = self._ramp(self.wire_length_m, self.wire_target_m, self.wire_rate_mps, n)
+        env[:, plant.E_LREST] = lengths + site.self_weight_stretch(self.ps, self.wire_length_m)
+        crane = self._crane_path(n)
+        env[:, plant.E_CT:plant.E_CT + 3] = crane
+        self.wire_length_m = float(lengths[-1])
+        self.crane_tip_n = crane[-1].copy()
         return env, water_n
 
     def run(self, duration_s: float) -> Trajectory:
