@@ -106,6 +106,8 @@ class MissionContext:
         eta = cl.eta_estimate
         self.target = np.array([eta[0], eta[1], eta[2]])
         self.last_log: FloatArray = np.zeros((0, loop.N_LOG))
+        self.previous_row: FloatArray | None = None
+        self.charted_frame: DockingFrame | None = None
         self.events: list[dict] = []
         self.landings: list[LandingResult] = []
 
@@ -325,7 +327,8 @@ def _first_contact(rows: FloatArray, post_top: float, half_h: float) -> int | No
 
 def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float):
     cl = ctx.cl
-    frame = cl.sim.docking_frame
+    frame = ctx.charted_frame  # where the operator believes it is
+    real = cl.sim.docking_frame  # where it is
     layout = cl.ps.spec.docking.to_numeric()
     half_h = float(cl.sim.ps.tree.dimensions_m[2]) / 2.0
     post_top = frame.post_top_depth_m(layout)
@@ -350,10 +353,10 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float):
         rows = ctx.last_log
         k = _first_contact(rows, post_top, half_h) if contact is None else None
         if k is not None:
-            prev = rows[k - 1] if k > 0 else rows[k]
-            contact = (k, rows[k].copy(), prev.copy())
+            prev = rows[k - 1] if k > 0 else ctx.previous_row
+            contact = (k, rows[k].copy(), (rows[k] if prev is None else prev).copy())
     yield from ctx.wait(leg.settle_s, deadline)
-    result = _landing_result(cl, frame, layout, contact)
+    result = _landing_result(cl, real, layout, contact)
     ctx.landings.append(result)
     verdict = "landed" if result.success else "FAILED landing"
     ctx.event("landing", f"{verdict}: miss {result.miss_m:.3f} m, heading error "
@@ -380,7 +383,7 @@ def _landing_result(cl: ClosedLoop, frame: DockingFrame, layout: DockingLayout,
 
 def _lift(ctx: MissionContext, leg: schema.LiftLeg, deadline: float):
     cl = ctx.cl
-    frame = cl.sim.docking_frame
+    frame = ctx.charted_frame
     layout = cl.ps.spec.docking.to_numeric()
     half_h = float(cl.sim.ps.tree.dimensions_m[2]) / 2.0
     post_top = frame.post_top_depth_m(layout)
@@ -413,6 +416,7 @@ class MissionExecution:
         self.mission = mission
         self.cl = cl
         self.ctx = MissionContext(cl)
+        self.ctx.charted_frame = charted_frame(mission)
         self.leg_index = -1
         self.chunks: list[FloatArray] = []
         self.rows = 0
@@ -460,6 +464,8 @@ class MissionExecution:
 
     def record(self, log: LoopLog) -> None:
         """Keep the log of the time just run."""
+        if len(self.ctx.last_log):
+            self.ctx.previous_row = self.ctx.last_log[-1]
         self.chunks.append(log.data)
         self.ctx.last_log = log.data
         self.rows += len(log.data)
@@ -516,10 +522,20 @@ def build_loop(mission: schema.Mission, seed: int | None = None,
                     tree_heading_rad=math.radians(s.heading_deg), plant_ps=plant_ps,
                     start_gripping=s.start_gripping)
     if s.docking_frame is not None:
-        cl.sim.set_docking_frame(DockingFrame(np.asarray(s.docking_frame.center_ne_m, float),
-                                              math.radians(s.docking_frame.heading_deg),
-                                              s.docking_frame.landing_depth_m))
+        chart = charted_frame(mission)
+        real_center = chart.center_n + np.asarray(s.docking_frame.survey_error_ne_m, float)
+        cl.sim.set_docking_frame(DockingFrame(real_center, chart.heading_rad,
+                                              chart.landing_depth_m))
     return cl
+
+
+def charted_frame(mission: schema.Mission) -> DockingFrame | None:
+    """The docking frame where the mission's chart puts it (what the operator aligns to)."""
+    f = mission.setup.docking_frame
+    if f is None:
+        return None
+    return DockingFrame(np.asarray(f.center_ne_m, float), math.radians(f.heading_deg),
+                        f.landing_depth_m)
 
 
 def vary_tree(ps: params_mod.ParameterSet, mass_scale: float,

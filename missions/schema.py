@@ -64,6 +64,9 @@ class DockingFrameSetup(_Model):
     heading_deg: float = Field(ge=-360.0, le=360.0, description="heading the tree must land at")
     landing_depth_m: float = Field(gt=5.0, le=4000.0,
                                    description="depth of the landing surface (seabed) [m]")
+    survey_error_ne_m: Annotated[list[Finite], Field(min_length=2, max_length=2)] = Field(
+        default=[0.0, 0.0], description="where the frame really is, relative to the charted "
+                                        "center_ne_m the operator aligns to [m]")
 
 
 class Setup(_Model):

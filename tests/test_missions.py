@@ -1,0 +1,167 @@
+"""Mission files, the runner's legs (docking above all), `rov-console run` and the studies."""
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from missions import runner, schema, studies
+
+ROOT = Path(__file__).resolve().parents[1]
+EXE = shutil.which("rov-console", path=str(Path(sys.executable).parent)) or "rov-console"
+
+REQUIRED = ["full-rotation-400", "full-square-400", "full-square-100", "model-square-ekf-400",
+            "model-step-pinv", "model-step-priority", "model-step-qp", "model-mass-m50",
+            "model-mass-m20", "model-mass-p20", "model-mass-p50", "model-weight-m50",
+            "model-weight-m20", "model-weight-p20", "model-weight-p50", "model-rotation-wrong-r",
+            "sea-trial-appendix-c", "full-docking-current-0.3"]
+
+
+def test_library_has_every_scenario_and_each_file_round_trips(tmp_path):
+    assert set(REQUIRED) <= set(schema.library_names())
+    for name in schema.library_names():
+        mission = schema.load_mission(name)
+        assert mission.name == name
+        path = tmp_path / f"{name}.toml"
+        path.write_text(schema.dump_mission(mission))
+        assert schema.load_mission(path) == mission
+
+
+BAD = """format_version = 1
+name = "bad"
+
+[setup]
+params = "full-scale"
+depth_m = 400.0
+
+[[legs]]
+type = "hold"
+duration_s = 10.0
+
+[[legs]]
+type = "rotate"
+angle_deg = "ninety"
+
+[[legs]]
+type = "teleport"
+"""
+
+
+def test_bad_file_names_file_line_field_and_allowed_values(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(BAD)
+    with pytest.raises(schema.MissionError) as err:
+        schema.load_mission(path)
+    text = str(err.value)
+    assert str(path) in text
+    assert "line 14: legs[2] (rotate).angle_deg: Input should be a valid number" in text
+    assert "legs[3] (teleport)" in text and "'hold', 'rotate'" in text and "'dock'" in text
+
+
+def test_out_of_range_and_missing_frame_are_refused():
+    base = schema.load_mission("full-square-400").model_dump(mode="json")
+    base["legs"][0]["duration_s"] = -1
+    with pytest.raises(schema.MissionError, match=r"legs\[1\] \(hold\)\.duration_s: Input should "
+                                                  r"be greater than 0"):
+        schema.parse_mission(base)
+    docking = schema.load_mission("full-docking-current-0.3").model_dump(mode="json")
+    del docking["setup"]["docking_frame"]
+    with pytest.raises(schema.MissionError, match=r"legs\[2\] \(dock\) needs setup.docking_frame"):
+        schema.parse_mission(docking)
+    with pytest.raises(schema.MissionError, match="unknown mission 'nowhere'; the library has"):
+        schema.load_mission("nowhere")
+
+
+def test_full_scale_docking_in_current_lands_within_the_funnels():
+    r = runner.run_mission(schema.load_mission("full-docking-current-0.3"))
+    assert not r.failed
+    (landing,) = r.landings
+    assert landing.success and landing.rests_on == "frame"
+    assert landing.miss_m < 0.25  # the funnels' capture tolerance (parameter set)
+    assert landing.contact_speed_mps <= 0.10
+    # the tree rests on the frame: its bottom at the landing surface (static sink 2 % of H)
+    bottom = r.final_eta_n[2] + 2.808 / 2
+    assert 400.0 <= bottom < 400.0 + 0.03 * 2.808
+    assert any(e["kind"] == "landing" for e in r.events)
+
+
+def test_misaligned_landing_is_reported_with_the_miss():
+    """The frame stands 0.4 m from where the chart puts it (a survey error): the ROV aligns
+    the tree perfectly over the charted position, the funnels miss the posts (capture
+    tolerance 0.25 m) and the tree stands on the posts; the result says by how much."""
+    m = schema.load_mission("full-docking-current-0.3").model_dump(mode="json")
+    m["setup"]["docking_frame"]["survey_error_ne_m"] = [0.4, 0.0]
+    r = runner.run_mission(schema.parse_mission(m))
+    (landing,) = r.landings
+    assert not landing.success and r.failed
+    assert landing.rests_on == "posts"
+    # 0.4 m of survey error plus the alignment error at the funnels (estimate-based: up to
+    # about 0.1 m with the LBL noise)
+    assert landing.miss_m == pytest.approx(0.4, abs=0.1)
+    assert abs(landing.heading_error_deg) < 2.0
+    # the winch speed, plus the tree's heave ringing on the elastic wire (1.5 s period, 1 % of
+    # critical damping, excited when the winch starts): +-0.025 m/s
+    assert landing.contact_speed_mps == pytest.approx(0.05, abs=0.03)
+
+
+def test_too_fast_landing_fails_on_speed():
+    m = schema.load_mission("full-docking-current-0.3").model_dump(mode="json")
+    m["legs"][1]["lower_rate_mps"] = 0.25  # the funnels take 0.10 m/s
+    r = runner.run_mission(schema.parse_mission(m))
+    (landing,) = r.landings
+    assert not landing.success
+    assert landing.miss_m < 0.25
+    assert landing.contact_speed_mps > 0.10
+
+
+def test_sea_trial_sequence_hooks_up_and_lands_three_times():
+    r = runner.run_mission(schema.load_mission("sea-trial-appendix-c"))
+    kinds = [e["kind"] for e in r.events]
+    assert "hookup" in kinds and "heave" in kinds
+    assert len(r.landings) == 3
+    assert all(landing.success for landing in r.landings)
+    assert not r.failed
+
+
+def run_cli(*args):
+    return subprocess.run([EXE, *args], capture_output=True, text=True, cwd=ROOT, timeout=600)
+
+
+def test_run_command_json_plots_and_exit_codes(tmp_path):
+    proc = run_cli("run", "full-square-400", "--json", "--plots", str(tmp_path))
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["rms_north_m"] < 0.10 and not out["failed"]
+    assert [leg["type"] for leg in out["legs"]] == ["hold", "rotate", "square"]
+    pngs = sorted(p.name for p in tmp_path.glob("*.png"))
+    assert pngs == ["full-square-400-forces.png", "full-square-400-pose.png",
+                    "full-square-400-track.png"]
+    assert all((tmp_path / p).stat().st_size > 10_000 for p in pngs)
+    # a mission whose leg times out fails: exit 1
+    bad = schema.load_mission("model-step-priority").model_dump(mode="json")
+    bad["legs"] = [{"type": "move", "north_m": 40.0, "east_m": 0.0, "timeout_s": 30.0}]
+    path = tmp_path / "timeout.toml"
+    path.write_text(schema.dump_mission(schema.parse_mission(bad)))
+    proc = run_cli("run", str(path), "--json")
+    assert proc.returncode == 1
+    assert json.loads(proc.stdout)["legs"][0]["timed_out"] is True
+
+
+def test_run_command_rejects_a_bad_file_with_exit_2(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(BAD)
+    proc = run_cli("run", str(path))
+    assert proc.returncode == 2
+    assert "angle_deg" in proc.stderr and "line 14" in proc.stderr
+
+
+def test_table_4_1_control_suppresses_the_long_period_motion():
+    """Thesis 4.1.3: with T = 30 s, Hs = 8 m the controller cuts the north and heading RMS."""
+    unc, ctl = studies.wave_case(30.0, 8.0, duration_s=200.0, seed=0)
+    assert ctl.ours[0] < 0.7 * unc.ours[0]
+    assert ctl.ours[2] < 0.2 * unc.ours[2]
+    assert np.all(np.isfinite(unc.ours + ctl.ours))
