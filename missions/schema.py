@@ -15,6 +15,8 @@ from typing import Annotated, Literal
 import tomli_w
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from sim.params import KdVector, KiVector, KpVector
+
 FORMAT_VERSION = 1
 LIBRARY_DIR = Path(__file__).with_name("library")
 
@@ -146,12 +148,9 @@ class WaypointsLeg(_Leg):
 
 class GainsLeg(_Leg):
     type: Literal["gains"]
-    kp: Annotated[list[Annotated[float, Field(ge=0.0, le=1.0e7)]], Field(min_length=3,
-                                                                         max_length=3)]
-    ki: Annotated[list[Annotated[float, Field(ge=0.0, le=1.0e6)]], Field(min_length=3,
-                                                                         max_length=3)]
-    kd: Annotated[list[Annotated[float, Field(ge=0.0, le=1.0e8)]], Field(min_length=3,
-                                                                         max_length=3)]
+    kp: KpVector
+    ki: KiVector
+    kd: KdVector
 
 
 class ModeLeg(_Leg):

@@ -177,15 +177,23 @@ class SensorsSpec(_Strict):
     gyro: SensorSpec = Field(description="ROV body angular rate [rad/s]")
 
 
+def _gain_vector(limit: float) -> object:
+    """[surge, sway, yaw] gains, each in [0, limit]."""
+    return Annotated[list[Annotated[float, Field(ge=0.0, le=limit, allow_inf_nan=False)]],
+                     Field(min_length=3, max_length=3)]
+
+
+KpVector = _gain_vector(1.0e7)
+KiVector = _gain_vector(1.0e6)
+KdVector = _gain_vector(1.0e8)
+
+
 class GainsSpec(_Strict):
     """Nonlinear PID gains in the tree frame, [surge, sway, yaw] (B.9-B.11, B.19-B.21)."""
 
-    kp: Annotated[list[Annotated[float, Field(ge=0.0, le=1.0e7)]], Field(min_length=3,
-                                                                         max_length=3)]
-    ki: Annotated[list[Annotated[float, Field(ge=0.0, le=1.0e6)]], Field(min_length=3,
-                                                                         max_length=3)]
-    kd: Annotated[list[Annotated[float, Field(ge=0.0, le=1.0e8)]], Field(min_length=3,
-                                                                         max_length=3)]
+    kp: KpVector
+    ki: KiVector
+    kd: KdVector
 
 
 class ReferenceSpec(_Strict):

@@ -9,19 +9,13 @@ import pytest
 from control import loop, model, quality
 from control.closed_loop import ClosedLoop, ControlSettings, Gains
 from control.startup import check_mount_vector
-from sim import environment as envmod
 from sim import params
 from sim.gnc import Hmtrx
 from sim.sensors import Y_SENSOR
+from tests.helpers import steady_current
 
 MODEL = params.load("model-scale")
 FULL = params.load("full-scale")
-
-
-def current(speed=0.1, direction_deg=225.0):
-    d = math.radians(direction_deg)
-    return envmod.CurrentParams(speed_mps=speed, direction_rad=d, speed_min_mps=speed,
-                                speed_max_mps=speed, direction_min_rad=d, direction_max_rad=d)
 
 
 def test_system_model_mass_is_spd_and_wrench_map_is_the_lever_arm():
@@ -46,7 +40,7 @@ def test_capacity_matches_the_thrusters():
 
 
 def test_gain_change_is_bumpless():
-    cl = ClosedLoop(MODEL, tree_depth_m=100.0, current=current())
+    cl = ClosedLoop(MODEL, tree_depth_m=100.0, current=steady_current())
     cl.run(60.0)
     cl.set_target(1.5, 1.0, 0.3)  # a moving reference: errors and rates are not zero
     before = cl.run(20.0).tau_tree[-1].copy()
@@ -72,7 +66,7 @@ def test_bad_gains_are_refused_with_the_range():
 
 
 def test_supervisor_switch_to_free_rov_has_no_thrust_jump_and_keeps_station():
-    cl = ClosedLoop(MODEL, tree_depth_m=100.0, current=current(0.05))
+    cl = ClosedLoop(MODEL, tree_depth_m=100.0, current=steady_current(0.05))
     cl.run(90.0)
     before = cl.run(1.0).data[-1, loop.L_TAU_ROV:loop.L_TAU_ROV + 6]
     cl.set_grip(False)
@@ -94,7 +88,7 @@ def test_supervisor_switch_to_free_rov_has_no_thrust_jump_and_keeps_station():
 
 def test_heading_only_mode_holds_heading_and_lets_position_go():
     gains = Gains(tuple(MODEL.gains.kp), tuple(MODEL.gains.ki), tuple(MODEL.gains.kd))
-    cl = ClosedLoop(MODEL, tree_depth_m=100.0, current=current(0.1, 90.0),
+    cl = ClosedLoop(MODEL, tree_depth_m=100.0, current=steady_current(0.1, 90.0),
                     settings=ControlSettings(gains=gains.heading_only()))
     cl.set_target(1.0, 1.0, math.radians(30.0))
     log = cl.run(300.0)
@@ -109,7 +103,7 @@ def test_observer_coasts_through_position_dropouts():
     sensors = spec.sensors.model_copy(update={"position": spec.sensors.position.model_copy(
         update={"dropout_probability": 0.97})})
     ps = params.build(spec.model_copy(update={"sensors": sensors}))
-    cl = ClosedLoop(ps, tree_depth_m=100.0, current=current(),
+    cl = ClosedLoop(ps, tree_depth_m=100.0, current=steady_current(),
                     settings=ControlSettings(feedback="ekf"), seed=3)
     log = cl.run(300.0)
     fixes = log.col(loop.L_ACCEPT + 0).sum()

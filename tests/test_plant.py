@@ -11,15 +11,10 @@ from sim import params, plant, site
 from sim import wire as wm
 from sim.gnc import Rzyx
 from sim.simulator import SimulationDiverged, Simulator
+from tests.helpers import steady_current
 
 FULL = params.load("full-scale")
 MODEL = params.load("model-scale")
-
-
-def thesis_current(speed=0.1, direction_deg=225.0):
-    d = math.radians(direction_deg)
-    return envmod.CurrentParams(speed_mps=speed, direction_rad=d, speed_min_mps=speed,
-                                speed_max_mps=speed, direction_min_rad=d, direction_max_rad=d)
 
 
 def test_pushed_tree_shows_the_closed_form_horizontal_stiffness():
@@ -87,11 +82,11 @@ def test_undamped_pendulum_keeps_its_energy_over_100_periods():
     assert np.ptp(traj.x[-int(period / 0.01):, 0]) > 1.5
 
 
-def test_tree_alone_settles_downstream_in_the_thesis_current():
+def test_tree_alone_settles_downstream_in_the_steady_current():
     """Issue 2 / thesis 4.1.1: 0.1 m/s towards 225 deg, wire at N=1, E=1, 400 m, no ROV: the tree
     settles 0.15 to 0.35 m from the wire's surface point (thesis 0.25 m; MODEL_NOTES explains
     why the default wire gives less), downstream, without turning."""
-    sim = Simulator(FULL, tree_depth_m=400.0, current=thesis_current(), has_rov=False)
+    sim = Simulator(FULL, tree_depth_m=400.0, current=steady_current(), has_rov=False)
     traj = sim.run(1500.0)
     x = sim.x
     offset = math.hypot(x[0] - 1.0, x[1] - 1.0)
@@ -108,7 +103,7 @@ def test_tree_alone_settles_downstream_in_the_thesis_current():
 def test_tree_with_rov_turns_to_face_the_current():
     """Issue 2 / thesis 4.1.1: the ROV mounted 2 m behind, no control: the pair turns until the
     tree heads into the current (45 deg, the current flows towards 225 deg) and settles."""
-    sim = Simulator(FULL, tree_depth_m=400.0, current=thesis_current(), has_rov=True)
+    sim = Simulator(FULL, tree_depth_m=400.0, current=steady_current(), has_rov=True)
     traj = sim.run(2400.0)
     heading = math.degrees(sim.x[5])
     assert abs(heading - 45.0) < 20.0
