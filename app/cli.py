@@ -12,6 +12,8 @@ from typing import Annotated
 import numpy as np
 import typer
 
+from app.log_cli import log_app
+
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Simulator, control system and console for ROV-assisted tree-on-wire "
                        "installation.")
@@ -129,6 +131,8 @@ def simulation_summary(sim, traj, wall_s: float) -> dict:  # type: ignore[no-unt
 
 SCENARIO_HELP = "name of a scenario in the mission library (see --list)"
 
+app.add_typer(log_app, name="log")
+
 
 @app.command()
 def scenario(
@@ -243,8 +247,7 @@ def run(
         _drive(exe, cl, recorder, show=progress and not json_out)
     finally:
         if recorder is not None:
-            for event in exe.ctx.events:
-                recorder.event(event["t_s"], event["kind"], event["text"], event["data"])
+            _write_new_events(exe, recorder)
             recorder.close()
     wall = time.perf_counter() - t0
     result = exe.result()
@@ -297,11 +300,20 @@ def _drive(exe, cl, recorder, show: bool) -> None:  # type: ignore[no-untyped-de
                 break
             exe.record(log)
             if recorder is not None:
+                _write_new_events(exe, recorder)
                 recorder.write_log(log.data, crane_tip_n=cl.sim.crane_tip_n,
                                    wire_length_m=cl.sim.wire_length_m)
             leg = exe.current_leg
             bar.update(task, completed=max(exe.leg_index, 0), sim=cl.t_s,
                        description=f"{exe.mission.name}: {leg.type if leg else 'done'}")
+
+
+def _write_new_events(exe, recorder) -> None:  # type: ignore[no-untyped-def]
+    """Events (leg changes, landings, alarms) go into the log as they happen."""
+    done = getattr(recorder, "_events_written", 0)
+    for event in exe.ctx.events[done:]:
+        recorder.event(event["t_s"], event["kind"], event["text"], event["data"])
+    recorder._events_written = len(exe.ctx.events)
 
 
 def _open_recorder(path: str, spec, cl, seed):  # type: ignore[no-untyped-def]

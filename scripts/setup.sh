@@ -16,5 +16,7 @@ if [[ ! -f "$stamp" || "$(cat "$stamp")" != "$want" ]]; then
   echo "setup: installing rov-console$extras into .venv" >&2
   .venv/bin/python -m pip install --quiet --disable-pip-version-check --upgrade pip >&2
   .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".$extras" >&2
+  # compile the numeric core into numba's cache now, so every run loads the same machine code
+  .venv/bin/python -m app.precompile >&2
   echo "$want" > "$stamp"
 fi

@@ -1,0 +1,93 @@
+"""``rov-console log``: look into session logs (MCAP) and export them.
+
+Exit codes of ``check``: 0 complete, 1 cut off but readable (everything up to the cut is
+there), 2 unreadable (not an MCAP file, no header, cannot be opened).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from app import recording
+
+EXIT_COMPLETE, EXIT_TRUNCATED, EXIT_UNREADABLE = 0, 1, 2
+
+log_app = typer.Typer(no_args_is_help=True, add_completion=False,
+                      help="Session logs (MCAP): check what a file holds, export it as CSV.")
+
+FileArg = Annotated[Path, typer.Argument(help="session log (.mcap)", show_default=False)]
+
+
+def _print_report(report: dict) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    console = Console(width=110, highlight=False)
+    status = report["status"].upper()
+    console.print(f"[bold]{report['file']}[/]: {status} "
+                  f"({report['intact_bytes']} of {report['file_bytes']} bytes readable)")
+    if report["problem"]:
+        console.print(f"  {report['problem']}")
+    span = report["time_range_s"]
+    if span:
+        console.print(f"  simulation time {span[0]:.2f} .. {span[1]:.2f} s, "
+                      f"{report['rows']} log rows, {report['events']} events")
+    console.print(f"  written by: {report['writer'] or '?'}; setup keys: "
+                  f"{', '.join(report['metadata_keys']) or 'none'}")
+    table = Table()
+    for col, justify in (("topic", "left"), ("schema", "left"), ("messages", "right"),
+                         ("first s", "right"), ("last s", "right")):
+        table.add_column(col, justify=justify)  # type: ignore[arg-type]
+    for ch in report["channels"]:
+        first = "" if ch["first_s"] is None else f"{ch['first_s']:.2f}"
+        last = "" if ch["last_s"] is None else f"{ch['last_s']:.2f}"
+        table.add_row(ch["topic"], ch["schema"], str(ch["messages"]), first, last)
+    console.print(table)
+
+
+@log_app.command()
+def check(
+    file: FileArg,
+    json_out: Annotated[bool, typer.Option("--json", help="one JSON object")] = False,
+) -> None:
+    """Say what is in a session log and whether it is complete (exit 0), cut off but readable
+    (exit 1) or unreadable (exit 2)."""
+    try:
+        report = recording.check_session(file)
+    except ValueError as err:
+        if json_out:
+            typer.echo(json.dumps({"file": str(file), "status": "unreadable",
+                                   "problem": str(err)}))
+        else:
+            typer.echo(f"error: {err}", err=True)
+        raise typer.Exit(EXIT_UNREADABLE) from None
+    if json_out:
+        typer.echo(json.dumps(report, indent=2))
+    else:
+        _print_report(report)
+    raise typer.Exit(EXIT_COMPLETE if report["complete"] else EXIT_TRUNCATED)
+
+
+@log_app.command()
+def export(
+    file: FileArg,
+    csv: Annotated[Path, typer.Option("--csv", help="folder for the CSV files",
+                                      show_default=False)],
+    force: Annotated[bool, typer.Option("--force", help="replace existing CSV files")] = False,
+) -> None:
+    """Write the numeric channels as CSV: session_log.csv (every log column, exact), one file
+    per plot channel, events.csv."""
+    try:
+        written = recording.export_csv(file, csv, overwrite=force)
+    except (ValueError, FileExistsError) as err:
+        typer.echo(f"error: {err}", err=True)
+        raise typer.Exit(EXIT_UNREADABLE) from None
+    except OSError as err:
+        typer.echo(f"error: {csv}: {err.strerror or err}", err=True)
+        raise typer.Exit(EXIT_UNREADABLE) from None
+    for path in written:
+        typer.echo(str(path))

@@ -1,0 +1,554 @@
+"""Session logs (app.recording, app.log_cli): written with mcap, read back by the mcap Python
+reader, by our loader and by Foxglove's JavaScript reader (@mcap/core), complete, cut off,
+damaged and after a SIGKILL of a real writing process."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from mcap.reader import make_reader
+from typer.testing import CliRunner
+
+from app import recording
+from app.log_cli import log_app
+from control import loop
+from control.closed_loop import ClosedLoop, ControlSettings
+from missions import schema
+from sim import params
+from sim.docking import DockingFrame
+from sim.gnc import Rzyx
+
+ROOT = Path(__file__).resolve().parents[1]
+JS_DIR = ROOT / "tests" / "js"
+RUN_S = 20.0
+NUMERIC_HZ, SCENE_HZ = 20.0, 5.0
+PLOT_TOPICS = ("/tree/state", "/rov/state", "/tree/estimate", "/reference", "/measurements",
+               "/control/forces", "/thrusters", "/control/terms", "/wire")
+FOXGLOVE = {"/tf": "foxglove.FrameTransforms", "/scene": "foxglove.SceneUpdate",
+            "/log": "foxglove.Log"}
+EVENTS = [(2.0, "leg", "leg 1: hold", {"leg": 1}), (7.5, "alarm", "compass frozen", {}),
+          (12.0, "gains", "kp x2", {"kp": [100.0, 100.0, 600.0]})]
+
+
+def first_in_each_slot(t_s: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Indices of the first row in each 1/rate slot of time (written independently of the
+    recorder's Decimator)."""
+    return np.unique(np.floor(t_s * rate_hz + 1e-9), return_index=True)[1]
+
+
+def record_run(path: Path, *, seed: int = 0, feedback: str = "perfect", seconds: float = RUN_S,
+               flush_interval_s: float = 0.5, with_events: bool = True) -> np.ndarray:
+    """Record a real closed-loop run in 1 s calls; returns the full source log."""
+    ps = params.load("model-scale")
+    cl = ClosedLoop(ps, tree_depth_m=100.0, seed=seed,
+                    settings=ControlSettings(feedback=feedback))  # type: ignore[arg-type]
+    mission = schema.dump_mission(schema.load_mission("model-square-ekf-400"))
+    dock = DockingFrame(np.array([1.5, 1.0]), math.radians(20.0), 101.0)
+    meta = {"seed": str(seed), "mission": mission, "software": "test",
+            "gains": {"kp": list(cl.gains.kp), "ki": list(cl.gains.ki)}}
+    pieces = []
+    with recording.SessionRecorder(path, metadata=meta, params=ps,
+                                   n_thrusters=cl.ps.rov.thrusters.T.shape[1],
+                                   flush_interval_s=flush_interval_s) as rec:
+        pending = list(EVENTS) if with_events else []
+        for k in range(int(seconds)):
+            if k == 5:
+                cl.set_target(1.5, 1.2, math.radians(30.0))
+            data = cl.run(1.0).data
+            pieces.append(data)
+            rec.write_log(data, crane_tip_n=cl.sim.crane_tip_n,
+                          wire_length_m=cl.sim.wire_length_m, docking=dock)
+            while pending and pending[0][0] <= cl.t_s:
+                rec.event(*pending.pop(0))
+    return np.vstack(pieces)
+
+
+@pytest.fixture(scope="module")
+def session(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, np.ndarray]:
+    path = tmp_path_factory.mktemp("rec") / "session.mcap"
+    return path, record_run(path)
+
+
+def mcap_messages(path: Path) -> tuple[dict, dict[str, list], dict[str, dict[str, str]]]:
+    """(channels by topic, decoded messages by topic, metadata records) via the mcap reader."""
+    with path.open("rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        assert summary is not None, "a closed file has a summary section"
+        channels = {c.topic: (c, summary.schemas[c.schema_id])
+                    for c in summary.channels.values()}
+        msgs: dict[str, list] = {t: [] for t in channels}
+        for _, channel, message in reader.iter_messages():
+            msgs[channel.topic].append((message.log_time, json.loads(message.data)))
+        meta = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
+    return channels, msgs, meta
+
+
+def node_read(path: Path) -> dict:
+    node = shutil.which("node")
+    if node is None or not (JS_DIR / "node_modules" / "@mcap" / "core").is_dir():
+        pytest.fail("the JavaScript reader needs node and `npm ci` in tests/js "
+                    "(scripts/test.sh does it)")
+    proc = subprocess.run([node, str(JS_DIR / "read_mcap.mjs"), str(path)], capture_output=True,
+                          text=True, timeout=60, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)
+
+
+# ------------------------------------------------------------------------------------ layout
+
+
+def test_column_names_tile_the_log_layout():
+    names = recording.column_names()
+    assert len(names) == loop.N_LOG == len(set(names))
+    assert names[loop.L_T] == "t_s"
+    assert names[loop.L_TREE + 5] == "tree_yaw_rad"
+    assert names[loop.L_Y + 4] == "y_heading_rad"
+    assert names[loop.L_ACCEPT + 4] == "accepted_gyro"
+
+
+@given(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5), st.floats(-7.0, 7.0))
+def test_quaternion_is_the_zyx_rotation(phi: float, theta: float, psi: float):
+    """Law: the quaternion's rotation matrix is R_zyx (Fossen eq. 2.18), and it is a unit one."""
+    q = recording.quaternion_from_rpy_radians(phi, theta, psi)
+    x, y, z, w = q["x"], q["y"], q["z"], q["w"]
+    r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                  [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                  [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    assert x * x + y * y + z * z + w * w == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_allclose(r, Rzyx(phi, theta, psi), atol=1e-12)
+
+
+def test_attachment_point_is_above_the_centre_in_body_axes():
+    eta = np.array([3.0, -2.0, 100.0, 0.0, 0.0, 1.0])
+    np.testing.assert_allclose(recording.attachment_point_n(eta, 2.5), [3.0, -2.0, 97.5])
+    tilted = np.array([0.0, 0.0, 100.0, 0.0, math.radians(10.0), 0.0])
+    p = recording.attachment_point_n(tilted, 2.0)  # nose up: the top leans aft (south)
+    np.testing.assert_allclose(p, [-2.0 * math.sin(math.radians(10.0)), 0.0,
+                                   100.0 - 2.0 * math.cos(math.radians(10.0))], atol=1e-12)
+
+
+# ------------------------------------------------------------------------- complete file
+
+
+def test_mcap_reader_sees_every_channel_at_its_rate(session):
+    path, source = session
+    channels, msgs, _ = mcap_messages(path)
+    n_numeric = len(first_in_each_slot(source[:, loop.L_T], NUMERIC_HZ))
+    n_scene = len(first_in_each_slot(source[:, loop.L_T], SCENE_HZ))
+    # rows at 0.01 .. 20.00 s: slot 0 (t < 0.05 s) and slots 1 .. 400
+    assert n_numeric == RUN_S * NUMERIC_HZ + 1 and n_scene == RUN_S * SCENE_HZ + 1
+    expected = {"/session/log": n_numeric, "/tf": n_numeric, "/scene": n_scene,
+                "/events": len(EVENTS), "/log": len(EVENTS)}
+    expected |= dict.fromkeys(PLOT_TOPICS, n_numeric)
+    assert {t: len(m) for t, m in msgs.items()} == expected
+    for topic, name in FOXGLOVE.items():
+        channel, sch = channels[topic]
+        assert (sch.name, sch.encoding, channel.message_encoding) == (name, "jsonschema", "json")
+        assert json.loads(sch.data)["title"] == name
+    tf_schema = json.loads(channels["/tf"][1].data)
+    item = tf_schema["properties"]["transforms"]["items"]["properties"]
+    assert set(item) == {"timestamp", "parent_frame_id", "child_frame_id", "translation",
+                         "rotation"}
+    thr = msgs["/thrusters"][0][1]
+    assert "thruster5_utilisation" in thr and "thruster6_force_n" not in thr  # Minerva: 5
+
+
+def test_messages_carry_the_rows_in_foxglove_frames(session):
+    path, source = session
+    _, msgs, _ = mcap_messages(path)
+    rows = source[first_in_each_slot(source[:, loop.L_T], NUMERIC_HZ)]
+    k = 150
+    t_ns, tf = msgs["/tf"][k]
+    assert t_ns == round(rows[k, loop.L_T] * 1e9)
+    frames = {x["child_frame_id"]: x for x in tf["transforms"]}
+    assert frames["ned"]["parent_frame_id"] == "world"
+    assert frames["ned"]["rotation"] == {"x": 1.0, "y": 0.0, "z": 0.0, "w": 0.0}
+    tree = frames["tree"]["translation"]
+    assert [tree["x"], tree["y"], tree["z"]] == rows[k, loop.L_TREE:loop.L_TREE + 3].tolist()
+    state = msgs["/tree/state"][k][1]
+    assert state["yaw_deg"] == pytest.approx(math.degrees(rows[k, loop.L_TREE + 5]), rel=1e-12)
+    ref = msgs["/reference"][k][1]
+    assert ref["error_north_m"] == pytest.approx(rows[k, loop.L_TREE] - rows[k, loop.L_ETA_D])
+    scene = msgs["/scene"][30][1]
+    ents = {e["id"]: e for e in scene["entities"]}
+    assert set(ents) == {"tree", "rov", "reference", "wire", "docking_frame"}
+    assert ents["tree"]["frame_locked"] and ents["tree"]["frame_id"] == "tree"
+    assert [ents["tree"]["cubes"][0]["size"][a] for a in "xyz"] == [1.0, 1.5, 1.2]
+    assert len(ents["docking_frame"]["cylinders"]) == 2  # the model's two guideposts
+    wire = ents["wire"]["lines"][0]["points"]
+    assert [wire[0][a] for a in "xyz"] == [1.0, 1.0, 0.0]  # crane tip
+    assert wire[1]["z"] < rows[0, loop.L_TREE + 2] - 0.5  # attachment above the tree's centre
+
+
+SCALARS = {"boolean": bool, "string": str, "number": (int, float), "integer": int}
+
+
+def foxglove_can_parse(schema: dict, where: str) -> None:
+    """The rules of Foxglove's JSON-schema reader (@mcap/support parseJsonSchema): objects list
+    their properties, a field has one plain type or numeric oneOf constants, array items are
+    scalars or objects, strings carry no encoding but base64."""
+    assert schema.get("type") == "object" and isinstance(schema.get("properties"), dict), where
+    for name, field in schema["properties"].items():
+        at = f"{where}.{name}"
+        if "oneOf" in field:
+            assert all(isinstance(alt["const"], int) for alt in field["oneOf"]), at
+            continue
+        kind = field.get("type")
+        assert kind in (*SCALARS, "object", "array"), f"{at}: type {kind!r}"
+        if kind == "string":
+            assert field.get("contentEncoding") in (None, "base64"), at
+        if kind == "object":
+            foxglove_can_parse(field, at)
+        if kind == "array":
+            item = field["items"]
+            assert item.get("type") in (*SCALARS, "object") and "contentEncoding" not in item, at
+            if item["type"] == "object":
+                foxglove_can_parse(item, at + "[]")
+
+
+def conforms(value: object, schema: dict, where: str) -> None:
+    """A message has exactly the schema's fields, each of the schema's type."""
+    if "oneOf" in schema:
+        assert value in [alt["const"] for alt in schema["oneOf"]], where
+    elif schema["type"] == "object":
+        assert isinstance(value, dict), where
+        if schema["properties"]:
+            assert set(value) == set(schema["properties"]), where
+            for k, v in value.items():
+                conforms(v, schema["properties"][k], f"{where}.{k}")
+    elif schema["type"] == "array":
+        assert isinstance(value, list), where
+        for i, v in enumerate(value):
+            conforms(v, schema["items"], f"{where}[{i}]")
+    else:
+        assert isinstance(value, SCALARS[schema["type"]]), f"{where}: {value!r}"
+
+
+def test_every_channel_has_a_schema_foxglove_can_parse(session):
+    path, _ = session
+    channels, msgs, _ = mcap_messages(path)
+    for topic, (_, sch) in channels.items():
+        parsed = json.loads(sch.data)
+        foxglove_can_parse(parsed, sch.name)
+        for _, message in msgs[topic][:: max(1, len(msgs[topic]) // 7)]:
+            conforms(message, parsed, topic)
+
+
+def test_metadata_holds_the_setup(session):
+    path, _ = session
+    _, _, meta = mcap_messages(path)
+    setup = {k: json.loads(v) for k, v in meta["setup"].items()}
+    assert setup["params"] == params.load("model-scale").spec.model_dump(mode="json")
+    assert setup["columns"] == recording.COLUMNS
+    assert setup["seed"] == "0"
+    assert setup["mission"].startswith("format_version = 1")
+    assert setup["gains"]["kp"] == list(params.load("model-scale").gains.kp)
+    assert setup["recorder"]["software_version"] == recording.software_version()
+    assert setup["recorder"]["numeric_rate_hz"] == NUMERIC_HZ
+
+
+def test_load_session_returns_the_decimated_rows_exactly(session):
+    path, source = session
+    data = recording.load_session(path)
+    expected = source[first_in_each_slot(source[:, loop.L_T], NUMERIC_HZ)]
+    assert data.complete and data.problem == ""
+    assert data.rows.shape == expected.shape == (RUN_S * NUMERIC_HZ + 1, loop.N_LOG)
+    assert np.array_equal(data.rows, expected)
+    assert np.array_equal(data.t_s, expected[:, loop.L_T])
+    assert [(e["t_s"], e["kind"], e["text"], e["data"]) for e in data.events] == EVENTS
+    assert data.end_time_s == pytest.approx(source[-1, loop.L_T])
+    assert data.metadata["seed"] == "0"
+
+
+def test_javascript_reader_agrees_on_a_complete_file(session):
+    path, _ = session
+    js = node_read(path)
+    _, msgs, _ = mcap_messages(path)
+    assert js["reader"] == "indexed" and js["complete"] is True and js["error"] is None
+    assert js["counts"] == {t: len(m) for t, m in msgs.items()}
+    assert js["schemas"]["/scene"] == "foxglove.SceneUpdate"
+    assert json.loads(js["metadata"]["setup"]["columns"]) == recording.COLUMNS
+
+
+# --------------------------------------------------------------------- cut off and damaged
+
+
+def test_truncated_file_is_read_up_to_the_cut_by_both_readers(session, tmp_path):
+    path, _ = session
+    whole = path.read_bytes()
+    full = recording.load_session(path)
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(whole[:int(0.6 * len(whole))])
+    data = recording.load_session(cut)
+    assert not data.complete and "cut off" in data.problem
+    assert 0 < len(data.rows) < len(full.rows)
+    assert np.array_equal(data.rows, full.rows[:len(data.rows)])
+    assert data.metadata == full.metadata
+    report = recording.check_session(cut)
+    assert report["status"] == "truncated"
+    assert report["intact_bytes"] < report["file_bytes"] == len(whole) * 6 // 10
+    js = node_read(cut)
+    assert js["reader"] == "stream" and js["complete"] is False
+    assert js["counts"] == data.message_counts | {"/events": data.message_counts.get(
+        "/events", 0), "/log": data.message_counts.get("/log", 0)}
+    assert path.read_bytes() == whole  # reading changed nothing
+    assert recording.load_session(path).complete
+
+
+def test_damaged_chunk_stops_the_read_before_it(session, tmp_path):
+    path, _ = session
+    whole = bytearray(path.read_bytes())
+    full = recording.load_session(path)
+    middle = len(whole) // 2
+    whole[middle:middle + 64] = bytes(64)
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(whole))
+    data = recording.load_session(bad)
+    assert not data.complete and "damaged" in data.problem
+    assert 0 < len(data.rows) < len(full.rows)
+    assert np.array_equal(data.rows, full.rows[:len(data.rows)])
+
+
+@pytest.mark.parametrize("content", [b"", b"this is not a log\n", bytes(100),
+                                     recording.MCAP_MAGIC + b"\x01\x05"])
+def test_non_mcap_input_is_a_clear_error(tmp_path, content):
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(content)
+    with pytest.raises(ValueError, match="bad.mcap"):
+        recording.load_session(bad)
+    result = CliRunner().invoke(log_app, ["check", str(bad)])
+    assert result.exit_code == 2
+    assert "bad.mcap" in result.output
+    assert bad.read_bytes() == content
+
+
+# -------------------------------------------------------------------------- SIGKILL
+
+
+CHILD = """
+import sys, time
+from sim import params
+from control.closed_loop import ClosedLoop
+from app.recording import SessionRecorder
+ps = params.load("model-scale")
+cl = ClosedLoop(ps, tree_depth_m=100.0)
+cl.run(0.1)
+with SessionRecorder(sys.argv[1], metadata={"seed": "0"}, params=ps, n_thrusters=5,
+                     flush_interval_s=0.5) as rec:
+    while True:
+        data = cl.run(0.2).data
+        rec.write_log(data, crane_tip_n=cl.sim.crane_tip_n, wire_length_m=cl.sim.wire_length_m)
+        print(f"{time.monotonic():.6f} {data[-1, 0]:.6f}", flush=True)
+        time.sleep(0.002)
+"""
+
+
+def test_sigkill_loses_less_than_one_second(tmp_path):
+    """Kill a real recording process; the file must hold what the child had handed to the
+    recorder one second (wall time) before the kill."""
+    path = tmp_path / "killed.mcap"
+    child = subprocess.Popen([sys.executable, "-c", CHILD, str(path)], cwd=ROOT,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lines: list[tuple[float, float]] = []
+
+    def read() -> None:
+        assert child.stdout is not None
+        for line in child.stdout:
+            wall, sim = line.split()
+            lines.append((float(wall), float(sim)))
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    try:
+        deadline = time.monotonic() + 60.0
+        while not lines and time.monotonic() < deadline and child.poll() is None:
+            time.sleep(0.05)
+        assert lines, f"the child wrote nothing: {child.stderr.read() if child.stderr else ''}"
+        time.sleep(3.0)
+        t_kill = time.monotonic()
+        os.kill(child.pid, signal.SIGKILL)
+    finally:
+        child.kill()
+        child.wait(10)
+    reader.join(10)
+    data = recording.load_session(path)
+    assert not data.complete
+    handed_over_1s_before = max(sim for wall, sim in lines if wall <= t_kill - 1.0)
+    assert data.t_s[-1] >= handed_over_1s_before - 1e-9
+    # rows the child handed over but was killed before reporting count as written at the kill
+    written_at = min((wall for wall, sim in lines if sim >= data.t_s[-1] - 1e-9),
+                     default=t_kill)
+    print(f"SIGKILL: last row {data.t_s[-1]:.2f} s of {lines[-1][1]:.2f} s simulated, "
+          f"handed over {t_kill - written_at:.2f} s of wall time before the kill")
+    assert np.all(np.diff(data.t_s) > 0)
+
+
+# ---------------------------------------------------------------- flushing by the clock
+
+
+class FakeClock:
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def test_flush_inside_calls_follows_the_wall_clock(tmp_path, monkeypatch):
+    monkeypatch.setattr(recording.SessionRecorder, "_start_flusher", lambda self: None)
+    ps = params.load("model-scale")
+    cl = ClosedLoop(ps, tree_depth_m=100.0)
+    clock = FakeClock()
+    path = tmp_path / "clock.mcap"
+    with recording.SessionRecorder(path, metadata={}, params=ps, n_thrusters=5,
+                                   flush_interval_s=0.5, clock=clock) as rec:
+        rec.write_log(cl.run(1.0).data)
+        clock.now = 0.4
+        rec.write_log(cl.run(1.0).data)
+        assert len(recording.load_session(path).rows) == 0  # 0.4 s < 0.5 s: still buffered
+        clock.now = 0.6
+        rec.write_log(cl.run(1.0).data)  # flushes at its first row
+        assert len(recording.load_session(path).rows) == 21 + 20 + 1
+        clock.now = 1.0
+        rec.event(3.0, "leg", "no flush yet")
+        assert recording.load_session(path).message_counts.get("/events", 0) == 0
+        clock.now = 1.2
+        rec.event(3.0, "leg", "flushes")
+        assert recording.load_session(path).message_counts["/events"] == 2
+    data = recording.load_session(path)
+    assert data.complete and len(data.rows) == 61
+
+
+def test_idle_recorder_flushes_from_its_thread(tmp_path):
+    ps = params.load("model-scale")
+    cl = ClosedLoop(ps, tree_depth_m=100.0)
+    clock = FakeClock()
+    path = tmp_path / "idle.mcap"
+    rec = recording.SessionRecorder(path, metadata={}, params=ps, n_thrusters=5,
+                                    flush_interval_s=0.5, clock=clock)
+    try:
+        rec.write_log(cl.run(1.0).data)
+        time.sleep(0.3)
+        assert len(recording.load_session(path).rows) == 0  # the clock has not moved
+        clock.now = 0.5  # the caller stays idle: the background thread flushes
+        deadline = time.monotonic() + 5.0
+        while len(recording.load_session(path).rows) < 21 and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert len(recording.load_session(path).rows) == 21
+    finally:
+        rec.close()
+        rec.close()  # idempotent
+    assert recording.load_session(path).complete
+    with pytest.raises(recording.RecordingError, match="closed"):
+        rec.write_log(cl.run(0.1).data)
+
+
+def test_recorder_refuses_bad_input_and_existing_files(tmp_path):
+    ps = params.load("model-scale")
+    old = tmp_path / "old.mcap"
+    old.write_bytes(b"an earlier session")
+    with pytest.raises(FileExistsError):
+        recording.SessionRecorder(old, metadata={}, params=ps, n_thrusters=5)
+    assert old.read_bytes() == b"an earlier session"
+    with pytest.raises(ValueError, match="written by the recorder"):
+        recording.SessionRecorder(tmp_path / "a.mcap", metadata={"params": {}}, params=ps,
+                                  n_thrusters=5)
+    same = {"params": ps.spec.model_dump(mode="json")}  # the recorder's own value is accepted
+    recording.SessionRecorder(tmp_path / "same.mcap", metadata=same, params=ps,
+                              n_thrusters=5).close()
+    dock = DockingFrame(np.array([0.0, 0.0]), 0.0, 101.0)
+    with recording.SessionRecorder(tmp_path / "b.mcap", metadata={}, params=ps,
+                                   n_thrusters=5, docking=dock) as rec:
+        with pytest.raises(ValueError, match="shape"):
+            rec.write_log(np.zeros((3, loop.N_LOG - 1)))
+        with pytest.raises(ValueError, match="JSON"):
+            rec.event(1.0, "leg", "x", {"bad": object()})
+        rows = np.zeros((2, loop.N_LOG))
+        rows[:, loop.L_T] = [0.05, 0.10]
+        rows[1, loop.L_NIS] = np.nan
+        rec.write_log(rows)
+        with pytest.raises(ValueError, match="forward in time"):
+            rec.write_log(rows)  # the same rows again: refused, not silently dropped
+    data = recording.load_session(tmp_path / "b.mcap")
+    assert math.isnan(data.rows[1, loop.L_NIS]) and data.rows[0, loop.L_NIS] == 0.0
+    _, msgs, _ = mcap_messages(tmp_path / "b.mcap")
+    (_, scene), = msgs["/scene"]
+    assert "docking_frame" in {e["id"] for e in scene["entities"]}
+    assert msgs["/wire"] == []  # no crane tip given: no wire
+
+
+# ------------------------------------------------------------------------- determinism
+
+
+def test_same_seed_gives_the_same_log_contents(tmp_path):
+    """Same seeded EKF run, recorded twice with different flush timing: every message is the
+    same. Another seed gives other contents (the comparison can fail)."""
+    def contents(path: Path) -> list:
+        _, msgs, meta = mcap_messages(path)
+        setup = {k: json.loads(v) for k, v in meta["setup"].items()}
+        del setup["recorder"]["flush_interval_s"]
+        return [setup, sorted((t, ts, json.dumps(m)) for t, ms in msgs.items() for ts, m in ms)]
+
+    a, b, c = (tmp_path / f"{n}.mcap" for n in "abc")
+    record_run(a, seed=7, feedback="ekf", seconds=8)
+    record_run(b, seed=7, feedback="ekf", seconds=8, flush_interval_s=1e-6)
+    record_run(c, seed=8, feedback="ekf", seconds=8)
+    assert contents(a) == contents(b)
+    assert contents(a)[1] != contents(c)[1]
+    assert np.array_equal(recording.load_session(a).rows, recording.load_session(b).rows)
+
+
+# -------------------------------------------------------------------------------- CLI
+
+
+def test_log_check_exit_codes_and_json(session, tmp_path):
+    path, _ = session
+    runner = CliRunner()
+    ok = runner.invoke(log_app, ["check", str(path)])
+    assert ok.exit_code == 0, ok.output
+    assert "COMPLETE" in ok.output and "/scene" in ok.output
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(path.read_bytes()[:path.stat().st_size // 3])
+    res = runner.invoke(log_app, ["check", str(cut), "--json"])
+    assert res.exit_code == 1
+    report = json.loads(res.output)
+    assert report["status"] == "truncated" and report["rows"] > 0
+    assert {c["topic"] for c in report["channels"]} >= set(PLOT_TOPICS)
+
+
+def test_log_export_csv_matches_the_rows(session, tmp_path):
+    path, _ = session
+    out = tmp_path / "csv"
+    res = CliRunner().invoke(log_app, ["export", str(path), "--csv", str(out)])
+    assert res.exit_code == 0, res.output
+    data = recording.load_session(path)
+    with (out / "session_log.csv").open() as f:
+        table = list(csv.reader(f))
+    assert table[0] == data.columns
+    assert np.array_equal(np.array(table[1:], dtype=float), data.rows)
+    with (out / "tree_state.csv").open() as f:
+        tree = list(csv.DictReader(f))
+    assert len(tree) == len(data.rows)
+    np.testing.assert_allclose([float(r["yaw_deg"]) for r in tree],
+                               np.degrees(data.rows[:, loop.L_TREE + 5]), rtol=1e-12)
+    assert [float(r["t_s"]) for r in tree] == data.t_s.tolist()
+    with (out / "events.csv").open() as f:
+        assert [r["kind"] for r in csv.DictReader(f)] == [e[1] for e in EVENTS]
+    assert {p.name for p in out.iterdir()} >= {"thrusters.csv", "wire.csv", "control_terms.csv"}
+    again = CliRunner().invoke(log_app, ["export", str(path), "--csv", str(out)])
+    assert again.exit_code == 2 and "would replace" in again.output
