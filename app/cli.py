@@ -376,6 +376,42 @@ def study(
     Console(width=130).print(table)
 
 
+@app.command()
+def serve(
+    host: Annotated[str, typer.Option(help="address the API and 3D view bind to")] = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="HTTP port (API, /docs, telemetry)")] = 8000,
+    viser_port: Annotated[int, typer.Option("--viser-port", help="port of the 3D view")] = 8080,
+    token: Annotated[str | None, typer.Option(help="token for actions that change the run "
+                                                   "(generated and printed if not given)")] = None,
+    params: Annotated[str, typer.Option(help="parameter set when no mission is given")] =
+        "full-scale",
+    mission: Annotated[str | None, typer.Option(help="library mission or .toml to load and "
+                                                     "start")] = None,
+    depth: Annotated[float, typer.Option(help="tree depth without a mission [m]")] = 400.0,
+    recordings: Annotated[Path, typer.Option(help="directory for session logs (MCAP)")] =
+        Path("recordings"),
+    allow_remote: Annotated[bool, typer.Option("--allow-remote",
+                                               help="allow a non-loopback --host")] = False,
+    paused: Annotated[bool, typer.Option("--paused", help="start paused")] = False,
+    speed: Annotated[float, typer.Option(help="simulated s per wall s, 0.25..50")] = 1.0,
+) -> None:
+    """Serve the operator console: 3D view (viser), HTTP API and telemetry WebSocket."""
+    from app.console import ConsoleSettings
+    from app.server import serve as run_console
+
+    try:
+        settings = ConsoleSettings(host=host, port=port, viser_port=viser_port, token=token,
+                                   params=params, mission=mission, depth_m=depth,
+                                   recordings_dir=recordings, allow_remote=allow_remote,
+                                   paused=paused, speed=speed)
+    except ValueError as err:
+        raise typer.BadParameter(str(err)) from None
+    try:
+        run_console(settings)
+    except ValueError as err:  # unknown parameter set or invalid mission
+        _fail(str(err))
+
+
 def main() -> None:
     """Entry point of the ``rov-console`` script."""
     try:

@@ -27,21 +27,21 @@ def thesis_current() -> envmod.CurrentParams:
 
 
 @njit(cache=True)
-def _time_plant(x, n, env, P, dt, reps):  # noqa: ANN001, ANN202
+def _time_plant(x, n, env, P, dt, reps):
     for _ in range(reps):
         x = plant.rk4_step(x, n, env, P, dt)
     return x
 
 
 @njit(cache=True)
-def _time_sensors(x, held, noise, fresh, reps):  # noqa: ANN001, ANN202
+def _time_sensors(x, held, noise, fresh, reps):
     for _ in range(reps):
         held = sensors.sample(x, held, noise, fresh, sensors.Y_SENSOR)
     return held
 
 
 @njit(cache=True)
-def _time_ekf(xh, Pc, C, dt, reps):  # noqa: ANN001, ANN202
+def _time_ekf(xh, Pc, C, dt, reps):
     tau = np.zeros(3)
     for _ in range(reps):
         xh, Pc = ekf.predict(xh, Pc, tau, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq,
@@ -50,7 +50,7 @@ def _time_ekf(xh, Pc, C, dt, reps):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def _time_ekf_correct(xh, Pc, reps):  # noqa: ANN001, ANN202
+def _time_ekf_correct(xh, Pc, reps):
     z = xh[0:2].copy()
     rows = np.array([0, 1])
     r = np.array([0.01, 0.01])
@@ -60,26 +60,26 @@ def _time_ekf_correct(xh, Pc, reps):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def _time_reference(state, target, params_, reps):  # noqa: ANN001, ANN202
+def _time_reference(state, target, params_, reps):
     for _ in range(reps):
         state = refkernel.third_order_step(state, target, 0.01, params_)
     return state
 
 
 @njit(cache=True)
-def _time_controller(C, reps):  # noqa: ANN001, ANN202
+def _time_controller(C, reps):
     eta = np.array([0.1, 0.2, 0.3])
     i_n = np.zeros(3)
     z = np.zeros(3)
     for _ in range(reps):
-        tau, i_n, terms, e, de = pid.tree_pid(eta, z, z, z, z, i_n, C.Kp, C.Ki, C.Kd, True,
-                                              C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, loop.EYE3,
-                                              loop.EYE3, C.i_limit, 0.01)
+        _, i_n, _, _, _ = pid.tree_pid(eta, z, z, z, z, i_n, C.Kp, C.Ki, C.Kd, True,
+                                       C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, loop.EYE3,
+                                       loop.EYE3, C.i_limit, 0.01)
     return i_n
 
 
 @njit(cache=True)
-def _time_allocation(C, reps):  # noqa: ANN001, ANN202
+def _time_allocation(C, reps):
     tau = np.array([30.0, -20.0, 0.0, 0.0, 0.0, 15.0])
     f = np.zeros(C.f_lo.shape[0])
     for _ in range(reps):
@@ -87,7 +87,7 @@ def _time_allocation(C, reps):  # noqa: ANN001, ANN202
     return f
 
 
-def _per_call(fn, *args, reps: int = 20000) -> float:  # noqa: ANN001
+def _per_call(fn, *args, reps: int = 20000) -> float:
     fn(*args, 10)
     t0 = time.perf_counter()
     fn(*args, reps)

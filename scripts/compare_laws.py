@@ -16,11 +16,11 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from control import loop  # noqa: E402
-from missions import runner, schema  # noqa: E402
+from control import loop
+from missions import runner, schema
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
 LAWS = {"thesis": False, "feedforward": True}

@@ -1,0 +1,178 @@
+"""Operator alarms computed from the closed loop's log rows (``control.loop.L_*`` columns).
+
+Five alarms, each with a limit taken from the parameter set where the thesis gives one:
+
+- ``saturation``: a thruster has been at or above ``SATURATED`` utilisation for more than
+  ``saturation_s`` seconds without a break.
+- ``position_error``: the tree is further from the reference than the funnels' capture
+  tolerance (``DockingLayout.tolerance_m``), or its heading is off by more than
+  ``heading_error_deg``.
+- ``wire_slack``: the wire tension has dropped below ``slack_fraction`` of the tree's
+  submerged weight W0 (the wire only pulls, eq. 2.28: a slack wire no longer carries the tree).
+- ``innovation``: the mean normalised innovation squared of the last ``nis_window`` accepted
+  position or heading fixes is above ``nis_limit`` (its expected value is 1 per axis when the
+  EKF's model and noise agree with the measurements).
+- ``dropout``: a sensor has delivered no accepted sample for ``dropout_periods`` of its sample
+  periods (at least ``dropout_min_s``).
+
+The monitor only reads rows; it never changes the loop. The last two alarms need the EKF (with
+perfect feedback the sensors are not read and the columns stay zero); they stay inactive then.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from control import loop
+from sim.gnc import ssa
+from sim.params import ParameterSet
+from sim.sensors import SENSOR_NAMES
+
+FloatArray = NDArray[np.float64]
+SATURATED = 0.99
+"""Utilisation at or above which a thruster counts as saturated (as missions.runner)."""
+ALARM_NAMES = ("saturation", "position_error", "wire_slack", "innovation", "dropout")
+
+
+@dataclass(frozen=True)
+class AlarmLimits:
+    """Where each alarm trips."""
+
+    position_error_m: float
+    """Horizontal distance tree - reference [m]: the funnels' capture tolerance."""
+    sample_period_s: tuple[float, ...]
+    """Sample period of each sensor (position, depth, compass, dvl, gyro) [s]."""
+    saturation_s: float = 2.0
+    """Continuous saturation of one thruster before the alarm [s] (the issue: 2 s)."""
+    heading_error_deg: float = 10.0
+    """Heading error against the reference [deg]."""
+    slack_fraction: float = 0.1
+    """Tension below this fraction of W0 counts as slack [-]."""
+    nis_limit: float = 4.0
+    """Mean NIS per axis over the window above which the observer disagrees with the sensors."""
+    nis_window: int = 10
+    """Accepted fixes averaged for the innovation alarm."""
+    dropout_periods: float = 3.0
+    """Missing sample periods before a dropout alarm [-]."""
+    dropout_min_s: float = 1.0
+    """Shortest gap reported as a dropout [s]."""
+
+    @staticmethod
+    def for_params(ps: ParameterSet) -> AlarmLimits:
+        """Limits for a parameter set: capture tolerance and the sensors' rates."""
+        layout = ps.spec.docking.to_numeric()
+        spec = ps.spec.sensors
+        periods = tuple(1.0 / getattr(spec, name).rate_hz for name in SENSOR_NAMES)
+        return AlarmLimits(position_error_m=float(layout.tolerance_m), sample_period_s=periods)
+
+
+@dataclass(frozen=True)
+class Alarm:
+    """One alarm's present state."""
+
+    name: str
+    active: bool
+    message: str
+
+
+@dataclass
+class AlarmMonitor:
+    """Keeps the little history the alarms need; ``update`` with each new block of rows."""
+
+    limits: AlarmLimits
+    n_thrusters: int
+    weight_n: float
+    """Tree submerged weight W0 [N]."""
+    uses_sensors: bool
+    """True with EKF feedback: innovation and dropout alarms are armed."""
+    _sat_since: FloatArray = field(init=False)
+    _last_accept: FloatArray = field(init=False)
+    _nis: tuple[deque[float], deque[float]] = field(init=False)
+    _t_s: float = field(init=False, default=0.0)
+    state: tuple[Alarm, ...] = field(init=False)
+
+    def __post_init__(self) -> None:
+        self._sat_since = np.full(self.n_thrusters, np.nan)
+        self._last_accept = np.full(len(SENSOR_NAMES), np.nan)
+        self._nis = (deque(maxlen=self.limits.nis_window), deque(maxlen=self.limits.nis_window))
+        self.state = tuple(Alarm(name, False, "") for name in ALARM_NAMES)
+
+    def update(self, rows: FloatArray, tension_n: float | None) -> tuple[Alarm, ...]:
+        """Advance with log rows (k, N_LOG) and the present wire tension (None: unknown)."""
+        if len(rows) == 0:
+            return self.state
+        self._t_s = float(rows[-1, loop.L_T])
+        self.state = (self._saturation(rows), self._position(rows[-1]), self._slack(tension_n),
+                      self._innovation(rows), self._dropout(rows))
+        return self.state
+
+    def _saturation(self, rows: FloatArray) -> Alarm:
+        util = rows[:, loop.L_UTIL:loop.L_UTIL + self.n_thrusters]
+        t = rows[:, loop.L_T]
+        for i in range(self.n_thrusters):
+            below = np.flatnonzero(util[:, i] < SATURATED)
+            if below.size == len(t):
+                self._sat_since[i] = np.nan
+            elif below.size == 0:
+                if math.isnan(self._sat_since[i]):
+                    self._sat_since[i] = t[0]
+            else:
+                last_below = below[-1]
+                self._sat_since[i] = np.nan if last_below == len(t) - 1 else t[last_below + 1]
+        held = self._t_s - self._sat_since
+        worst = int(np.nanargmax(held)) if np.any(np.isfinite(held)) else -1
+        if worst >= 0 and held[worst] > self.limits.saturation_s:
+            return Alarm("saturation", True, f"thruster {worst + 1} saturated for "
+                                             f"{held[worst]:.1f} s")
+        return Alarm("saturation", False, "")
+
+    def _position(self, row: FloatArray) -> Alarm:
+        err_m = math.hypot(row[loop.L_TREE] - row[loop.L_ETA_D],
+                           row[loop.L_TREE + 1] - row[loop.L_ETA_D + 1])
+        err_deg = abs(math.degrees(ssa(float(row[loop.L_TREE + 5] - row[loop.L_ETA_D + 2]))))
+        if err_m > self.limits.position_error_m or err_deg > self.limits.heading_error_deg:
+            return Alarm("position_error", True,
+                         f"tree {err_m:.2f} m / {err_deg:.1f} deg off the reference")
+        return Alarm("position_error", False, "")
+
+    def _slack(self, tension_n: float | None) -> Alarm:
+        if tension_n is not None and tension_n < self.limits.slack_fraction * self.weight_n:
+            return Alarm("wire_slack", True, f"wire tension {tension_n / 1e3:.1f} kN")
+        return Alarm("wire_slack", False, "")
+
+    def _innovation(self, rows: FloatArray) -> Alarm:
+        if not self.uses_sensors:
+            return Alarm("innovation", False, "")
+        pos = rows[:, loop.L_ACCEPT] > 0.5
+        psi = rows[:, loop.L_ACCEPT + 2] > 0.5
+        self._nis[0].extend(0.5 * (rows[pos, loop.L_NIS] + rows[pos, loop.L_NIS + 1]))
+        self._nis[1].extend(rows[psi, loop.L_NIS + 2])
+        for label, window in zip(("position", "heading"), self._nis, strict=True):
+            if len(window) == window.maxlen and np.mean(window) > self.limits.nis_limit:
+                return Alarm("innovation", True, f"{label} innovation {np.mean(window):.1f} "
+                                                 f"x expected")
+        return Alarm("innovation", False, "")
+
+    def _dropout(self, rows: FloatArray) -> Alarm:
+        if not self.uses_sensors:
+            return Alarm("dropout", False, "")
+        t = rows[:, loop.L_T]
+        accepted = rows[:, loop.L_ACCEPT:loop.L_ACCEPT + len(SENSOR_NAMES)] > 0.5
+        for k in range(len(SENSOR_NAMES)):
+            hits = np.flatnonzero(accepted[:, k])
+            if hits.size:
+                self._last_accept[k] = t[hits[-1]]
+            elif math.isnan(self._last_accept[k]):
+                self._last_accept[k] = t[0]
+        for k, name in enumerate(SENSOR_NAMES):
+            limit = max(self.limits.dropout_periods * self.limits.sample_period_s[k],
+                        self.limits.dropout_min_s)
+            gap = self._t_s - self._last_accept[k]
+            if gap > limit:
+                return Alarm("dropout", True, f"no {name} sample for {gap:.1f} s")
+        return Alarm("dropout", False, "")

@@ -1,0 +1,49 @@
+"""Session recording to MCAP: start, stop, list, download."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, HTTPException, status
+from fastapi.responses import FileResponse
+
+from app.api.deps import UNPROCESSABLE, ConsoleDep, SnapshotDep, TokenDep, run_command
+from app.api.schemas import RecordingInfoOut, RecordingListOut, RecordingOut, RecordingStartIn
+from app.console_engine import ConsoleError, list_recordings, recording_path
+from app.console_loop import StartRecording, StopRecording
+
+router = APIRouter(prefix="/api/recordings", tags=["recordings"])
+
+
+@router.get("", response_model=RecordingListOut)
+def get_recordings(console: ConsoleDep, snapshot: SnapshotDep) -> RecordingListOut:
+    return RecordingListOut(
+        recordings=[RecordingInfoOut(**r) for r in
+                    list_recordings(console.settings.recordings_dir)],
+        recording=snapshot.recording)
+
+
+@router.post("/start", response_model=RecordingOut)
+async def start(body: RecordingStartIn, console: ConsoleDep, _: TokenDep) -> RecordingOut:
+    result = await run_command(console, StartRecording(body.label))
+    return RecordingOut(name=result["name"])  # type: ignore[index]
+
+
+@router.post("/stop", response_model=RecordingOut)
+async def stop(console: ConsoleDep, _: TokenDep) -> RecordingOut:
+    result = await run_command(console, StopRecording())
+    return RecordingOut(name=result["name"])  # type: ignore[index]
+
+
+@router.get("/{name}", response_class=FileResponse,
+            responses={200: {"content": {"application/octet-stream": {}}}})
+def download(name: str, console: ConsoleDep, snapshot: SnapshotDep) -> FileResponse:
+    """The MCAP file (not while it is being written)."""
+    try:
+        path = recording_path(console.settings.recordings_dir, name)
+    except ConsoleError as err:
+        raise HTTPException(UNPROCESSABLE, f"name: {err}") from None
+    if not path.is_file():
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no recording named {name!r}")
+    if name == snapshot.recording:
+        raise HTTPException(status.HTTP_409_CONFLICT,
+                            f"{name} is being written; stop the recording first")
+    return FileResponse(path, media_type="application/octet-stream", filename=name)

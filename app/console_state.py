@@ -1,0 +1,253 @@
+"""Immutable views of the console's state, for readers on other threads and tasks.
+
+The loop task builds a new ``Snapshot`` after every tick and swaps one reference; the HTTP
+routes, the telemetry stream and the 3D view only read snapshots, never the loop itself.
+Angles are radians here (the core's unit); the API turns them into degrees at its edge.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from app.alarms import Alarm
+from control import loop
+from control.closed_loop import Gains
+from sim.docking import DockingFrame, DockingLayout
+from sim.params import ParameterSet
+
+FloatArray = NDArray[np.float64]
+Vec3 = tuple[float, float, float]
+Vec6 = tuple[float, float, float, float, float, float]
+
+TREND_COLUMNS = ("t_s", "north_m", "east_m", "psi_rad", "north_ref_m", "east_ref_m",
+                 "psi_ref_rad")
+"""Columns of ``Snapshot.trend``: the tree against the reference, one row per 0.1 s."""
+TREND_DECIMATION = 10
+"""Plant steps per trend row (10 steps of 0.01 s = 0.1 s at the plant's 100 Hz)."""
+MODES = ("tree", "free")
+"""Controller modes by their code in the log column L_MODE."""
+
+
+@dataclass(frozen=True)
+class SceneInfo:
+    """What the 3D view needs to draw the site; changes only with a new set-up."""
+
+    version: int
+    params_name: str
+    tree_dimensions_m: Vec3
+    """[length, width, height] of the tree's box [m]."""
+    attachment_height_m: float
+    """Wire attachment above the tree's centre of gravity [m]."""
+    rov_dimensions_m: Vec3
+    """Drawing size of the ROV [m] (not a model parameter: scaled from the ROV's mass)."""
+    layout: DockingLayout
+    frame: DockingFrame
+    n_thrusters: int
+    wire_weight_n_per_m: float
+    """Submerged weight of the wire per metre, w [N/m]."""
+    tree_weight_n: float
+    """Tree submerged weight W0 [N]."""
+    preset_gains: Gains
+    """The parameter set's controller gains (the gain sliders' reference)."""
+
+
+@dataclass(frozen=True)
+class MissionStatus:
+    """The mission in progress or the last one run."""
+
+    name: str | None = None
+    state: str = "idle"
+    """idle | running | completed | aborted | diverged"""
+    leg_index: int | None = None
+    """1-based index of the running leg."""
+    legs_total: int = 0
+    leg_type: str | None = None
+    leg_name: str | None = None
+    result: dict | None = None
+    """``MissionResult.summary()`` once the mission has ended."""
+
+
+@dataclass(frozen=True)
+class ReplayStatus:
+    """An open replay."""
+
+    name: str
+    t_s: float
+    start_s: float
+    end_s: float
+    playing: bool
+    complete: bool
+    """False when the log was not closed cleanly (its tail was recovered)."""
+
+
+@dataclass(frozen=True)
+class LoopStats:
+    """How well the loop keeps its pace (over the last few seconds of ticks)."""
+
+    period_s: float
+    jitter_median_ms: float
+    jitter_p99_ms: float
+    ticks: int
+    overruns: int
+    """Times the loop fell so far behind that it re-anchored its clock."""
+    step_ms_p99: float
+    """99th percentile of the time one tick's work took [ms]."""
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """Everything a reader may show, as of one tick."""
+
+    seq: int
+    source: str
+    """live | replay"""
+    t_s: float
+    paused: bool
+    speed: float
+    """Simulated seconds per wall-clock second."""
+    tree_eta_n: Vec6
+    rov_eta_n: Vec6
+    eta_ref: Vec3
+    """Reference [north, east, psi] of the tree."""
+    eta_hat: Vec3
+    """Estimate [north, east, psi] of the tree."""
+    thruster_utilisation: tuple[float, ...]
+    thruster_force_n: tuple[float, ...]
+    mode: str
+    allocation: str | None
+    grip: bool | None
+    gains: Gains | None
+    crane_tip_n: Vec3
+    wire_length_m: float
+    wire_tension_n: float | None
+    current_speed_mps: float
+    current_direction_rad: float
+    wire_drag_n_per_m: float
+    mission: MissionStatus
+    alarms: tuple[Alarm, ...]
+    recording: str | None
+    replay: ReplayStatus | None
+    scene: SceneInfo
+    stats: LoopStats
+    warnings: tuple[str, ...] = ()
+    error: str | None = None
+    trend: FloatArray = field(default_factory=lambda: _frozen(np.zeros((0, 7))), repr=False)
+
+    @property
+    def active_alarms(self) -> tuple[Alarm, ...]:
+        return tuple(a for a in self.alarms if a.active)
+
+
+def _frozen(a: FloatArray) -> FloatArray:
+    a.flags.writeable = False
+    return a
+
+
+def frozen_copy(a: FloatArray) -> FloatArray:
+    """A read-only copy (readers on other threads cannot change what the loop publishes)."""
+    return _frozen(np.array(a, dtype=float, copy=True))
+
+
+def rov_drawing_size_m(ps: ParameterSet) -> Vec3:
+    """A box of water density with the ROV's mass, 1.6 : 1 : 1 (drawing only)."""
+    side = (float(ps.rov.M_rb[0, 0]) / 1000.0 / 1.6) ** (1.0 / 3.0)
+    return (1.6 * side, side, side)
+
+
+def default_docking_frame(ps: ParameterSet, center_ne: FloatArray, heading_rad: float,
+                          tree_depth_m: float) -> DockingFrame:
+    """The frame under the tree's start: post tops half a tree height below its bottom.
+
+    Used until a mission's set-up places the frame (the thesis's chapter 5 frame stands under
+    the hook-up point)."""
+    layout = ps.spec.docking.to_numeric()
+    height = float(ps.tree.dimensions_m[2])
+    landing = tree_depth_m + height / 2.0 + layout.post_height_m + height / 2.0
+    return DockingFrame(np.asarray(center_ne, float).copy(), heading_rad, landing)
+
+
+def scene_info(ps: ParameterSet, frame: DockingFrame, version: int) -> SceneInfo:
+    dims = ps.tree.dimensions_m
+    return SceneInfo(
+        version=version, params_name=ps.name,
+        tree_dimensions_m=(float(dims[0]), float(dims[1]), float(dims[2])),
+        attachment_height_m=float(ps.tree.attachment_height_m),
+        rov_dimensions_m=rov_drawing_size_m(ps), layout=ps.spec.docking.to_numeric(),
+        frame=frame, n_thrusters=int(ps.rov.thrusters.T.shape[1]),
+        wire_weight_n_per_m=float(ps.wire.submerged_weight_per_length()),
+        tree_weight_n=float(ps.tree.submerged_weight_n),
+        preset_gains=Gains(tuple(ps.gains.kp), tuple(ps.gains.ki),  # type: ignore[arg-type]
+                           tuple(ps.gains.kd)))
+
+
+@dataclass(frozen=True)
+class RowView:
+    """The parts of one log row a snapshot shows."""
+
+    t_s: float
+    tree_eta_n: Vec6
+    rov_eta_n: Vec6
+    eta_ref: Vec3
+    eta_hat: Vec3
+    utilisation: tuple[float, ...]
+    force_n: tuple[float, ...]
+    mode: str
+
+
+def row_view(row: FloatArray, n_thrusters: int) -> RowView:
+    """Pick a log row (control.loop.L_* columns) apart."""
+    def seq(start: int, width: int) -> tuple[float, ...]:
+        return tuple(float(v) for v in row[start:start + width])
+
+    mode_code = int(row[loop.L_MODE]) if math.isfinite(row[loop.L_MODE]) else 0
+    return RowView(
+        t_s=float(row[loop.L_T]), tree_eta_n=seq(loop.L_TREE, 6),  # type: ignore[arg-type]
+        rov_eta_n=seq(loop.L_ROV, 6),  # type: ignore[arg-type]
+        eta_ref=seq(loop.L_ETA_D, 3), eta_hat=seq(loop.L_ETA_HAT, 3),  # type: ignore[arg-type]
+        utilisation=seq(loop.L_UTIL, n_thrusters), force_n=seq(loop.L_F, n_thrusters),
+        mode=MODES[mode_code] if 0 <= mode_code < len(MODES) else "tree")
+
+
+def trend_rows(rows: FloatArray) -> FloatArray:
+    """(k, 7) trend rows (TREND_COLUMNS) from log rows."""
+    out = np.empty((len(rows), len(TREND_COLUMNS)))
+    out[:, 0] = rows[:, loop.L_T]
+    out[:, 1:3] = rows[:, loop.L_TREE:loop.L_TREE + 2]
+    out[:, 3] = rows[:, loop.L_TREE + 5]
+    out[:, 4:7] = rows[:, loop.L_ETA_D:loop.L_ETA_D + 3]
+    return out
+
+
+class TrendBuffer:
+    """Ring of the last ``capacity`` trend rows (owned by the loop task)."""
+
+    def __init__(self, dt_s: float, capacity: int = 3000) -> None:
+        self.dt_s = dt_s
+        self._data = np.zeros((capacity, len(TREND_COLUMNS)))
+        self._count = 0
+
+    def clear(self) -> None:
+        self._count = 0
+
+    def extend(self, rows: FloatArray) -> None:
+        """Add the log rows that fall on the decimation grid."""
+        if len(rows) == 0:
+            return
+        steps = np.rint(rows[:, loop.L_T] / self.dt_s).astype(np.int64)
+        picked = rows[steps % TREND_DECIMATION == 0]
+        cap = len(self._data)
+        for r in trend_rows(picked)[-cap:]:
+            self._data[self._count % cap] = r
+            self._count += 1
+
+    def view(self) -> FloatArray:
+        """Read-only copy, oldest first."""
+        cap = len(self._data)
+        if self._count <= cap:
+            return frozen_copy(self._data[:self._count])
+        i = self._count % cap
+        return frozen_copy(np.vstack([self._data[i:], self._data[:i]]))

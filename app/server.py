@@ -1,0 +1,156 @@
+"""The console server: ``create_app(settings)`` builds the FastAPI application (HTTP API,
+OpenAPI at /openapi.json, telemetry WebSocket) around one ``Console``; its lifespan starts the
+loop task and the 3D view (viser) and stops both. ``serve`` runs it with uvicorn (the
+``rov-console serve`` command); ``serve_in_thread`` runs it in the background for tests and
+benchmarks.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import socket
+import threading
+import time
+from collections.abc import AsyncIterator, Iterator
+from dataclasses import dataclass, replace
+
+import uvicorn
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+
+from app.api import control, environment, gains, health, missions, recordings, replay, run, state
+from app.api.state import StateJsonCache
+from app.console import Console, ConsoleSettings
+
+ROUTERS = (health.router, state.router, run.router, missions.router, gains.router,
+           control.router, environment.router, recordings.router, replay.router)
+
+
+def create_app(settings: ConsoleSettings) -> FastAPI:
+    """The application for one console (nothing is shared between two apps)."""
+    console = Console.build(settings)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        task = asyncio.create_task(console.loop.run(), name="console-loop")
+        view = None
+        try:
+            if settings.view:
+                view = await asyncio.to_thread(_start_view, console, settings)
+            app.state.view = view
+            if settings.announce:
+                print(addresses(settings, console.token, view.port if view else None),
+                      flush=True)
+            yield
+        finally:
+            console.loop.stop()
+            with contextlib.suppress(asyncio.CancelledError):
+                await task
+            if view is not None:
+                await asyncio.to_thread(view.stop)
+
+    app = FastAPI(title="ROV console", version="0.1.0", lifespan=lifespan,
+                  description="Simulator, control system and operator console for an ROV "
+                              "that positions a subsea tree hanging from a vessel's wire. "
+                              "Watching needs no token; actions that change the run need "
+                              "'Authorization: Bearer <token>'.")
+    app.state.console = console
+    app.state.state_cache = StateJsonCache()
+    app.state.view = None
+    for router in ROUTERS:
+        app.include_router(router)
+    app.add_exception_handler(RequestValidationError, _validation_error)
+    return app
+
+
+def _start_view(console: Console, settings: ConsoleSettings):
+    from web.view import ConsoleView
+
+    return ConsoleView(console, settings.host, settings.viser_port)
+
+
+async def _validation_error(request: Request, exc: Exception) -> JSONResponse:
+    """422 whose message names each bad field: 'body.kp.1: Input should be <= 10000000'."""
+    assert isinstance(exc, RequestValidationError)
+    errors = exc.errors()
+    message = "; ".join(f"{'.'.join(str(p) for p in e['loc'])}: {e['msg']}" for e in errors)
+    return JSONResponse(status_code=422, content={
+        "detail": message, "errors": [{"loc": list(e["loc"]), "msg": e["msg"],
+                                       "type": e["type"]} for e in errors]})
+
+
+def addresses(settings: ConsoleSettings, token: str, viser_port: int | None = None) -> str:
+    """What ``serve`` prints: where to open the console and the token."""
+    host = f"[{settings.host}]" if ":" in settings.host else settings.host
+    lines = [f"3D console:  http://{host}:{viser_port or settings.viser_port}/",
+             f"HTTP API:    http://{host}:{settings.port}/docs  "
+             f"(OpenAPI: /openapi.json, telemetry: ws://{host}:{settings.port}/api/telemetry)",
+             f"token:       {token}   (needed to change the run; watching needs none)"]
+    return "\n".join(lines)
+
+
+def serve(settings: ConsoleSettings) -> None:
+    """Run until interrupted (the ``rov-console serve`` command); prints where to go."""
+    app = create_app(replace(settings, announce=True))
+    uvicorn.Server(uvicorn.Config(app, host=settings.host, port=settings.port,
+                                  log_level="warning")).run()
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    """A TCP port nobody listens on right now (for tests and benchmarks)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind((host, 0))
+        return int(s.getsockname()[1])
+
+
+@dataclass(frozen=True)
+class RunningServer:
+    """A console served in a background thread."""
+
+    settings: ConsoleSettings
+    app: FastAPI
+    token: str
+
+    @property
+    def console(self) -> Console:
+        return self.app.state.console
+
+    @property
+    def base_url(self) -> str:
+        return f"http://{self.settings.host}:{self.settings.port}"
+
+    @property
+    def view_url(self) -> str:
+        view = self.app.state.view
+        return f"http://{self.settings.host}:{view.port if view else self.settings.viser_port}/"
+
+    @property
+    def auth(self) -> dict[str, str]:
+        return {"Authorization": f"Bearer {self.token}"}
+
+
+@contextlib.contextmanager
+def serve_in_thread(settings: ConsoleSettings, timeout_s: float = 300.0) -> Iterator[RunningServer]:
+    """Serve on free ports (port 0 in the settings) in a thread; stop on exit."""
+    if settings.port == 0:
+        settings = replace(settings, port=free_port(settings.host))
+    if settings.view and settings.viser_port == 0:
+        settings = replace(settings, viser_port=free_port(settings.host))
+    app = create_app(settings)
+    server = uvicorn.Server(uvicorn.Config(app, host=settings.host, port=settings.port,
+                                           log_level="warning", lifespan="on"))
+    thread = threading.Thread(target=server.run, name="console-http", daemon=True)
+    thread.start()
+    deadline = time.monotonic() + timeout_s
+    while not server.started:
+        if not thread.is_alive() or time.monotonic() > deadline:
+            server.should_exit = True
+            raise RuntimeError("the console server did not start")
+        time.sleep(0.05)
+    try:
+        yield RunningServer(settings, app, app.state.console.token)
+    finally:
+        server.should_exit = True
+        thread.join(timeout=30.0)

@@ -1,0 +1,179 @@
+"""The console's loop: the engine steps exactly what it is asked, runs missions leg by leg,
+is deterministic, and the asyncio task paces it to the wall clock, applies commands between
+steps and survives bad ones."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from app import console_loop as cmd
+from app.console_engine import (
+    ConsoleEngine,
+    ConsoleError,
+    prepare_run,
+    station_keeping_mission,
+)
+from app.console_loop import ConsoleLoop
+from control import loop
+from control.closed_loop import Gains
+from missions import runner, schema
+
+MOVE = {"format_version": 1, "name": "loop-test",
+        "setup": {"params": "full-scale", "depth_m": 100.0, "seed": 3},
+        "legs": [{"type": "move", "north_m": 0.5, "east_m": 0.0, "settle_s": 2.0},
+                 {"type": "rotate", "angle_deg": 10.0, "settle_s": 2.0}]}
+
+
+def engine_for(mission: dict, tmp_path: Path, run_legs: bool = True) -> ConsoleEngine:
+    return ConsoleEngine(prepare_run(schema.parse_mission(mission), run_legs), tmp_path)
+
+
+def test_engine_steps_exactly_what_it_is_asked(tmp_path: Path) -> None:
+    eng = ConsoleEngine(prepare_run(station_keeping_mission("full-scale", 100.0), False),
+                        tmp_path)
+    for n in (1, 7, 100, 250):
+        t0 = eng.cl.t_s
+        eng.advance(n)
+        assert eng.cl.t_s == pytest.approx(t0 + n * 0.01)
+        assert eng.last_row[loop.L_T] == pytest.approx(eng.cl.t_s)
+
+
+def test_engine_runs_a_mission_in_small_slices_to_the_end(tmp_path: Path) -> None:
+    eng = engine_for(MOVE, tmp_path)
+    legs_seen = set()
+    while eng.mission_status.state == "running":
+        eng.advance(37)  # an odd slice: requests are cut across ticks
+        if eng.mission_status.leg_index:
+            legs_seen.add(eng.mission_status.leg_type)
+        assert eng.cl.t_s < 600.0, "the mission never ended"
+    assert eng.mission_status.state == "completed"
+    assert legs_seen == {"move", "rotate"}
+    snap = eng.snapshot(1, False, 1.0, ConsoleLoop(eng).snapshot.stats)
+    deadline = time.monotonic() + 10.0
+    while snap.mission.result is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+        snap = eng.snapshot(2, False, 1.0, snap.stats)
+    assert snap.mission.result is not None
+    assert snap.tree_eta_n[0] == pytest.approx(1.5, abs=0.05), "start 1.0 m + 0.5 m north"
+    assert np.degrees(snap.tree_eta_n[5]) == pytest.approx(10.0, abs=2.0), "turned 10 deg"
+    batch = runner.run_mission(schema.parse_mission(MOVE)).summary()
+    for key in ("rms_north_m", "rms_east_m", "rms_heading_deg", "max_thruster_utilisation"):
+        assert snap.mission.result[key] == pytest.approx(batch[key], rel=1e-6, abs=1e-9), \
+            f"{key}: the console's sliced run differs from the batch runner"
+
+
+def test_same_seed_same_commands_same_state(tmp_path: Path) -> None:
+    a = engine_for(MOVE, tmp_path / "a")
+    b = engine_for(MOVE, tmp_path / "b")
+    for eng in (a, b):
+        eng.advance(300)
+        eng.cl.set_gains(Gains((2500.0, 2500.0, 2000.0), (175.0, 175.0, 75.0),
+                               (8000.0, 8000.0, 38500.0)))
+        eng.advance(300)
+    assert np.array_equal(a.last_row, b.last_row)
+
+
+def test_engine_refuses_what_cannot_be_done_now(tmp_path: Path) -> None:
+    eng = engine_for(MOVE, tmp_path)
+    with pytest.raises(ConsoleError, match="abort it first"):
+        eng.require_no_mission("target")
+    eng.abort_mission()
+    with pytest.raises(ConsoleError, match="no mission"):
+        eng.abort_mission()
+    with pytest.raises(ConsoleError, match="not recording"):
+        eng.stop_recording()
+    with pytest.raises(ConsoleError, match="no replay"):
+        eng.require_replay()
+    with pytest.raises(ConsoleError, match="label"):
+        eng.start_recording("../x")
+
+
+async def _run_for(console: ConsoleLoop, seconds: float) -> None:
+    task = asyncio.create_task(console.run())
+    await asyncio.sleep(seconds)
+    console.stop()
+    await task
+
+
+def test_loop_keeps_wall_clock_pace_at_each_speed(tmp_path: Path) -> None:
+    async def scenario() -> dict[float, float]:
+        eng = ConsoleEngine(prepare_run(station_keeping_mission("full-scale", 100.0), False),
+                            tmp_path)
+        eng.advance(1)  # compiled code warmed up
+        console = ConsoleLoop(eng)
+        task = asyncio.create_task(console.run())
+        rates = {}
+        for speed in (1.0, 5.0, 0.25):
+            await console.call(cmd.SetSpeed(speed))
+            t0, w0 = console.snapshot.t_s, time.perf_counter()
+            await asyncio.sleep(1.5)
+            rates[speed] = (console.snapshot.t_s - t0) / (time.perf_counter() - w0)
+        console.stop()
+        await task
+        return rates
+
+    rates = asyncio.run(scenario())
+    for speed, rate in rates.items():
+        assert rate == pytest.approx(speed, rel=0.25), f"speed {speed}: ran at {rate:.2f}"
+
+
+def test_pause_step_and_commands_between_steps(tmp_path: Path) -> None:
+    async def scenario() -> None:
+        eng = ConsoleEngine(prepare_run(station_keeping_mission("full-scale", 100.0), False),
+                            tmp_path)
+        console = ConsoleLoop(eng, paused=True)
+        task = asyncio.create_task(console.run())
+        await asyncio.sleep(0.2)
+        t0 = console.snapshot.t_s
+        await asyncio.sleep(0.2)
+        assert console.snapshot.t_s == t0, "paused"
+        result = await console.call(cmd.Step(13))
+        assert result["t_s"] == pytest.approx(t0 + 0.13)
+        with pytest.raises(ConsoleError, match="speed"):
+            await console.call(cmd.SetSpeed(1000.0))
+        with pytest.raises(ValueError, match="allocation"):
+            await console.call(cmd.SetAllocation("magic"))  # type: ignore[arg-type]
+        await console.call(cmd.Resume())
+        await asyncio.sleep(0.3)
+        assert console.snapshot.t_s > t0 + 0.2, "bad commands did not stop the loop"
+        assert console.running
+        console.stop()
+        await task
+        assert not console.running
+
+    asyncio.run(scenario())
+
+
+def test_commands_from_threads_are_applied_by_the_loop(tmp_path: Path) -> None:
+    async def scenario() -> None:
+        eng = ConsoleEngine(prepare_run(station_keeping_mission("full-scale", 100.0), False),
+                            tmp_path)
+        console = ConsoleLoop(eng)
+        task = asyncio.create_task(console.run())
+        target = Gains((3000.0, 3000.0, 3000.0), (100.0, 100.0, 50.0),
+                       (9000.0, 9000.0, 40000.0))
+        # what a viser callback does: block its own thread until the loop has applied it
+        result = await asyncio.to_thread(console.call_blocking, cmd.SetGains(target))
+        assert result == target and console.snapshot.gains == target
+        console.stop()
+        await task
+
+    asyncio.run(scenario())
+
+
+def test_published_snapshots_cannot_be_changed_by_readers(tmp_path: Path) -> None:
+    eng = ConsoleEngine(prepare_run(station_keeping_mission("full-scale", 100.0), False),
+                        tmp_path)
+    eng.advance(500)
+    time.sleep(0.15)
+    snap = ConsoleLoop(eng).snapshot
+    assert len(snap.trend) > 0
+    with pytest.raises(ValueError):
+        snap.trend[0, 0] = 1.0
+    with pytest.raises(AttributeError):
+        snap.t_s = 0.0  # type: ignore[misc]

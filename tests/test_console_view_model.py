@@ -1,0 +1,200 @@
+"""What the console view computes without a browser: poses and the loaded wire's shape, the
+mission builder's inputs read from the leg models, and the alarms."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from app.alarms import AlarmLimits, AlarmMonitor
+from control import loop
+from missions import schema
+from sim import gnc
+from sim import wire as wire_mod
+from web import geometry as geo
+from web import mission_builder as mb
+
+angles = st.floats(-math.pi, math.pi, allow_nan=False)
+
+
+def rotation_of(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+@given(angles, st.floats(-1.5, 1.5), angles)
+def test_quaternion_is_the_zyx_rotation_of_the_core(phi: float, theta: float, psi: float) -> None:
+    q = geo.quaternion_wxyz_from_rpy_radians(phi, theta, psi)
+    assert np.linalg.norm(q) == pytest.approx(1.0)
+    np.testing.assert_allclose(rotation_of(q), gnc.Rzyx(phi, theta, psi), atol=1e-12)
+    np.testing.assert_allclose(geo.Rzyx(phi, theta, psi), gnc.Rzyx(phi, theta, psi),
+                               atol=1e-12)
+
+
+def test_attachment_point_is_above_the_cg_and_tilts_with_the_tree() -> None:
+    upright = geo.attachment_point_n(np.array([1.0, 2.0, 400.0, 0.0, 0.0, 0.7]), 2.584)
+    np.testing.assert_allclose(upright, [1.0, 2.0, 400.0 - 2.584])
+    pitched = geo.attachment_point_n(np.array([0.0, 0.0, 0.0, 0.0, 0.1, 0.0]), 1.0)
+    assert pitched[0] < 0.0, "pitching nose-up moves the top of the tree aft"
+
+
+W, W0, L = 199.6, 307_046.75, 397.0
+
+
+def test_wire_without_drag_is_the_straight_line_between_its_ends() -> None:
+    top, bottom = np.array([1.0, 1.0, 0.0]), np.array([3.0, -1.0, 397.0])
+    pts = geo.loaded_wire_points_n(top, bottom, L, W, W0, np.zeros(2), n_points=21)
+    np.testing.assert_allclose(pts[0], bottom)
+    np.testing.assert_allclose(pts[-1], top)
+    s = np.linspace(0.0, 1.0, 21)
+    # no drag: x(s) = x_load - H0 I1(s); I1 is concave, so the line hangs steeper at the top
+    # (heavier there): between the ends and on the same side of the chord everywhere
+    chord = bottom[None, :2] + s[:, None] * (top - bottom)[None, :2]
+    off = pts[:, :2] - chord
+    assert np.all(np.abs(off) < 0.05 * np.linalg.norm(top[:2] - bottom[:2]))
+
+
+def test_wire_in_current_bows_downstream_and_matches_the_closed_form() -> None:
+    q = 0.5 * 1025.0 * 0.076 * 1.2 * 0.1**2  # eq. 2.26 at 0.1 m/s
+    offset = wire_mod.horizontal_offset(q, W, W0, L)  # load's equilibrium offset (eq. 2.29)
+    top = np.array([0.0, 0.0, 0.0])
+    bottom = np.array([offset, 0.0, L])
+    pts = geo.loaded_wire_points_n(top, bottom, L, W, W0, np.array([q, 0.0]), n_points=81)
+    np.testing.assert_allclose(pts[-1], top, atol=1e-9)
+    # at equilibrium no extra horizontal force acts at the load: H0 = 0, so the shape is
+    # the offset formula evaluated along the line (the closed form, measured from the top)
+    for k in (20, 40, 60):
+        s_from_load = L * k / 80
+        expected = offset - wire_mod.horizontal_offset(q, W, W0, s_from_load)
+        assert pts[k, 0] == pytest.approx(expected, rel=1e-6, abs=1e-9)
+    assert np.all(pts[1:-1, 0] > -1e-9), "the wire bows downstream of the crane tip"
+
+
+def test_camera_presets_look_at_the_job() -> None:
+    tree = np.array([1.0, 1.0, 400.0, 0.0, 0.0, 0.3])
+    over = geo.overview_camera(tree, 3.6)
+    assert over.position_n[2] < tree[2], "the overview looks down from above the tree"
+    top = geo.top_down_camera(np.array([1.0, 1.0]), 405.0, tree, 3.6)
+    np.testing.assert_allclose(top.position_n[:2], [1.0, 1.0])
+    assert top.position_n[2] < tree[2] - 3.6
+    rov = np.array([-1.0, 1.0, 400.0, 0.0, 0.0, 0.0])
+    cam = geo.rov_camera(rov, np.array([2.0, 1.2, 1.2]), tree, 2.8)
+    assert cam.position_n[2] < rov[2] and cam.position_n[0] < rov[0]
+    assert np.linalg.norm(cam.look_at_n[:2] - tree[:2]) < 1e-9
+
+
+# ---------------------------------------------------------------------- mission builder
+def test_builder_offers_every_leg_type_of_the_schema() -> None:
+    models = mb.leg_models()
+    assert set(models) == set(schema.LEG_TYPES)
+    for name, model in models.items():
+        specs = mb.field_specs(model)
+        assert "type" not in [s.name for s in specs]
+        assert [s.name for s in specs][-3:] == ["name", "score", "timeout_s"], name
+
+
+def test_builder_reads_bounds_and_kinds_from_the_models() -> None:
+    rotate = {s.name: s for s in mb.field_specs(mb.leg_models()["rotate"])}
+    assert (rotate["angle_deg"].lo, rotate["angle_deg"].hi) == (-1080.0, 1080.0)
+    assert rotate["angle_deg"].kind == "number" and rotate["angle_deg"].required
+    move = {s.name: s for s in mb.field_specs(mb.leg_models()["move"])}
+    assert move["heading_deg"].optional and move["relative"].kind == "bool"
+    mode = {s.name: s for s in mb.field_specs(mb.leg_models()["mode"])}
+    assert mode["mode"].choices == ("tree", "free") and mode["grip"].kind == "tristate"
+    waypoints = {s.name: s for s in mb.field_specs(mb.leg_models()["waypoints"])}
+    assert waypoints["points_ne_m"].kind == "json"
+
+
+def test_every_leg_type_builds_with_its_initial_values_or_names_the_missing_field() -> None:
+    setups = [schema.load_mission(n).setup for n in schema.library_names()]
+    with_frame = [s for s in setups if getattr(s, "docking_frame", None) is not None]
+    setup = with_frame[0] if with_frame else schema.Setup(params="full-scale", depth_m=100.0)
+    for leg_type, model in mb.leg_models().items():
+        values = {s.name: mb.parse_input(s, mb.initial_value(s)) for s in mb.field_specs(model)}
+        leg = mb.build_leg(leg_type, values)
+        try:
+            mission = mb.build_mission("m", setup, [leg])
+        except schema.MissionError as err:
+            missing = [s.name for s in mb.field_specs(model) if s.required and
+                       values[s.name] is None]
+            named = any(name in str(err) for name in missing) or f"({leg_type})" in str(err)
+            assert named, str(err)
+        else:
+            assert mission.legs[0].type == leg_type
+
+
+def test_builder_inputs_parse_and_bad_values_name_the_field() -> None:
+    specs = {s.name: s for s in mb.field_specs(mb.leg_models()["waypoints"])}
+    assert mb.parse_input(specs["points_ne_m"], "[[1, 2], [3, 4]]") == [[1, 2], [3, 4]]
+    with pytest.raises(ValueError, match="points_ne_m"):
+        mb.parse_input(specs["points_ne_m"], "[[1, 2")
+    move = {s.name: s for s in mb.field_specs(mb.leg_models()["move"])}
+    assert mb.parse_input(move["heading_deg"], "") is None
+    assert mb.parse_input(move["heading_deg"], "45") == 45.0
+    with pytest.raises(ValueError, match="heading_deg"):
+        mb.parse_input(move["heading_deg"], "north")
+    setup = schema.Setup(params="full-scale", depth_m=100.0)
+    with pytest.raises(schema.MissionError, match=r"legs\[1\].*angle_deg"):
+        mb.build_mission("m", setup, [mb.build_leg("rotate", {"angle_deg": 5000.0})])
+    with pytest.raises(ValueError, match="type"):
+        mb.build_leg("teleport", {})
+
+
+# ---------------------------------------------------------------------- alarms
+def rows(t: np.ndarray, util: float = 0.0, err_m: float = 0.0) -> np.ndarray:
+    out = np.zeros((len(t), loop.N_LOG))
+    out[:, loop.L_T] = t
+    out[:, loop.L_UTIL] = util
+    out[:, loop.L_TREE] = err_m
+    return out
+
+
+def monitor(uses_sensors: bool = False) -> AlarmMonitor:
+    limits = AlarmLimits(position_error_m=0.25, sample_period_s=(1.0, 0.1, 0.1, 0.2, 0.02))
+    return AlarmMonitor(limits, n_thrusters=4, weight_n=300e3, uses_sensors=uses_sensors)
+
+
+def active(m: AlarmMonitor) -> set[str]:
+    return {a.name for a in m.state if a.active}
+
+
+def test_saturation_alarm_needs_more_than_two_seconds_without_a_break() -> None:
+    m = monitor()
+    t = np.arange(1, 151) * 0.01
+    m.update(rows(t, util=1.0), 300e3)
+    assert "saturation" not in active(m), "1.5 s is not yet an alarm"
+    m.update(rows(t + 1.5, util=1.0), 300e3)
+    assert "saturation" in active(m)
+    broken = rows(t + 3.0, util=1.0)
+    broken[-1, loop.L_UTIL] = 0.5
+    m.update(broken, 300e3)
+    assert "saturation" not in active(m)
+
+
+def test_position_slack_innovation_and_dropout_alarms() -> None:
+    m = monitor()
+    m.update(rows(np.array([0.01]), err_m=0.3), 300e3)
+    assert active(m) == {"position_error"}
+    m.update(rows(np.array([0.02])), 10e3)
+    assert active(m) == {"wire_slack"}
+    m.update(rows(np.array([0.03])), 300e3)
+    assert active(m) == set()
+    e = monitor(uses_sensors=True)
+    t = np.arange(1, 401) * 0.01
+    r = rows(t)
+    r[:, loop.L_ACCEPT:loop.L_ACCEPT + 5] = 1.0
+    r[:, loop.L_NIS:loop.L_NIS + 3] = 9.0  # nine times the expected innovation
+    e.update(r, 300e3)
+    assert "innovation" in active(e)
+    r[:, loop.L_NIS:loop.L_NIS + 3] = 1.0
+    r[:, loop.L_ACCEPT + 3] = 0.0  # the DVL stops delivering
+    e.update(r, 300e3)
+    e.update(rows(t + 4.0) + 0.0, 300e3)
+    assert {"dropout"} <= active(e) and "innovation" not in active(e)
+    assert any("dvl" in a.message or "position" in a.message for a in e.state if a.active)

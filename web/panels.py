@@ -1,0 +1,566 @@
+"""The operator's panels, one set per browser (viser client).
+
+Each browser has its own panels (its own camera preset, mission being built, and unlock state)
+while all share the scene. Watching needs nothing; every control that changes the run stays
+disabled until the console token is entered in "Access". Callbacks run on viser's threads:
+they only build a command, hand it to the loop (``ConsoleLoop.call_blocking``) and show the
+answer. ``update`` is called by the view's publisher thread with each new snapshot.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import viser
+
+from app import console_loop as cmd
+from app.alarms import SATURATED
+from app.console_engine import (
+    ConsoleError,
+    list_recordings,
+    load_replay,
+    prepare_run,
+)
+from app.console_state import Snapshot
+from control.closed_loop import Gains
+from missions import schema
+from web import geometry as geo
+from web import mission_builder as mb
+
+if TYPE_CHECKING:
+    from app.console import Console
+
+SPEEDS = ("0.25", "0.5", "1", "2", "5", "10", "20", "50")
+STATUS_EVERY_S = 0.2
+PLOTS_EVERY_S = 0.5
+PLOT_WINDOW_S = 120.0
+GAIN_RANGE_FACTOR = 4.0
+"""Gain sliders run from 0 to this many times the parameter set's gain (a safe band)."""
+AXES = ("surge", "sway", "yaw")
+CAMERAS = ("Overview", "Top-down", "ROV camera")
+
+
+def _bar_color(utilisation: float) -> str:
+    if utilisation >= SATURATED:
+        return "red"
+    return "orange" if utilisation >= 0.8 else "blue"
+
+
+class ClientPanel:
+    """Panels of one browser."""
+
+    def __init__(self, client: viser.ClientHandle, console: Console) -> None:
+        self.client = client
+        self.console = console
+        self.gui = client.gui
+        self.unlocked = False
+        self.camera_mode = "Overview"
+        self._camera_pending = True
+        self._guarded: list[Any] = []
+        self._status_wall = 0.0
+        self._plots_wall = 0.0
+        self._gain_touch = 0.0
+        self._scene_version = -1
+        self._replay_name: str | None = None
+        self.legs: list[dict[str, Any]] = []
+        self._leg_inputs: dict[str, tuple[mb.FieldSpec, Any]] = {}
+        self._leg_folder: Any = None
+        snap = console.loop.snapshot
+        self._build_header()
+        tabs = self.gui.add_tab_group()
+        with tabs.add_tab("Run"):
+            self._build_run()
+        with tabs.add_tab("Mission"):
+            self._build_missions()
+        with tabs.add_tab("Control"):
+            self._build_control(snap)
+        with tabs.add_tab("Plots"):
+            self._build_plots()
+        with tabs.add_tab("Record"):
+            self._build_record()
+        self._set_enabled(False)
+
+    # ================================================================== building
+    def _build_header(self) -> None:
+        gui = self.gui
+        self.status_md = gui.add_markdown("starting...")
+        self.alarms_html = gui.add_html("")
+        self.message_md = gui.add_markdown("")
+        with gui.add_folder("View"):
+            self.camera_buttons = gui.add_button_group("Camera", CAMERAS)
+            self.camera_buttons.on_click(self._on_camera)
+        with gui.add_folder("Access", expand_by_default=True):
+            self.token_text = gui.add_text("Token", initial_value="")
+            self.unlock_button = gui.add_button("Unlock controls")
+            self.unlock_button.on_click(self._on_unlock)
+        with gui.add_folder("Thrusters"):
+            self.thruster_md = gui.add_markdown("")
+            n = self.console.loop.snapshot.scene.n_thrusters
+            self.bars = [gui.add_progress_bar(0.0, color="blue") for _ in range(n)]
+
+    def _guard(self, handle: Any) -> Any:
+        """A control that needs the token."""
+        self._guarded.append(handle)
+        return handle
+
+    def _build_run(self) -> None:
+        gui = self.gui
+        self._action(self._guard(gui.add_button("Pause")), cmd.Pause)
+        self._action(self._guard(gui.add_button("Resume")), cmd.Resume)
+        self._action(self._guard(gui.add_button("Step 0.1 s")), lambda: cmd.Step(10))
+        self.speed = self._guard(gui.add_dropdown("Speed (x real time)", SPEEDS,
+                                                  initial_value="1"))
+        self.speed.on_update(self._on_speed)
+        self.reset_button = self._guard(gui.add_button("Reset to station keeping"))
+        self.reset_button.on_click(self._on_reset)
+        with gui.add_folder("Target (no mission)"):
+            self.target_n = self._guard(gui.add_number("Target north m", 0.0, step=0.1))
+            self.target_e = self._guard(gui.add_number("Target east m", 0.0, step=0.1))
+            self.target_psi = self._guard(gui.add_number("Target heading deg", 0.0,
+                                                         step=1.0))
+            self._action(self._guard(gui.add_button("Go to target")), lambda: cmd.SetTarget(
+                float(self.target_n.value), float(self.target_e.value),
+                float(self.target_psi.value)))
+
+    def _build_missions(self) -> None:
+        gui = self.gui
+        library, uploaded = self.console.mission_names()
+        names = tuple(library + uploaded) or ("(none)",)
+        self.mission_pick = gui.add_dropdown("Mission", names, initial_value=names[0])
+        self.mission_start = self._guard(gui.add_button("Start mission"))
+        self.mission_start.on_click(self._on_start_library)
+        self._action(self._guard(gui.add_button("Abort mission", color="red")),
+                     cmd.AbortMission)
+        self.mission_md = gui.add_markdown("")
+        with gui.add_folder("Mission builder"):
+            self.setup_pick = gui.add_dropdown("Set-up from", names, initial_value=names[0])
+            types = tuple(mb.leg_models())
+            self.leg_type = gui.add_dropdown("Leg type", types, initial_value=types[0])
+            self.leg_type.on_update(lambda _: self._rebuild_leg_inputs())
+            self._leg_anchor = gui.add_markdown("**Leg values**")
+            self._rebuild_leg_inputs()
+            self.add_leg = gui.add_button("Add leg", order=self._leg_anchor.order + 0.2)
+            self.add_leg.on_click(self._on_add_leg)
+            self.leg_edit = gui.add_button_group("Legs", ("Remove last", "Clear"),
+                                                 order=self._leg_anchor.order + 0.3)
+            self.leg_edit.on_click(self._on_leg_edit)
+            self.legs_md = gui.add_markdown("*no legs yet*", order=self._leg_anchor.order + 0.4)
+            self.validate_button = gui.add_button("Validate",
+                                                  order=self._leg_anchor.order + 0.5)
+            self.validate_button.on_click(self._on_validate)
+            self.build_start = self._guard(gui.add_button("Start built mission",
+                                                          order=self._leg_anchor.order + 0.6))
+            self.build_start.on_click(self._on_start_built)
+            self.builder_md = gui.add_markdown("", order=self._leg_anchor.order + 0.7)
+
+    def _build_control(self, snap: Snapshot) -> None:
+        gui = self.gui
+        self.mode = self._guard(gui.add_dropdown("Mode", ("tree", "free"),
+                                                 initial_value=snap.mode))
+        self.mode.on_update(self._when_client(lambda: cmd.SetMode(self.mode.value)))
+        self.allocation = self._guard(gui.add_dropdown(
+            "Allocation", ("pinv", "priority", "qp"), initial_value=snap.allocation or
+            "priority"))
+        self.allocation.on_update(self._when_client(
+            lambda: cmd.SetAllocation(self.allocation.value)))
+        self.grip = self._guard(gui.add_checkbox("Grip", bool(snap.grip)))
+        self.grip.on_update(self._when_client(lambda: cmd.SetGrip(bool(self.grip.value))))
+        with gui.add_folder("Gains"):
+            self.gain_sliders: dict[str, list[Any]] = {}
+            preset = snap.scene.preset_gains
+            live = snap.gains or preset
+            for term in ("kp", "ki", "kd"):
+                row = []
+                for i, axis in enumerate(AXES):
+                    hi = _slider_max(getattr(preset, term)[i], getattr(live, term)[i])
+                    slider = self._guard(gui.add_slider(
+                        f"{term} {axis}", min=0.0, max=hi, step=hi / 200.0,
+                        initial_value=float(getattr(live, term)[i])))
+                    slider.on_update(self._on_gain)
+                    row.append(slider)
+                self.gain_sliders[term] = row
+            self._action(self._guard(gui.add_button("Preset gains")),
+                         lambda: cmd.SetGains(self.console.loop.snapshot.scene.preset_gains))
+        with gui.add_folder("Current"):
+            self.current_speed = self._guard(gui.add_number("Speed m/s", 0.0, min=0.0,
+                                                            max=3.0, step=0.01))
+            self.current_dir = self._guard(gui.add_number("Towards deg", 0.0, min=-360.0,
+                                                          max=360.0, step=1.0))
+            self._action(self._guard(gui.add_button("Set current")), lambda: cmd.SetCurrent(
+                float(self.current_speed.value), float(self.current_dir.value)))
+        with gui.add_folder("Vessel (crane tip)"):
+            ct = snap.crane_tip_n
+            self.vessel_n = self._guard(gui.add_number("North m", round(ct[0], 2),
+                                                       min=-1000.0, max=1000.0, step=0.1))
+            self.vessel_e = self._guard(gui.add_number("East m", round(ct[1], 2),
+                                                       min=-1000.0, max=1000.0, step=0.1))
+            self._action(self._guard(gui.add_button("Move vessel")), lambda: cmd.MoveVessel(
+                float(self.vessel_n.value), float(self.vessel_e.value), 0.5))
+
+    def _build_plots(self) -> None:
+        gui = self.gui
+        self.plots = []
+        for title, unit in (("North", "m"), ("East", "m"), ("Heading", "deg")):
+            empty = np.zeros(2)
+            series = ({"label": "t [s]"},
+                      {"label": f"tree {unit}", "stroke": "#1f5fd0", "width": 2},
+                      {"label": f"reference {unit}", "stroke": "#d03030", "width": 1.5,
+                       "dash": (6, 4)})
+            self.plots.append(gui.add_uplot(
+                (empty, empty, empty), series, title=f"{title} [{unit}]", aspect=2.0,  # type: ignore[arg-type]
+                scales={"x": {"time": False}}))
+
+    def _build_record(self) -> None:
+        gui = self.gui
+        self.record_label = self._guard(gui.add_text("Label", initial_value=""))
+        start = self._guard(gui.add_button("Start recording"))
+        start.on_click(lambda event: self._on_record(True))
+        stop = self._guard(gui.add_button("Stop recording"))
+        stop.on_click(lambda event: self._on_record(False))
+        self.record_md = gui.add_markdown("")
+        with gui.add_folder("Replay"):
+            self.recordings = gui.add_dropdown("Recording", self._recording_names())
+            refresh = gui.add_button("Refresh list")
+            refresh.on_click(lambda _: self._refresh_recordings())
+            self.replay_open = self._guard(gui.add_button("Open replay"))
+            self.replay_open.on_click(self._on_open_replay)
+            self._action(self._guard(gui.add_button("Play replay")),
+                         lambda: cmd.PlayReplay(True))
+            self._action(self._guard(gui.add_button("Pause replay")),
+                         lambda: cmd.PlayReplay(False))
+            self._action(self._guard(gui.add_button("Close replay")), cmd.CloseReplay)
+            self.replay_time = self._guard(gui.add_slider("Replay time s", min=0.0, max=1.0,
+                                                          step=0.1, initial_value=0.0))
+            self.replay_time.on_update(self._when_client(
+                lambda: cmd.SeekReplay(float(self.replay_time.value))))
+
+    def _rebuild_leg_inputs(self) -> None:
+        """Inputs for the chosen leg type, from its pydantic model's fields."""
+        if self._leg_folder is not None:
+            self._leg_folder.remove()
+        model = mb.leg_models()[self.leg_type.value]
+        self._leg_inputs = {}
+        with self.gui.add_folder(f"{self.leg_type.value} leg",
+                                 order=self._leg_anchor.order + 0.1) as folder:
+            for spec in mb.field_specs(model):
+                self._leg_inputs[spec.name] = (spec, self._leg_input(spec))
+        self._leg_folder = folder
+
+    def _leg_input(self, spec: mb.FieldSpec) -> Any:
+        gui, value = self.gui, mb.initial_value(spec)
+        hint = spec.description or None
+        if spec.kind == "bool":
+            return gui.add_checkbox(spec.label, bool(value), hint=hint)
+        if spec.kind in ("choice", "tristate"):
+            return gui.add_dropdown(spec.label, spec.choices, initial_value=str(
+                value if value is not None else spec.choices[0]), hint=hint)
+        if spec.kind in ("number", "integer") and not spec.optional:
+            step = 1.0 if spec.kind == "integer" else _step_for(spec)
+            return gui.add_number(spec.label, value, min=spec.lo, max=spec.hi, step=step,
+                                  hint=hint)
+        return gui.add_text(spec.label, mb.text_of(spec, value), hint=hint)
+
+    # ================================================================== callbacks
+    def _set_enabled(self, enabled: bool) -> None:
+        for handle in self._guarded:
+            handle.disabled = not enabled
+
+    def _say(self, text: str) -> None:
+        self.message_md.content = text
+
+    def _run(self, make: Callable[[], Any]) -> Any:
+        """Build a command and have the loop apply it; show the outcome."""
+        if not self.unlocked:
+            self._say("**locked**: enter the console token under Access")
+            return None
+        try:
+            result = self.console.loop.call_blocking(make(), timeout_s=15.0)
+        except (ConsoleError, ValueError, FileNotFoundError, KeyError) as err:
+            self._say(f"**error**: {err}")
+            return None
+        except Exception as err:
+            self._say(f"**error**: {type(err).__name__}: {err}")
+            return None
+        self._say("")
+        return result
+
+    def _action(self, button: Any, make: Callable[[], Any]) -> None:
+        button.on_click(lambda event: self._run(make) if event.client is not None else None)
+
+    def _when_client(self, make: Callable[[], Any]) -> Callable[[Any], None]:
+        """An input callback that acts on what the operator did, not on our own updates."""
+        def callback(event: Any) -> None:
+            if event.client is not None:
+                self._run(make)
+        return callback
+
+    def _on_unlock(self, event: Any) -> None:
+        if self.console.is_token(str(self.token_text.value).strip()):
+            self.unlocked = True
+            self._set_enabled(True)
+            self._say("controls unlocked")
+        else:
+            self._say("**wrong token**")
+
+    def _on_camera(self, event: Any) -> None:
+        self.camera_mode = str(self.camera_buttons.value)
+        self._camera_pending = True
+        self._apply_camera(self.console.loop.snapshot)
+
+    def _on_speed(self, event: Any) -> None:
+        if event.client is not None:
+            self._run(lambda: cmd.SetSpeed(float(self.speed.value)))
+
+    def _on_reset(self, event: Any) -> None:
+        snap = self.console.loop.snapshot
+        from app.console_engine import station_keeping_mission
+
+        mission = station_keeping_mission(snap.scene.params_name, self.console.settings.depth_m)
+        self._start(mission, run_legs=False)
+
+    def _start(self, mission: schema.Mission, run_legs: bool = True) -> None:
+        if not self.unlocked:
+            self._say("**locked**: enter the console token under Access")
+            return
+        self._say(f"building {mission.name}...")
+        try:
+            run = prepare_run(mission, run_legs)
+        except ValueError as err:
+            self._say(f"**error**: {err}")
+            return
+        self._run(lambda: cmd.StartRun(run))
+
+    def _on_start_library(self, event: Any) -> None:
+        try:
+            mission = self.console.find_mission(str(self.mission_pick.value))
+        except (KeyError, ValueError) as err:
+            self._say(f"**error**: {err}")
+            return
+        self._start(mission)
+
+    def _on_gain(self, event: Any) -> None:
+        if event.client is None:
+            return
+        self._gain_touch = time.monotonic()
+        values = {t: tuple(float(s.value) for s in row) for t, row in self.gain_sliders.items()}
+        self._run(lambda: cmd.SetGains(Gains(values["kp"], values["ki"],  # type: ignore[arg-type]
+                                             values["kd"])))
+
+    def _on_record(self, start: bool) -> None:
+        if start:
+            result = self._run(lambda: cmd.StartRecording(str(self.record_label.value).strip()))
+        else:
+            result = self._run(cmd.StopRecording)
+            self._refresh_recordings()
+        if result:
+            self.record_md.content = f"`{result['name']}`"
+
+    def _recording_names(self) -> tuple[str, ...]:
+        names = tuple(r["name"] for r in list_recordings(self.console.settings.recordings_dir))
+        return names or ("(none)",)
+
+    def _refresh_recordings(self) -> None:
+        names = self._recording_names()
+        self.recordings.options = names
+        if self.recordings.value not in names:
+            self.recordings.value = names[0]
+
+    def _on_open_replay(self, event: Any) -> None:
+        name = str(self.recordings.value)
+        if not self.unlocked:
+            self._say("**locked**: enter the console token under Access")
+            return
+        try:
+            data = load_replay(self.console.settings.recordings_dir, name)
+        except (ConsoleError, FileNotFoundError, ValueError) as err:
+            self._say(f"**error**: {err}")
+            return
+        self._run(lambda: cmd.OpenReplay(name, data))
+
+    # ---------------------------------------------------------------- builder
+    def _on_add_leg(self, event: Any) -> None:
+        try:
+            values = {name: mb.parse_input(spec, handle.value)
+                      for name, (spec, handle) in self._leg_inputs.items()}
+            leg = mb.build_leg(str(self.leg_type.value), values)
+            schema.parse_mission({"format_version": 1, "name": "check",
+                                  "setup": {"params": "full-scale", "depth_m": 100.0},
+                                  "legs": [leg]}, "<leg>")
+        except ValueError as err:
+            self.builder_md.content = f"**invalid leg**: {err}"
+            return
+        self.legs.append(leg)
+        self._show_legs()
+        self.builder_md.content = f"added {leg['type']} leg"
+
+    def _on_leg_edit(self, event: Any) -> None:
+        if self.leg_edit.value == "Clear":
+            self.legs.clear()
+        elif self.legs:
+            self.legs.pop()
+        self._show_legs()
+
+    def _show_legs(self) -> None:
+        lines = [f"{i + 1}. `{mb.describe_leg(leg)}`" for i, leg in enumerate(self.legs)]
+        self.legs_md.content = "\n".join(lines) if lines else "*no legs yet*"
+
+    def _built_mission(self) -> schema.Mission | None:
+        try:
+            base = self.console.find_mission(str(self.setup_pick.value))
+            return mb.build_mission("built mission", base.setup, self.legs)
+        except (KeyError, ValueError) as err:
+            self.builder_md.content = f"**invalid**: {err}"
+            return None
+
+    def _on_validate(self, event: Any) -> None:
+        mission = self._built_mission()
+        if mission is not None:
+            self.builder_md.content = f"valid: {len(mission.legs)} legs"
+
+    def _on_start_built(self, event: Any) -> None:
+        mission = self._built_mission()
+        if mission is not None:
+            self._start(mission)
+
+    # ================================================================== updates
+    def _apply_camera(self, snap: Snapshot) -> None:
+        info = snap.scene
+        size = max(info.tree_dimensions_m)
+        if self.camera_mode == "Top-down":
+            pose = geo.top_down_camera(info.frame.center_n, info.frame.landing_depth_m,
+                                       np.array(snap.tree_eta_n), size)
+        elif self.camera_mode == "ROV camera":
+            pose = geo.rov_camera(np.array(snap.rov_eta_n), np.array(info.rov_dimensions_m),
+                                  np.array(snap.tree_eta_n), info.tree_dimensions_m[2])
+        else:
+            pose = geo.overview_camera(np.array(snap.tree_eta_n), size)
+        cam = self.client.camera
+        try:
+            with self.client.atomic():
+                cam.up_direction = pose.up_n
+                cam.position = pose.position_n
+                cam.look_at = pose.look_at_n
+                cam.fov = math.radians(60.0 if self.camera_mode == "ROV camera" else 50.0)
+        except AssertionError:
+            return  # the browser has not reported its camera yet: try again next frame
+        self._camera_pending = self.camera_mode == "ROV camera"
+
+    def update(self, snap: Snapshot) -> None:
+        """Refresh from a snapshot (the publisher thread)."""
+        if self._camera_pending:
+            self._apply_camera(snap)
+        now = time.monotonic()
+        if now - self._status_wall >= STATUS_EVERY_S:
+            self._status_wall = now
+            self._update_status(snap)
+        if now - self._plots_wall >= PLOTS_EVERY_S:
+            self._plots_wall = now
+            self._update_plots(snap)
+
+    def _update_status(self, snap: Snapshot) -> None:
+        tree = snap.tree_eta_n
+        m = snap.mission
+        leg = f"leg {m.leg_index}/{m.legs_total} {m.leg_type}" if m.leg_index else ""
+        state = "paused" if snap.paused else f"running x{snap.speed:g}"
+        source = f"REPLAY `{snap.replay.name}`" if snap.replay else "live"
+        text = (f"**{source}** t = {snap.t_s:8.1f} s, {state}  \n"
+                f"tree N {tree[0]:.2f} m, E {tree[1]:.2f} m, heading "
+                f"{math.degrees(tree[5]):.1f} deg, mode {snap.mode}  \n"
+                f"mission: {m.name or '-'} ({m.state}) {leg}"
+                + (f"  \n**{snap.error}**" if snap.error else "")
+                + (f"  \nrecording `{snap.recording}`" if snap.recording else ""))
+        if self.status_md.content != text:
+            self.status_md.content = text
+        badges = "".join(
+            f"<span style='display:inline-block;margin:1px;padding:1px 5px;border-radius:4px;"
+            f"color:white;background:{'#c0392b' if a.active else '#27ae60'}' "
+            f"title='{a.message}'>{a.name}</span>" for a in snap.alarms)
+        active = "; ".join(f"{a.name}: {a.message}" for a in snap.active_alarms)
+        html = f"<div>{badges}</div>" + (f"<div style='color:#c0392b'>{active}</div>"
+                                         if active else "")
+        if self.alarms_html.content != html:
+            self.alarms_html.content = html
+        self._update_thrusters(snap)
+        self._update_controls(snap)
+
+    def _update_thrusters(self, snap: Snapshot) -> None:
+        util = snap.thruster_utilisation
+        for bar, u in zip(self.bars, util, strict=False):
+            value = round(100.0 * min(max(u, 0.0), 1.0), 1)
+            if bar.value != value:
+                bar.value = value
+            color = _bar_color(u)
+            if bar.color != color:
+                bar.color = color
+        text = " | ".join(f"T{i + 1} {100 * u:.0f}%" for i, u in enumerate(util))
+        if self.thruster_md.content != text:
+            self.thruster_md.content = text
+
+    def _update_controls(self, snap: Snapshot) -> None:
+        """Keep inputs in step with changes made elsewhere (API, missions, other browsers)."""
+        if snap.gains is not None and time.monotonic() - self._gain_touch > 1.0:
+            for term, row in self.gain_sliders.items():
+                for slider, value in zip(row, getattr(snap.gains, term), strict=True):
+                    if value > slider.max:
+                        slider.max = value
+                    if abs(slider.value - value) > 1e-9 * max(1.0, value):
+                        slider.value = value
+        if snap.mode != self.mode.value:
+            self.mode.value = snap.mode
+        if snap.allocation and snap.allocation != self.allocation.value:
+            self.allocation.value = snap.allocation
+        if snap.grip is not None and snap.grip != self.grip.value:
+            self.grip.value = snap.grip
+        speed = f"{snap.speed:g}"
+        if speed in SPEEDS and speed != self.speed.value:
+            self.speed.value = speed
+        self.mission_md.content = _mission_text(snap)
+        self._update_replay(snap)
+
+    def _update_replay(self, snap: Snapshot) -> None:
+        rp = snap.replay
+        if rp is None:
+            self._replay_name = None
+            return
+        if rp.name != self._replay_name:
+            self._replay_name = rp.name
+            self.replay_time.min = rp.start_s
+            self.replay_time.max = max(rp.end_s, rp.start_s + 0.1)
+        if abs(self.replay_time.value - rp.t_s) > 0.05:
+            self.replay_time.value = round(rp.t_s, 1)
+
+    def _update_plots(self, snap: Snapshot) -> None:
+        trend = snap.trend
+        if len(trend) < 2:
+            return
+        recent = trend[trend[:, 0] >= trend[-1, 0] - PLOT_WINDOW_S]
+        t = recent[:, 0]
+        data = ((t, recent[:, 1], recent[:, 4]), (t, recent[:, 2], recent[:, 5]),
+                (t, np.degrees(recent[:, 3]), np.degrees(recent[:, 6])))
+        for plot, series in zip(self.plots, data, strict=True):
+            plot.data = tuple(np.ascontiguousarray(a) for a in series)
+
+
+def _mission_text(snap: Snapshot) -> str:
+    m = snap.mission
+    if m.result:
+        r = m.result
+        return (f"**{m.name}** {m.state}: RMS N {r.get('rms_north_m', float('nan')):.3f} m, "
+                f"E {r.get('rms_east_m', float('nan')):.3f} m, heading "
+                f"{r.get('rms_heading_deg', float('nan')):.2f} deg")
+    if m.leg_index:
+        return f"**{m.name}**: leg {m.leg_index}/{m.legs_total} `{m.leg_type}` {m.leg_name or ''}"
+    return f"{m.name or 'no mission'} ({m.state})"
+
+
+def _slider_max(preset: float, live: float) -> float:
+    return max(GAIN_RANGE_FACTOR * preset, live, 1.0)
+
+
+def _step_for(spec: mb.FieldSpec) -> float:
+    span = (spec.hi or 1.0) - (spec.lo or 0.0)
+    return 0.01 if span <= 10.0 else 0.1

@@ -1,0 +1,198 @@
+"""The shared 3D scene: seabed, docking frame with guideposts, the tree with its funnels, the
+ROV, the loaded wire from the crane tip, the current arrow, the reference ghost and the track.
+
+Drawn in NED (``set_up_direction("-z")``); every pose update of one frame goes out in one
+``server.atomic()`` block so the browser never shows a half-updated scene.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import viser
+
+from app.console_state import SceneInfo, Snapshot
+from web import geometry as geo
+
+TREE_COLOR = (235, 190, 40)
+ROV_COLOR = (230, 110, 30)
+GHOST_COLOR = (60, 200, 230)
+GUIDE_COLOR = (220, 40, 40)
+FRAME_COLOR = (120, 120, 130)
+POST_COLOR = (200, 200, 210)
+FUNNEL_COLOR = (90, 90, 100)
+WIRE_COLOR = (30, 30, 30)
+TRACK_COLOR = (40, 90, 220)
+CURRENT_COLOR = (20, 160, 90)
+SEABED_COLOR = (194, 178, 128)
+POSE_EPS = 1e-4
+"""Changes below this (m, rad) are not sent: a still scene costs the browsers nothing."""
+TRACK_EVERY_S = 1.0
+"""Wall time between track redraws."""
+
+
+class SceneView:
+    """Owns the scene nodes of one viser server; ``update`` from the publisher thread."""
+
+    def __init__(self, server: viser.ViserServer) -> None:
+        self.server = server
+        self.scene = server.scene
+        self.scene.set_up_direction("-z")
+        # software-rendered browsers (no GPU) stay responsive without shadows
+        self.scene.configure_default_lights(enabled=True, cast_shadow=False)
+        self._last_pose: np.ndarray | None = None
+        self._version = -1
+        self._track_wall = 0.0
+        self._current_key: tuple[float, float] | None = None
+        self.info: SceneInfo | None = None
+        self._handles: list = []
+        self._current = None
+
+    # ----------------------------------------------------------------- static parts
+    def _build(self, info: SceneInfo) -> None:
+        """(Re)draw what only changes with a new set-up."""
+        for handle in reversed(self._handles):  # children before their parents
+            handle.remove()
+        self._handles = []
+        sc = _Recorder(self.scene, self._handles)
+        self.info = info
+        lay, frame = info.layout, info.frame
+        length, width, height = info.tree_dimensions_m
+        size = max(length, width, height)
+        thick = 0.15 * height
+        c, s = math.cos(frame.heading_rad), math.sin(frame.heading_rad)
+        center = np.array([frame.center_n[0], frame.center_n[1], frame.landing_depth_m])
+        frame_q = geo.quaternion_wxyz_from_rpy_radians(0.0, 0.0, frame.heading_rad)
+        extent = 16.0 * size
+        sc.add_grid("/site/seabed", width=extent, height=extent, plane="xy",
+                    cell_size=size / 2, section_size=2 * size, cell_color=(150, 140, 100),
+                    section_color=(120, 110, 80), plane_color=SEABED_COLOR, plane_opacity=1.0,
+                    position=center + np.array([0.0, 0.0, thick + 0.01]),
+                    fade_distance=40 * size)
+        sc.add_box("/site/frame", color=FRAME_COLOR,
+                   dimensions=(float(lay.frame_size_m[0]), float(lay.frame_size_m[1]), thick),
+                   position=center + np.array([0.0, 0.0, thick / 2]), wxyz=frame_q)
+        for k, (px, py) in enumerate(lay.post_xy_m):
+            pn = center[:2] + np.array([c * px - s * py, s * px + c * py])
+            sc.add_cylinder(f"/site/post_{k}", radius=float(lay.post_radius_m),
+                            height=float(lay.post_height_m), color=POST_COLOR,
+                            position=(pn[0], pn[1], center[2] - lay.post_height_m / 2))
+        tree = sc.add_frame("/tree", show_axes=False)
+        sc.add_box("/tree/body", color=TREE_COLOR, dimensions=(length, width, height))
+        funnel_h = 0.12 * height
+        for k, p in enumerate(geo.funnel_points_b(lay.post_xy_m, height)):
+            sc.add_cylinder(f"/tree/funnel_{k}", radius=float(lay.funnel_mouth_radius_m),
+                            height=funnel_h, color=FUNNEL_COLOR,
+                            position=(p[0], p[1], p[2] + funnel_h / 2))
+        for k, p in enumerate(geo.funnel_points_b(lay.post_xy_m, height)):
+            # the funnels' places marked on the tree's top, to line up with the guides
+            sc.add_cylinder(f"/tree/funnel_mark_{k}", radius=float(lay.funnel_mouth_radius_m),
+                            height=0.01 * height, color=FUNNEL_COLOR,
+                            position=(p[0], p[1], -0.5 * height - 0.006 * height))
+        sc.add_icosphere("/tree/attachment", radius=0.04 * size, color=WIRE_COLOR,
+                         position=(0.0, 0.0, -info.attachment_height_m))
+        guide_len = 2.0 * height  # from the post tops to half a tree height over the tree
+        guide_top = frame.landing_depth_m - lay.post_height_m - guide_len
+        for k, (px, py) in enumerate(lay.post_xy_m):
+            pn = center[:2] + np.array([c * px - s * py, s * px + c * py])
+            # alignment guides: each post's axis carried up past the tree (seen from above,
+            # a guide inside its funnel mark means that funnel will catch its post)
+            sc.add_cylinder(f"/site/guide_{k}", radius=0.5 * float(lay.post_radius_m),
+                            height=guide_len, color=GUIDE_COLOR, opacity=0.55,
+                            position=(pn[0], pn[1], guide_top + guide_len / 2))
+        rov = sc.add_frame("/rov", show_axes=False)
+        sc.add_box("/rov/body", color=ROV_COLOR, dimensions=info.rov_dimensions_m)
+        ghost = sc.add_frame("/reference", show_axes=False)
+        sc.add_box("/reference/body", color=GHOST_COLOR, dimensions=(length, width, height),
+                   opacity=0.3)
+        self._tree, self._rov, self._ghost = tree, rov, ghost
+        self._wire = sc.add_line_segments("/wire", np.zeros((1, 2, 3)), WIRE_COLOR,
+                                          thickness=2.0, thickness_units="screen")
+        self._track = sc.add_line_segments("/track", np.zeros((1, 2, 3)), TRACK_COLOR,
+                                           thickness=2.0, thickness_units="screen")
+        if self._current is not None:
+            self._current.remove()
+        self._current = None
+        self._current_key = None
+        self._version = info.version
+
+    def _draw_current(self, snap: Snapshot, size: float) -> None:
+        """Arrow along the current, beside the tree at its top: 10 tree lengths per m/s (at
+        least 0.3), ending two tree lengths upstream of the tree's start."""
+        key = (round(snap.current_speed_mps, 4), round(snap.current_direction_rad, 4))
+        if key == self._current_key:
+            return
+        self._current_key = key
+        if self._current is not None:
+            self._current.remove()
+        length = max(0.3 * size, 10.0 * size * snap.current_speed_mps)
+        d = snap.current_direction_rad
+        along = np.array([math.cos(d), math.sin(d), 0.0])
+        info = snap.scene
+        center = np.array([*info.frame.center_n, snap.tree_eta_n[2]])
+        end = center - 2.0 * size * along - np.array([0.0, 0.0, info.tree_dimensions_m[2]])
+        start = end - length * along
+        self._current = self.scene.add_arrows(
+            "/current", np.array([[start, end]]), CURRENT_COLOR, shaft_radius=0.015 * size,
+            head_radius=0.05 * size, head_length=0.12 * size,
+            visible=snap.current_speed_mps > 0.0)
+
+    # ----------------------------------------------------------------- per frame
+    def update(self, snap: Snapshot) -> None:
+        if snap.scene.version != self._version:
+            self._build(snap.scene)
+            self._last_pose = None
+        info = snap.scene
+        tree_eta = np.array(snap.tree_eta_n)
+        self._draw_current(snap, max(info.tree_dimensions_m))
+        self._update_track(snap, tree_eta[2])
+        ref = snap.eta_ref
+        pose = np.concatenate([tree_eta, snap.rov_eta_n, ref, snap.crane_tip_n,
+                               [snap.wire_length_m, snap.wire_drag_n_per_m]])
+        if self._last_pose is not None and np.all(np.abs(pose - self._last_pose) < POSE_EPS):
+            return
+        self._last_pose = pose
+        wire = geo.loaded_wire_points_n(
+            np.array(snap.crane_tip_n), geo.attachment_point_n(tree_eta,
+                                                               info.attachment_height_m),
+            snap.wire_length_m, info.wire_weight_n_per_m, info.tree_weight_n,
+            snap.wire_drag_n_per_m * np.array([math.cos(snap.current_direction_rad),
+                                               math.sin(snap.current_direction_rad)]))
+        with self.server.atomic():
+            self._tree.position = tree_eta[0:3]
+            self._tree.wxyz = geo.quaternion_wxyz_from_rpy_radians(*tree_eta[3:6])
+            self._rov.position = np.array(snap.rov_eta_n[0:3])
+            self._rov.wxyz = geo.quaternion_wxyz_from_rpy_radians(*snap.rov_eta_n[3:6])
+            self._ghost.position = (ref[0], ref[1], tree_eta[2])
+            self._ghost.wxyz = geo.quaternion_wxyz_from_rpy_radians(0.0, 0.0, ref[2])
+            self._wire.points = geo.polyline_segments(wire)
+
+    def _update_track(self, snap: Snapshot, depth_m: float) -> None:
+        now = time.monotonic()
+        if now - self._track_wall < TRACK_EVERY_S or len(snap.trend) < 2:
+            return
+        self._track_wall = now
+        pts = np.column_stack([snap.trend[-1200:, 1], snap.trend[-1200:, 2],
+                               np.full(min(len(snap.trend), 1200), depth_m)])
+        self._track.points = geo.polyline_segments(pts)
+
+
+class _Recorder:
+    """Passes ``add_*`` calls to the scene and remembers the handles (to remove them all when
+    the set-up changes)."""
+
+    def __init__(self, scene: viser.SceneApi, handles: list) -> None:
+        self._scene = scene
+        self._handles = handles
+
+    def __getattr__(self, name: str):
+        method = getattr(self._scene, name)
+
+        def add(*args, **kwargs):
+            handle = method(*args, **kwargs)
+            self._handles.append(handle)
+            return handle
+
+        return add

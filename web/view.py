@@ -1,0 +1,97 @@
+"""The console's 3D view: a viser server bound to the console's host (viser binds 0.0.0.0 by
+default), its share button off, one shared scene, and panels per browser.
+
+A publisher thread reads the newest snapshot ``FRAME_HZ`` times a second and pushes it to the
+scene and the panels; the loop never waits for it, and viser coalesces what a slow browser has
+not taken yet.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from web import geometry as geo
+from web.panels import ClientPanel
+from web.scene import SceneView
+
+if TYPE_CHECKING:
+    from app.console import Console
+
+FRAME_HZ = 20.0
+"""Scene updates per second."""
+
+
+class ConsoleView:
+    """Starts with the console, stops with it."""
+
+    def __init__(self, console: Console, host: str, port: int) -> None:
+        self.console = console
+        self.server = viser.ViserServer(host=host, port=port, label="ROV console",
+                                        verbose=False)
+        self.server.gui.configure_theme(show_share_button=False, control_width="large",
+                                        dark_mode=False, brand_color=(20, 90, 160))
+        self.scene = SceneView(self.server)
+        self._panels: dict[int, ClientPanel] = {}
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self.errors: list[str] = []
+        self.server.on_client_connect(self._connect)
+        self.server.on_client_disconnect(self._disconnect)
+        self._set_initial_camera()
+        self.scene.update(console.loop.snapshot)
+        self._thread = threading.Thread(target=self._publish, name="console-view",
+                                        daemon=True)
+        self._thread.start()
+
+    @property
+    def port(self) -> int:
+        return self.server.get_port()
+
+    @property
+    def clients(self) -> int:
+        with self._lock:
+            return len(self._panels)
+
+    def _set_initial_camera(self) -> None:
+        snap = self.console.loop.snapshot
+        pose = geo.overview_camera(np.array(snap.tree_eta_n),
+                                   max(snap.scene.tree_dimensions_m))
+        cam = self.server.initial_camera
+        cam.position = pose.position_n
+        cam.look_at = pose.look_at_n
+        cam.up = pose.up_n
+
+    def _connect(self, client: viser.ClientHandle) -> None:
+        panel = ClientPanel(client, self.console)
+        with self._lock:
+            self._panels[client.client_id] = panel
+
+    def _disconnect(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            self._panels.pop(client.client_id, None)
+
+    def _publish(self) -> None:
+        last = -1
+        while not self._stop.wait(1.0 / FRAME_HZ):
+            snap = self.console.loop.snapshot
+            if snap.seq == last:
+                continue
+            last = snap.seq
+            try:
+                self.scene.update(snap)
+                with self._lock:
+                    panels = list(self._panels.values())
+                for panel in panels:
+                    panel.update(snap)
+            except Exception as err:
+                if len(self.errors) < 100:
+                    self.errors.append(f"{type(err).__name__}: {err}")
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+        self.server.stop()
