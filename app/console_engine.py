@@ -123,11 +123,19 @@ class _Replay:
         self.playing = False
         self.trend_all = frozen_copy(trend_rows(self.rows))
         meta = getattr(data, "metadata", {}) or {}
-        self.crane_tip_n = tuple(float(v) for v in meta.get("crane_tip_n", (0.0, 0.0, 0.0)))
-        self.wire_length_m = float(meta.get("wire_length_m", 0.0))
         self.mission = str(meta.get("mission", name))
         self.monitor = self._new_monitor()
-        self.monitor.update(self.rows[:1], None)
+        self.monitor.update(self.rows[:1], self._tension(0))
+
+    def _tension(self, index: int) -> float:
+        """Wire tension recorded in that row (logs carry the site: crane tip, wire, tension)."""
+        return float(self.rows[index, loop.L_SITE + 3])
+
+    def site(self) -> tuple[tuple[float, float, float], float, float]:
+        """Crane tip (NED), wire rest length and tension at the present row."""
+        row = self.rows[self.index]
+        return ((float(row[loop.L_SITE]), float(row[loop.L_SITE + 1]), 0.0),
+                float(row[loop.L_SITE + 2]), float(row[loop.L_SITE + 3]))
 
     def _new_monitor(self) -> AlarmMonitor:
         limits = AlarmLimits(position_error_m=self.scene.layout.tolerance_m,
@@ -154,7 +162,7 @@ class _Replay:
         self.clock_s = min(self.clock_s + n_steps * self.dt_s, self.end_s)
         new = self._index_at(self.clock_s)
         if new > self.index:
-            self.monitor.update(self.rows[self.index + 1:new + 1], None)
+            self.monitor.update(self.rows[self.index + 1:new + 1], self._tension(new))
             self.index = new
         if self.clock_s >= self.end_s:
             self.playing = False
@@ -167,7 +175,7 @@ class _Replay:
         self.monitor = self._new_monitor()
         t = self.rows[:, loop.L_T]
         first = int(np.searchsorted(t, self.clock_s - 10.0))
-        self.monitor.update(self.rows[first:self.index + 1], None)
+        self.monitor.update(self.rows[first:self.index + 1], self._tension(self.index))
 
     def trend(self) -> FloatArray:
         k = self.index + 1
@@ -534,13 +542,14 @@ class ConsoleEngine:
         rp = self.replay
         assert rp is not None
         v = row_view(rp.rows[rp.index], rp.scene.n_thrusters)
+        crane_tip_n, wire_length_m, tension_n = rp.site()
         return Snapshot(
             seq=seq, source="replay", t_s=v.t_s, paused=not rp.playing, speed=speed,
             tree_eta_n=v.tree_eta_n, rov_eta_n=v.rov_eta_n, eta_ref=v.eta_ref,
             eta_hat=v.eta_hat, thruster_utilisation=v.utilisation, thruster_force_n=v.force_n,
             mode=v.mode, allocation=None, grip=None, gains=None,
-            crane_tip_n=rp.crane_tip_n,  # type: ignore[arg-type]
-            wire_length_m=rp.wire_length_m, wire_tension_n=None,
+            crane_tip_n=crane_tip_n,  # type: ignore[arg-type]
+            wire_length_m=wire_length_m, wire_tension_n=tension_n,
             current_speed_mps=0.0, current_direction_rad=0.0, wire_drag_n_per_m=0.0,
             mission=MissionStatus(name=rp.mission, state="replay"),
             alarms=rp.monitor.state, recording=self.recording_name, replay=rp.status(),

@@ -140,6 +140,8 @@ def _column_blocks() -> list[tuple[int, list[str]]]:
         (loop.L_MODE, ["mode"]),
         (loop.L_NIS, ["nis_north", "nis_east", "nis_heading"]),
         (loop.L_ACCEPT, [f"accepted_{s}" for s in sensors.SENSOR_NAMES]),
+        (loop.L_SITE, ["crane_tip_north_m", "crane_tip_east_m", "wire_rest_length_m",
+                       "wire_tension_n"]),
     ]
 
 

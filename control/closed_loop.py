@@ -442,6 +442,7 @@ class ClosedLoop:
             log[j, loop.L_TREE:loop.L_TREE + 6] = x[0:6]
             log[j, loop.L_ROV:loop.L_ROV + 6] = x[12:18]
             log[j, loop.L_Y:loop.L_Y + 11] = held
+            loop.log_site(log[j], x, env[j], sim.arrays)
             if not np.all(np.isfinite(x)):
                 return x, held, xhat, pc, cs, log, j
         return x, held, xhat, pc, cs, log, n

@@ -20,7 +20,7 @@ from numba import njit
 from control import ekf, pid, quality, refkernel
 from control.allocation import _priority_forces
 from sim import plant, sensors
-from sim.gnc import JIT
+from sim.gnc import JIT, Rzyx
 
 EYE3 = np.eye(3)
 
@@ -63,7 +63,8 @@ L_Y = L_TERMS + 12  # 11 held sensor values
 L_MODE = L_Y + 11
 L_NIS = L_MODE + 1  # 3: normalised innovation squared of position (2) and heading
 L_ACCEPT = L_NIS + 3  # 5: 1 where a fresh sample was accepted this step
-N_LOG = L_ACCEPT + 5
+L_SITE = L_ACCEPT + 5  # 4: crane tip north, east [m], wire rest length [m], tension [N]
+N_LOG = L_SITE + 4
 
 
 class ControlArrays(NamedTuple):
@@ -343,6 +344,18 @@ def finish_step(x: np.ndarray, f: np.ndarray, env_k: np.ndarray, xhat: np.ndarra
 
 
 @njit(**JIT)
+def log_site(row: np.ndarray, x: np.ndarray, env_k: np.ndarray, P: plant.PlantArrays) -> None:
+    """The vessel's crane tip, the wire's payout and its tension at the tree, into a log row."""
+    row[L_SITE] = env_k[plant.E_CT]
+    row[L_SITE + 1] = env_k[plant.E_CT + 1]
+    row[L_SITE + 2] = env_k[plant.E_LREST]
+    R_t = Rzyx(x[3], x[4], x[5])
+    p_att = x[0:3] + R_t @ P.tree_r_att
+    f = plant.wire_force_n(p_att, env_k, P.tree_W0)
+    row[L_SITE + 3] = np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
+
+
+@njit(**JIT)
 def run_chunk(k0: int, x: np.ndarray, held_y: np.ndarray, xhat: np.ndarray, Pc: np.ndarray,
               cs: np.ndarray, target: np.ndarray, env: np.ndarray, noise: np.ndarray,
               fresh: np.ndarray, P: plant.PlantArrays, C: ControlArrays, Q: QualityState,
@@ -364,6 +377,7 @@ def run_chunk(k0: int, x: np.ndarray, held_y: np.ndarray, xhat: np.ndarray, Pc: 
         row[L_TREE:L_TREE + 6] = x[0:6]
         row[L_ROV:L_ROV + 6] = x[12:18]
         row[L_Y:L_Y + 11] = held_y
+        log_site(row, x, env[j], P)
         if not np.all(np.isfinite(x)):
             return x, held_y, xhat, Pc, cs, log, j
     return x, held_y, xhat, Pc, cs, log, n

@@ -173,3 +173,24 @@ def test_full_turn_is_possible_and_short_way_is_default():
         cl.set_target(1.0, 1.0, 0.0, heading_mode="sideways")
     with pytest.raises(ValueError, match="target north_m must be finite"):
         cl.set_target(float("nan"), 1.0, 0.0)
+
+
+def test_log_rows_carry_the_site_vessel_wire_and_tension():
+    """The log holds the crane tip, the wire's payout and its tension each step, so a replay
+    shows the vessel where it was and the wire-slack alarm works on recordings too."""
+    cl = ClosedLoop(MODEL, tree_depth_m=100.0)
+    cl.sim.move_crane_tip(np.array([3.0, 1.0, 0.0]), speed_mps=0.5)
+    log = cl.run(10.0)
+    crane = log.col(loop.L_SITE, 2)
+    assert crane[0, 0] == pytest.approx(1.0 + 0.5 * 0.01)  # one step at 0.5 m/s
+    assert crane[-1, 0] == pytest.approx(3.0)  # arrived after 4 s
+    np.testing.assert_allclose(crane[:, 1], 1.0)
+    # hanging still, the wire carries the tree's submerged weight less the ROV's net
+    # buoyancy (1 % of its weight): within 1 %
+    tension = log.col(loop.L_SITE + 3)
+    assert tension[0] == pytest.approx(MODEL.tree.submerged_weight_n, rel=0.01)
+    cl.sim.winch_to(cl.sim.wire_length_m - 2.0, 0.5)  # haul in 2 m
+    cl.run(5.0)
+    cl.sim.set_wire_length(cl.sim.wire_length_m + 10.0)  # then pay out 10 m at once: slack
+    slack = cl.run(0.5).col(loop.L_SITE + 3)
+    assert slack[-1] == 0.0
