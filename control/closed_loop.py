@@ -19,7 +19,7 @@ from control import allocation as alloc
 from control import loop, model, quality, reference, refkernel
 from control.startup import StartupReport, check_mount_vector
 from sim import environment as envmod
-from sim import plant, sensors
+from sim import sensors
 from sim import wire as wm
 from sim.gnc import ssa
 from sim.params import ParameterSet
@@ -432,7 +432,7 @@ class ClosedLoop:
         for j in range(n):
             k = sim.step_index + j
             held = sensors.sample(x, held, noise.noise[j], noise.fresh[j], sensors.Y_SENSOR)
-            tau6, xhat, pc, cs = loop.control_step(k, k * self.dt_s, x, held, noise.fresh[j],
+            tau6, xhat, pc, cs = loop.control_step(k * self.dt_s, x, held, noise.fresh[j],
                                                    xhat, pc, cs, self.target, self.C, self.Q,
                                                    self.dt_s, log[j])
             f = np.asarray(alloc.allocate_qp(self.thruster_config, tau6).force_n)
@@ -447,7 +447,3 @@ class ClosedLoop:
                 return x, held, xhat, pc, cs, log, j
         return x, held, xhat, pc, cs, log, n
 
-
-def plant_mount_override(ps: ParameterSet, r_true_m: FloatArray) -> plant.PlantArrays:
-    """Plant arrays with the ROV mounted somewhere else than the parameter set says."""
-    return plant.plant_arrays(ps, has_rov=True, r_mount_tree_m=np.asarray(r_true_m, float))

@@ -195,30 +195,23 @@ def _truth_tree(x: np.ndarray):
 def _rov_pose(x: np.ndarray, y: np.ndarray, use_truth: bool):
     """The ROV's [north, east, down, psi] and rates for the free-ROV controller."""
     eta4 = np.empty(4)
-    deta4 = np.empty(4)
-    if use_truth:
+    if use_truth:  # pose and body velocities [u, v, w, r] of the plant state
         eta4[0:3] = x[12:15]
         eta4[3] = x[17]
-        c, s = np.cos(x[17]), np.sin(x[17])
-        deta4[0] = c * x[18] - s * x[19]
-        deta4[1] = s * x[18] + c * x[19]
-        deta4[2] = x[20]
-        deta4[3] = x[23]
-    else:
-        eta4[0:3] = y[0:3]
+        u, v, w, r = x[18], x[19], x[20], x[23]
+    else:  # fix (north, east), depth sensor, compass, DVL, gyro
+        eta4[0:2] = y[0:2]
         eta4[2] = y[3]
         eta4[3] = y[4]
-        c, s = np.cos(y[4]), np.sin(y[4])
-        deta4[0] = c * y[5] - s * y[6]
-        deta4[1] = s * y[5] + c * y[6]
-        deta4[2] = y[7]
-        deta4[3] = y[10]
+        u, v, w, r = y[5], y[6], y[7], y[10]
+    c, s = np.cos(eta4[3]), np.sin(eta4[3])
+    deta4 = np.array([c * u - s * v, s * u + c * v, w, r])
     return eta4, deta4
 
 
 @njit(**JIT)
-def _observe(k_step: int, t: float, y: np.ndarray, fresh: np.ndarray, xhat: np.ndarray,
-             P: np.ndarray, tau_tree_ach: np.ndarray, C: ControlArrays, Q: QualityState,
+def _observe(t: float, y: np.ndarray, fresh: np.ndarray, xhat: np.ndarray,
+             P: np.ndarray, C: ControlArrays, Q: QualityState,
              dt: float, log_row: np.ndarray):
     """Signal checks, then EKF correction with each accepted fresh sample, then prediction."""
     accepted = np.zeros(5, dtype=np.bool_)
@@ -250,14 +243,14 @@ def _observe(k_step: int, t: float, y: np.ndarray, fresh: np.ndarray, xhat: np.n
 
 
 @njit(**JIT)
-def control_step(k: int, t: float, x: np.ndarray, y: np.ndarray, fresh: np.ndarray,
+def control_step(t: float, x: np.ndarray, y: np.ndarray, fresh: np.ndarray,
                  xhat: np.ndarray, Pc: np.ndarray, cs: np.ndarray, target: np.ndarray,
                  C: ControlArrays, Q: QualityState, dt: float, log_row: np.ndarray):
     """Observer, reference, supervisor and controller for one step. Returns
     (tau_rov6, xhat, Pc, cs). ``cs`` is a fresh copy, updated."""
     cs = cs.copy()
     if C.feedback_ekf:
-        xhat, Pc = _observe(k, t, y, fresh, xhat, Pc, np.zeros(3), C, Q, dt, log_row)
+        xhat, Pc = _observe(t, y, fresh, xhat, Pc, C, Q, dt, log_row)
         eta = xhat[0:3].copy()
         c, s = np.cos(eta[2]), np.sin(eta[2])
         deta = np.array([c * xhat[3] - s * xhat[4], s * xhat[3] + c * xhat[4], xhat[5]])
@@ -369,7 +362,7 @@ def run_chunk(k0: int, x: np.ndarray, held_y: np.ndarray, xhat: np.ndarray, Pc: 
         t = k * dt
         row = log[j]
         held_y = sensors.sample(x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
-        tau6, xhat, Pc, cs = control_step(k, t, x, held_y, fresh[j], xhat, Pc, cs, target, C,
+        tau6, xhat, Pc, cs = control_step(t, x, held_y, fresh[j], xhat, Pc, cs, target, C,
                                           Q, dt, row)
         f = allocate(tau6, C)
         x, xhat, Pc = finish_step(x, f, env[j], xhat, Pc, C, P, dt, row)

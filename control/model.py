@@ -15,7 +15,6 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linprog
 
-from sim import site
 from sim import wire as wm
 from sim.gnc import Hmtrx, Rzyx
 from sim.params import ParameterSet
@@ -98,7 +97,3 @@ def dof_capacity(T: FloatArray, f_max_neg: FloatArray, f_max_pos: FloatArray) ->
         out[k] = best
     return out
 
-
-def wire_length_for(ps: ParameterSet, depth_m: float) -> float:
-    """Convenience: the wire length that hangs the tree at this depth (see sim.site)."""
-    return site.wire_length_for_depth(ps, depth_m)

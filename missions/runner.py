@@ -133,15 +133,21 @@ class MissionContext:
         if remaining > 0:
             yield remaining
 
+    def run_until(self, done: Callable[[], bool], deadline_s: float) -> Iterator[float]:
+        """Run in chunks until ``done()``; returns False if the deadline came first."""
+        while not done():
+            if self.cl.t_s >= deadline_s:
+                return False
+            yield CHUNK_S
+        return True
+
     def go_and_settle(self, north: float, east: float, psi: float, settle_s: float,
                       deadline_s: float) -> Iterator[float]:
         """Set the target, run until the reference arrives, then settle. Returns False on
         timeout."""
         self.set_target(north, east, psi)
-        while not self.reference_arrived():
-            if self.cl.t_s >= deadline_s:
-                return False
-            yield CHUNK_S
+        if not (yield from self.run_until(self.reference_arrived, deadline_s)):
+            return False
         yield from self.wait(settle_s, deadline_s)
         return True
 
@@ -232,10 +238,8 @@ def _winch_done(cl: ClosedLoop) -> bool:
 def _wire(ctx: MissionContext, leg: schema.WireLeg, deadline: float):
     sim = ctx.cl.sim
     sim.winch_to(sim.wire_length_m + leg.change_m, leg.rate_mps)
-    while not _winch_done(ctx.cl):
-        if ctx.cl.t_s >= deadline:
-            return False
-        yield CHUNK_S
+    if not (yield from ctx.run_until(lambda: _winch_done(ctx.cl), deadline)):
+        return False
     yield from ctx.wait(leg.settle_s, deadline)
     return True
 
@@ -246,10 +250,9 @@ def _vessel(ctx: MissionContext, leg: schema.VesselLeg, deadline: float):
     if leg.relative:
         target[0:2] += sim.crane_tip_n[0:2]
     sim.move_crane_tip(target, leg.speed_mps)
-    while np.linalg.norm(sim.crane_tip_n - target) > 1e-6:
-        if ctx.cl.t_s >= deadline:
-            return False
-        yield CHUNK_S
+    arrived = lambda: np.linalg.norm(sim.crane_tip_n - target) <= 1e-6  # noqa: E731
+    if not (yield from ctx.run_until(arrived, deadline)):
+        return False
     yield from ctx.wait(leg.settle_s, deadline)
     return True
 
@@ -335,11 +338,9 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float):
     cl.sim.winch_to(_depth_wire(cl, post_top - leg.hover_m - half_h), 0.1)
     psi = ctx.target[2] + ssa(frame.heading_rad - ctx.target[2])
     ok = yield from ctx.go_and_settle(frame.center_n[0], frame.center_n[1], psi, 0.0, deadline)
-    while ok and not (_winch_done(cl) and _aligned(cl, frame, layout, leg)):
-        if cl.t_s >= deadline:
-            ok = False
-            break
-        yield CHUNK_S
+    if ok:
+        ok = yield from ctx.run_until(
+            lambda: _winch_done(cl) and _aligned(cl, frame, layout, leg), deadline)
     if not ok:
         ctx.event("landing", "landing abandoned: not aligned over the frame in time")
         return False
@@ -388,10 +389,8 @@ def _lift(ctx: MissionContext, leg: schema.LiftLeg, deadline: float):
     half_h = float(cl.sim.ps.tree.dimensions_m[2]) / 2.0
     post_top = frame.post_top_depth_m(layout)
     cl.sim.winch_to(_depth_wire(cl, post_top - leg.height_m - half_h), leg.rate_mps)
-    while not _winch_done(cl):
-        if cl.t_s >= deadline:
-            return False
-        yield CHUNK_S
+    if not (yield from ctx.run_until(lambda: _winch_done(cl), deadline)):
+        return False
     ctx.event("lift", "tree lifted off the frame")
     yield from ctx.wait(leg.settle_s, deadline)
     return True

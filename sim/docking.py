@@ -74,12 +74,6 @@ def funnel_positions_n(tree_eta_n: FloatArray, layout: DockingLayout) -> FloatAr
     return tree_eta_n[0:2] + layout.post_xy_m @ rot.T
 
 
-def tree_pose_for_landing(frame: DockingFrame, tree_height_m: float) -> FloatArray:
-    """The tree pose [north, east, down_cg, 0, 0, psi] that sits exactly on the frame."""
-    return np.array([frame.center_n[0], frame.center_n[1],
-                     frame.landing_depth_m - tree_height_m / 2.0, 0.0, 0.0, frame.heading_rad])
-
-
 @dataclass(frozen=True)
 class LandingCheck:
     """Alignment of the funnels over the posts at one instant."""
