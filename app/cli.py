@@ -58,9 +58,9 @@ def simulate(
     seed: Annotated[int, typer.Option(help="random seed")] = 0,
 ) -> None:
     """Run the plant without control and print one JSON object describing where it ends."""
+    from control.simulation import Simulation, SimulationDiverged, steady_current
     from sim import environment as envmod
     from sim import params as params_mod
-    from sim.simulator import SimulationDiverged, Simulator
 
     speed, direction = parse_polar(current, "--current", "m/s")
     if not 0.0 <= speed <= 3.0:
@@ -80,24 +80,22 @@ def simulate(
             raise typer.BadParameter(f"--waves must be HS_M@TP_S@DIR_DEG: {err}") from None
     try:
         ps = params_mod.load(params)
-        cur = envmod.CurrentParams(speed_mps=speed, direction_rad=direction,
-                                   speed_min_mps=speed, speed_max_mps=speed,
-                                   direction_min_rad=direction, direction_max_rad=direction)
-        sim = Simulator(ps, tree_depth_m=depth, crane_tip_n=np.array([ct[0], ct[1], 0.0]),
-                        current=cur, waves=wave_params, has_rov=not no_rov, seed=seed)
+        sim = Simulation(ps, tree_depth_m=depth, crane_tip_n=np.array([ct[0], ct[1], 0.0]),
+                         current=steady_current(speed, direction), waves=wave_params,
+                         has_rov=not no_rov, seed=seed, control=False)
         if push is not None:
             force, pdir = parse_polar(push, "--push", "N")
             sim.set_push(np.array([force * math.cos(pdir), force * math.sin(pdir), 0.0]))
         t0 = time.perf_counter()
-        traj = sim.run(duration)
+        rows = sim.run_for(duration)
         wall = time.perf_counter() - t0
     except (ValueError, SimulationDiverged) as err:
         _fail(str(err))
         return
-    typer.echo(json.dumps(simulation_summary(sim, traj, wall), indent=2))
+    typer.echo(json.dumps(simulation_summary(sim, rows, wall), indent=2))
 
 
-def simulation_summary(sim, traj, wall_s: float) -> dict:  # type: ignore[no-untyped-def]
+def simulation_summary(sim, rows, wall_s: float) -> dict:
     """The JSON answer of ``simulate``: final poses (angles in degrees) and settling."""
     from sim.gnc import ssa
 
@@ -105,11 +103,12 @@ def simulation_summary(sim, traj, wall_s: float) -> dict:  # type: ignore[no-unt
         out = [float(v) for v in eta[:3]] + [math.degrees(ssa(float(a))) for a in eta[3:]]
         return [round(v, 6) for v in out]
 
-    x = sim.x
-    speeds = np.linalg.norm(traj.x[:, 6:9], axis=1)
-    last = traj.t_s >= traj.t_s[-1] - 60.0 if len(traj.t_s) else np.array([], dtype=bool)
-    settled = bool(len(traj.t_s) and traj.t_s[-1] >= 60.0 and np.all(speeds[last] < 1e-3))
-    duration = float(traj.t_s[-1]) if len(traj.t_s) else 0.0
+    x = sim.plant_state
+    t_s = rows.t_s
+    speeds = np.linalg.norm(rows["tree_nu_b"][:, 0:3], axis=1)
+    last = t_s >= t_s[-1] - 60.0 if len(t_s) else np.array([], dtype=bool)
+    settled = bool(len(t_s) and t_s[-1] >= 60.0 and np.all(speeds[last] < 1e-3))
+    duration = float(t_s[-1]) if len(t_s) else 0.0
     return {
         "params": sim.ps.name,
         "time_s": round(sim.t_s, 6),
@@ -120,66 +119,110 @@ def simulation_summary(sim, traj, wall_s: float) -> dict:  # type: ignore[no-unt
         "horizontal_offset_m": round(float(np.hypot(x[0] - sim.crane_tip_n[0],
                                                     x[1] - sim.crane_tip_n[1])), 6),
         "heading_deg": round(math.degrees(ssa(float(x[5]))), 4),
-        "wire_tension_n": round(sim.wire_tension_n(), 2),
+        "wire_tension_n": round(sim.wire_tension_newton(), 2),
         "tree_speed_mps": float(speeds[-1]) if len(speeds) else 0.0,
         "settled": settled,
-        "steps": len(traj.t_s),
-        "steps_per_second": round(len(traj.t_s) / wall_s, 1) if wall_s > 0 else None,
+        "steps": len(t_s),
+        "steps_per_second": round(len(t_s) / wall_s, 1) if wall_s > 0 else None,
         "real_time_factor": round(duration / wall_s, 1) if wall_s > 0 else None,
     }
 
 
-SCENARIO_HELP = "name of a scenario in the mission library (see --list)"
-
 app.add_typer(log_app, name="log")
+
+LIST_HELP = "list the library's missions and exit"
+
+
+def _list_library() -> None:
+    from missions import schema
+
+    for n in schema.library_names():
+        typer.echo(f"{n:28s} {schema.load_mission(n).description}")
 
 
 @app.command()
-def scenario(
-    name: Annotated[str | None, typer.Argument(help=SCENARIO_HELP)] = None,
-    list_: Annotated[bool, typer.Option("--list", help="list the scenario names")] = False,
-    json_out: Annotated[bool, typer.Option("--json", help="one JSON object instead of a "
-                                                          "table")] = False,
+def run(
+    mission: Annotated[str | None, typer.Argument(
+        help="mission file (TOML) or a library name (see --list)")] = None,
+    list_: Annotated[bool, typer.Option("--list", help=LIST_HELP)] = False,
+    json_out: Annotated[bool, typer.Option("--json", help="one JSON object")] = False,
+    log: Annotated[str | None, typer.Option(help="write the session to this MCAP file")] = None,
+    plots: Annotated[str | None, typer.Option(help="write PNG figures into this folder")] = None,
     seed: Annotated[int | None, typer.Option(help="random seed (default: the file's)")] = None,
     allocation: Annotated[str | None, typer.Option(
-        help="pinv | priority | qp (default: the file's)")] = None,
+        help="pinv | priority | qp (default: the mission file's)")] = None,
     feedback: Annotated[str | None, typer.Option(
-        help="perfect | ekf (default: the file's)")] = None,
+        help="perfect | ekf (default: the mission file's)")] = None,
     law: Annotated[str | None, typer.Option(
-        help="thesis (eq. 3.9 alone) | feedforward (with reference feedforward); "
-             "default: the file's")] = None,
+        help="thesis (eq. 3.9 alone) | feedforward (with reference feedforward); default: "
+             "the mission file's")] = None,
+    progress: Annotated[bool, typer.Option(help="show a progress bar")] = True,
 ) -> None:
-    """Run one named scenario of thesis chapter 4 and print its figures."""
-    from missions import runner, schema
+    """Run a mission headless, faster than real time; exit 1 if it failed."""
+    from control.config import ALLOCATIONS, FEEDBACKS, LAWS
+    from missions import schema
+    from missions.driver import MissionDriver
+    from missions.setup import build_simulation
 
-    if list_ or name is None:
-        for n in schema.library_names():
-            typer.echo(f"{n:28s} {schema.load_mission(n).description}")
+    if list_ or mission is None:
+        _list_library()
         return
-    if allocation is not None and allocation not in ("pinv", "priority", "qp"):
-        raise typer.BadParameter(f"--allocation must be pinv, priority or qp, got {allocation!r}")
-    if feedback is not None and feedback not in ("perfect", "ekf"):
-        raise typer.BadParameter(f"--feedback must be perfect or ekf, got {feedback!r}")
-    if law is not None and law not in ("thesis", "feedforward"):
-        raise typer.BadParameter(f"--law must be thesis or feedforward, got {law!r}")
+    _validate_choice("--allocation", allocation, ALLOCATIONS)
+    _validate_choice("--feedback", feedback, FEEDBACKS)
+    _validate_choice("--law", law, LAWS)
     try:
-        mission = schema.load_mission(name)
-        t0 = time.perf_counter()
-        result = runner.run_mission(mission, seed=seed, allocation=allocation,
-                                    feedback=feedback,
-                                    feedforward=None if law is None else law == "feedforward")
-        wall = time.perf_counter() - t0
+        spec = schema.load_mission(mission)
+        sim = build_simulation(spec, seed=seed, allocation=allocation,  # type: ignore[arg-type]
+                               feedback=feedback,  # type: ignore[arg-type]
+                               feedforward=None if law is None else law == "feedforward")
     except ValueError as err:
         _fail(str(err))
         return
+    driver = MissionDriver(spec, sim)
+    recorder = _open_recorder(log, spec, sim, seed) if log else None
+    t0 = time.perf_counter()
+    try:
+        _drive(driver, recorder, show=progress and not json_out)
+    finally:
+        if recorder is not None:
+            _write_new_events(driver, recorder)
+            recorder.close()
+    wall = time.perf_counter() - t0
+    result = driver.result()
     summary = result.summary()
-    sim_time = float(result.log.t_s[-1]) if result.log is not None and len(result.log.t_s) else 0
-    summary["simulated_s"] = round(sim_time, 2)
-    summary["real_time_factor"] = round(sim_time / wall, 1) if wall > 0 else None
+    summary["simulated_s"] = round(sim.t_s, 2)
+    summary["real_time_factor"] = round(sim.t_s / wall, 1) if wall > 0 else None
+    summary["events"] = result.events
+    if log:
+        summary["log"] = log
+    if plots:
+        from app.plots import mission_figures
+
+        summary["plots"] = [str(p) for p in mission_figures(result, Path(plots),
+                                                               sim.crane_tip_n)]
     if json_out:
-        typer.echo(json.dumps(summary, indent=2))
+        typer.echo(json.dumps(summary, indent=2, default=_json_default))
     else:
         _print_result_table(summary)
+        _print_landings(summary)
+    if result.failed:
+        raise typer.Exit(code=1)
+
+
+@app.command(hidden=True)
+def scenario(
+    name: Annotated[str | None, typer.Argument()] = None,
+    list_: Annotated[bool, typer.Option("--list")] = False,
+    json_out: Annotated[bool, typer.Option("--json")] = False,
+    seed: Annotated[int | None, typer.Option()] = None,
+    allocation: Annotated[str | None, typer.Option()] = None,
+    feedback: Annotated[str | None, typer.Option()] = None,
+    law: Annotated[str | None, typer.Option()] = None,
+) -> None:
+    """Former name of ``run`` (kept so old scripts work)."""
+    typer.echo("note: 'scenario' is now 'run'", err=True)
+    run(mission=name, list_=list_, json_out=json_out, log=None, plots=None, seed=seed,
+        allocation=allocation, feedback=feedback, law=law, progress=False)
 
 
 def _print_result_table(summary: dict) -> None:
@@ -215,62 +258,6 @@ def _validate_choice(name: str, value: str | None, allowed: tuple[str, ...]) -> 
         raise typer.BadParameter(f"{name} must be one of {', '.join(allowed)}, got {value!r}")
 
 
-@app.command()
-def run(
-    mission: Annotated[str, typer.Argument(help="mission file (TOML) or a library name")],
-    json_out: Annotated[bool, typer.Option("--json", help="one JSON object")] = False,
-    log: Annotated[str | None, typer.Option(help="write the session to this MCAP file")] = None,
-    plots: Annotated[str | None, typer.Option(help="write PNG figures into this folder")] = None,
-    seed: Annotated[int | None, typer.Option(help="random seed (default: the file's)")] = None,
-    allocation: Annotated[str | None, typer.Option(help="pinv | priority | qp")] = None,
-    feedback: Annotated[str | None, typer.Option(help="perfect | ekf")] = None,
-    law: Annotated[str | None, typer.Option(help="thesis | feedforward")] = None,
-    progress: Annotated[bool, typer.Option(help="show a progress bar")] = True,
-) -> None:
-    """Run a mission headless, faster than real time; exit 1 if it failed."""
-    from missions import runner, schema
-
-    _validate_choice("--allocation", allocation, ("pinv", "priority", "qp"))
-    _validate_choice("--feedback", feedback, ("perfect", "ekf"))
-    _validate_choice("--law", law, ("thesis", "feedforward"))
-    try:
-        spec = schema.load_mission(mission)
-        cl = runner.build_loop(spec, seed=seed, allocation=allocation, feedback=feedback,
-                               feedforward=None if law is None else law == "feedforward")
-    except ValueError as err:
-        _fail(str(err))
-        return
-    exe = runner.MissionExecution(spec, cl)
-    recorder = _open_recorder(log, spec, cl, seed) if log else None
-    t0 = time.perf_counter()
-    try:
-        _drive(exe, cl, recorder, show=progress and not json_out)
-    finally:
-        if recorder is not None:
-            _write_new_events(exe, recorder)
-            recorder.close()
-    wall = time.perf_counter() - t0
-    result = exe.result()
-    summary = result.summary()
-    summary["simulated_s"] = round(cl.t_s, 2)
-    summary["real_time_factor"] = round(cl.t_s / wall, 1) if wall > 0 else None
-    summary["events"] = result.events
-    if log:
-        summary["log"] = log
-    if plots:
-        from app.plots import mission_figures
-
-        summary["plots"] = [str(p) for p in mission_figures(result, Path(plots),
-                                                               cl.sim.crane_tip_n)]
-    if json_out:
-        typer.echo(json.dumps(summary, indent=2, default=_json_default))
-    else:
-        _print_result_table(summary)
-        _print_landings(summary)
-    if result.failed:
-        raise typer.Exit(code=1)
-
-
 def _json_default(value: object) -> object:
     if isinstance(value, (np.floating, np.integer)):
         return value.item()
@@ -281,59 +268,43 @@ def _json_default(value: object) -> object:
     return str(value)
 
 
-def _drive(exe, cl, recorder, show: bool) -> None:  # type: ignore[no-untyped-def]
+def _drive(driver, recorder, show: bool) -> None:
     """Run the mission to its end, with a progress bar over its legs."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from sim.simulator import SimulationDiverged
-
+    sim = driver.sim
     columns = (TextColumn("{task.description}"), BarColumn(),
                TextColumn("leg {task.completed:.0f}/{task.total:.0f}"),
                TextColumn("sim {task.fields[sim]:7.0f} s"), TimeElapsedColumn())
     with Progress(*columns, disable=not show, transient=True) as bar:
-        task = bar.add_task(exe.mission.name, total=len(exe.mission.legs), sim=0.0)
-        while (seconds := exe.next_request()) is not None:
-            try:
-                log = cl.run(seconds)
-            except SimulationDiverged:
-                exe.mark_diverged()
-                break
-            exe.record(log)
+        task = bar.add_task(driver.mission.name, total=len(driver.mission.legs), sim=0.0)
+        while not driver.done:
+            rows = driver.advance()
             if recorder is not None:
-                _write_new_events(exe, recorder)
-                recorder.write_log(log.data, crane_tip_n=cl.sim.crane_tip_n,
-                                   wire_length_m=cl.sim.wire_length_m)
-            leg = exe.current_leg
-            bar.update(task, completed=max(exe.leg_index, 0), sim=cl.t_s,
-                       description=f"{exe.mission.name}: {leg.type if leg else 'done'}")
+                _write_new_events(driver, recorder)
+                if len(rows):
+                    recorder.write_log(rows.data, crane_tip_n=sim.crane_tip_n,
+                                       wire_length_m=sim.wire_length_m)
+            leg = driver.current_leg
+            bar.update(task, completed=max(driver.leg_index, 0), sim=sim.t_s,
+                       description=f"{driver.mission.name}: {leg.type if leg else 'done'}")
 
 
-def _write_new_events(exe, recorder) -> None:  # type: ignore[no-untyped-def]
+def _write_new_events(driver, recorder) -> None:
     """Events (leg changes, landings, alarms) go into the log as they happen."""
     done = getattr(recorder, "_events_written", 0)
-    for event in exe.ctx.events[done:]:
+    for event in driver.events[done:]:
         recorder.event(event["t_s"], event["kind"], event["text"], event["data"])
-    recorder._events_written = len(exe.ctx.events)
+    recorder._events_written = len(driver.events)
 
 
-def _open_recorder(path: str, spec, cl, seed):  # type: ignore[no-untyped-def]
-    from importlib.metadata import version
+def _open_recorder(path: str, spec, sim, seed):
+    """A recorder for ``run --log``, with the setup metadata every recording has."""
+    from app.recording import SessionRecorder, session_metadata
 
-    from app.recording import SessionRecorder
-    from missions import schema
-
-    metadata = {
-        "mission": schema.dump_mission(spec),
-        "mission_name": spec.name,
-        "params": cl.ps.spec.model_dump(mode="json"),
-        "gains": {"kp": list(cl.gains.kp), "ki": list(cl.gains.ki), "kd": list(cl.gains.kd)},
-        "seed": str(spec.setup.seed if seed is None else seed),
-        "settings": {k: str(v) for k, v in vars(cl.settings).items()},
-        "software_version": version("rov-console"),
-    }
-    frame = cl.sim.docking_frame
-    return SessionRecorder(path, metadata=metadata, params=cl.ps,
-                           n_thrusters=cl.ps.rov.thrusters.T.shape[1], docking=frame)
+    metadata = session_metadata(sim, spec, seed=seed)  # seed None: the mission's
+    return SessionRecorder(path, metadata=metadata, params=sim.ps,
+                           n_thrusters=sim.n_thrusters, docking=sim.docking_frame)
 
 
 def _print_landings(summary: dict) -> None:

@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from app import recording
+from app.recording import check_session, export_csv
 
 EXIT_COMPLETE, EXIT_TRUNCATED, EXIT_UNREADABLE = 0, 1, 2
 
@@ -57,7 +57,7 @@ def check(
     """Say what is in a session log and whether it is complete (exit 0), cut off but readable
     (exit 1) or unreadable (exit 2)."""
     try:
-        report = recording.check_session(file)
+        report = check_session(file)
     except ValueError as err:
         if json_out:
             typer.echo(json.dumps({"file": str(file), "status": "unreadable",
@@ -82,7 +82,7 @@ def export(
     """Write the numeric channels as CSV: session_log.csv (every log column, exact), one file
     per plot channel, events.csv."""
     try:
-        written = recording.export_csv(file, csv, overwrite=force)
+        written = export_csv(file, csv, overwrite=force)
     except (ValueError, FileExistsError) as err:
         typer.echo(f"error: {err}", err=True)
         raise typer.Exit(EXIT_UNREADABLE) from None

@@ -12,7 +12,8 @@ import time
 
 
 def main() -> None:
-    from control.closed_loop import ClosedLoop, ControlSettings
+    from control.config import ControlSettings
+    from control.simulation import Simulation
     from sim import params
 
     t0 = time.perf_counter()
@@ -22,7 +23,8 @@ def main() -> None:
             for reference in ("first", "third"):
                 settings = ControlSettings(feedback=feedback, allocation=allocation,
                                            reference=reference, feedforward=True)
-                ClosedLoop(ps, tree_depth_m=100.0, settings=settings).run(0.02)
+                Simulation(ps, tree_depth_m=100.0, settings=settings).step(2)
+    Simulation(ps, tree_depth_m=100.0, control=False).step(2)
     print(f"precompile: numeric core compiled in {time.perf_counter() - t0:.0f} s")
 
 

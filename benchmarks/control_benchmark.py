@@ -15,7 +15,8 @@ import numpy as np
 from numba import njit
 
 from control import ekf, loop, pid, refkernel
-from control.closed_loop import ClosedLoop, ControlSettings
+from control.config import ControlSettings
+from control.simulation import Simulation
 from sim import environment as envmod
 from sim import params, plant, sensors
 
@@ -101,28 +102,29 @@ def main() -> None:
     args = parser.parse_args()
     ps = params.load("model-scale")
     settings = ControlSettings(feedback="ekf", allocation="priority", feedforward=True)
-    ClosedLoop(ps, tree_depth_m=400.0, current=thesis_current(), settings=settings).run(1.0)
+    Simulation(ps, tree_depth_m=400.0, current=thesis_current(), settings=settings).run_for(1.0)
     best = math.inf
+    steps = 0
     for _ in range(args.repeats):
-        cl = ClosedLoop(ps, tree_depth_m=400.0, current=thesis_current(), settings=settings)
-        cl.set_target(2.0, 2.0, 0.5)
+        sim = Simulation(ps, tree_depth_m=400.0, current=thesis_current(), settings=settings)
+        sim.set_target(2.0, 2.0, 0.5)
         t0 = time.perf_counter()
-        cl.run(args.duration)
+        steps = len(sim.run_for(args.duration))
         best = min(best, time.perf_counter() - t0)
-    steps = int(args.duration / 0.01)
     print(f"closed loop (model scale, EKF, priority allocation, feedforward): "
           f"{args.duration:.0f} s simulated in {best:.3f} s")
     print(f"  {steps / best:,.0f} steps/s, real-time factor {args.duration / best:,.0f}x, "
           f"{best / steps * 1e6:.1f} us per step")
-    C = cl.C
-    env = cl.sim.environment_chunk(1)[0][0]
+    C = sim.C
+    env = sim._environment_chunk(1)[0]
     n = np.zeros(ps.rov.thrusters.T.shape[1])
+    x = sim.plant_state
     cost = {
-        "plant RK4 step (4 rhs)": _per_call(_time_plant, cl.sim.x, n, env, cl.sim.arrays, 0.01),
-        "sensor sampling": _per_call(_time_sensors, cl.sim.x, cl.sim.held_y, np.zeros(11),
+        "plant RK4 step (4 rhs)": _per_call(_time_plant, x, n, env, sim.arrays, 0.01),
+        "sensor sampling": _per_call(_time_sensors, x, sim.held_y, np.zeros(11),
                                      np.ones(5, dtype=np.bool_)),
-        "EKF predict": _per_call(_time_ekf, cl.xhat, cl.P_cov, C, 0.01),
-        "EKF correct (position)": _per_call(_time_ekf_correct, cl.xhat, cl.P_cov),
+        "EKF predict": _per_call(_time_ekf, sim.xhat, sim.P_cov, C, 0.01),
+        "EKF correct (position)": _per_call(_time_ekf_correct, sim.xhat, sim.P_cov),
         "reference (3rd order)": _per_call(_time_reference, np.zeros(9), np.ones(3),
                                            C.ref_params),
         "controller (PID + FF)": _per_call(_time_controller, C),

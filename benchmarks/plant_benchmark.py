@@ -8,9 +8,9 @@ import argparse
 import math
 import time
 
+from control.simulation import Simulation
 from sim import environment as envmod
 from sim import params
-from sim.simulator import Simulator
 
 
 def main() -> None:
@@ -26,16 +26,16 @@ def main() -> None:
                                direction_max_rad=d + 0.2, speed_walk_mps_per_sqrt_s=0.002,
                                direction_walk_rad_per_sqrt_s=0.002)
     t0 = time.perf_counter()
-    Simulator(ps, tree_depth_m=400.0, current=cur).run(1.0)
+    Simulation(ps, tree_depth_m=400.0, current=cur, control=False).run_for(1.0)
     print(f"first run (includes compilation or cache load): {time.perf_counter() - t0:.1f} s")
     best = math.inf
     steps = 0
     for _ in range(args.repeats):
-        sim = Simulator(ps, tree_depth_m=400.0, current=cur)
+        sim = Simulation(ps, tree_depth_m=400.0, current=cur, control=False)
         t0 = time.perf_counter()
-        traj = sim.run(args.duration)
+        rows = sim.run_for(args.duration)
         best = min(best, time.perf_counter() - t0)
-        steps = len(traj.t_s)
+        steps = len(rows)
     print(f"{args.params}: {args.duration:.0f} s simulated, {steps} steps at 100 Hz")
     print(f"  wall time {best:.3f} s, {steps / best:,.0f} steps/s, "
           f"real-time factor {args.duration / best:,.0f}x")

@@ -1,7 +1,7 @@
 """Thrust allocation: from a demanded generalised force to thruster forces and propeller speeds.
 
-Thruster model (shared with the plant, thesis eq. 2.13 and 3.22): thruster ``i`` turning at
-``n_i`` [rev/s] gives the force
+Thruster model (``sim.thrusters``, shared with the plant and the compiled loop; thesis
+eq. 2.13 and 3.22): thruster ``i`` turning at ``n_i`` [rev/s] gives the force
 
     f_i = K_pos_i n_i^2   for n_i >= 0,        f_i = -K_neg_i n_i^2   for n_i < 0,
 
@@ -34,6 +34,8 @@ import numba
 import numpy as np
 import quadprog
 from numpy.typing import ArrayLike, NDArray
+
+from sim import thrusters
 
 FloatArray = NDArray[np.float64]
 
@@ -179,19 +181,6 @@ def _checked_dofs(name: str, dofs: tuple[int, ...]) -> NDArray[np.intp]:
 # --- thruster model --------------------------------------------------------------------------
 
 
-def _force_from_speed(n: FloatArray, k_pos: FloatArray, k_neg: FloatArray) -> FloatArray:
-    """f_i = k n_i |n_i| with k = k_pos for n_i >= 0 and k_neg otherwise (eq. 2.13)."""
-    return np.where(n >= 0.0, k_pos, k_neg) * n * np.abs(n)
-
-
-def _speed_from_force(
-    f: FloatArray, k_pos: FloatArray, k_neg: FloatArray, n_max: FloatArray
-) -> FloatArray:
-    """n_i = sign(f_i) sqrt(|f_i| / k), k chosen by the sign of f_i (eq. 3.22), clipped."""
-    k = np.where(f >= 0.0, k_pos, k_neg)
-    return np.copysign(np.minimum(np.sqrt(np.abs(f) / k), n_max), f)
-
-
 def thrust_from_speed(config: ThrusterConfig, speed_rps: ArrayLike) -> FloatArray:
     """Thruster forces [N] (m,) from propeller speeds [rev/s] (m,), eq. 2.13.
 
@@ -199,8 +188,7 @@ def thrust_from_speed(config: ThrusterConfig, speed_rps: ArrayLike) -> FloatArra
     always inside [-f_max_neg, f_max_pos].
     """
     n = _checked_vector("speed_rps", speed_rps, config.n_thrusters)
-    n = np.clip(n, -config.n_max_rps, config.n_max_rps)
-    return _force_from_speed(n, config.k_pos, config.k_neg)
+    return thrusters.thrust_from_speed(n, config.k_pos, config.k_neg, config.n_max_rps)
 
 
 def speed_from_thrust(config: ThrusterConfig, force_n: ArrayLike) -> FloatArray:
@@ -210,7 +198,7 @@ def speed_from_thrust(config: ThrusterConfig, force_n: ArrayLike) -> FloatArray:
     for f inside the force box.
     """
     f = _checked_vector("force_n", force_n, config.n_thrusters)
-    return _speed_from_force(f, config.k_pos, config.k_neg, config.n_max_rps)
+    return thrusters.speed_from_thrust(f, config.k_pos, config.k_neg, config.n_max_rps)
 
 
 # --- shared precomputation and outputs --------------------------------------------------------
@@ -255,7 +243,8 @@ def _result(layout: _Layout, force: FloatArray, tau_b: FloatArray) -> Allocation
     limit = np.where(force >= 0.0, layout.f_hi, -layout.f_lo)
     return AllocationResult(
         force_n=_frozen(force),
-        speed_rps=_frozen(_speed_from_force(force, layout.k_pos, layout.k_neg, layout.n_max)),
+        speed_rps=_frozen(thrusters.speed_from_thrust(force, layout.k_pos, layout.k_neg,
+                                                     layout.n_max)),
         tau_achieved=_frozen(achieved),
         tau_unmet=_frozen(np.where(layout.dof_mask, tau_b - achieved, 0.0)),
         utilisation=_frozen(np.minimum(np.abs(force) / limit, 1.0)),
@@ -295,7 +284,7 @@ class _PinvPlan:
 @lru_cache(maxsize=64)
 def _pinv_plan(config: ThrusterConfig, dofs: tuple[int, ...]) -> _PinvPlan:
     indices = _checked_dofs("dofs", dofs)
-    T_pinv = np.linalg.pinv(config.T[indices], rcond=_RCOND)
+    T_pinv = np.asarray(np.linalg.pinv(config.T[indices], rcond=_RCOND), dtype=np.float64)
     return _PinvPlan(layout=_layout(config, indices), T_pinv=T_pinv)
 
 
@@ -443,7 +432,7 @@ def _serve_remaining(
     f_lo: FloatArray,
     f_hi: FloatArray,
     tol: float,
-) -> tuple[bool, FloatArray]:
+) -> tuple[np.bool_, FloatArray]:
     """Least-norm f' serving rows k..K-1 at once without moving rows 0..k-1, and whether f'
     is inside the box (within tol)."""
     residual = np.zeros(A.shape[0])

@@ -19,7 +19,35 @@ from numba import njit
 
 from control import ekf, pid, quality, refkernel
 from control.allocation import _priority_forces
-from sim import plant, sensors
+from control.columns import (
+    L_ACCEPT,
+    L_BIAS,
+    L_CRANE,
+    L_DETA_D,
+    L_ETA_D,
+    L_ETA_HAT,
+    L_F,
+    L_MODE,
+    L_N,
+    L_NIS,
+    L_NU_HAT,
+    L_ROV,
+    L_ROV_NU,
+    L_T,
+    L_TAU_ACH,
+    L_TAU_ROV,
+    L_TAU_TREE,
+    L_TENSION,
+    L_TERMS,
+    L_TREE,
+    L_TREE_NU,
+    L_UTIL,
+    L_WIRE_LEN,
+    L_Y,
+    M_MAX,
+    N_LOG,
+)  # the log row is declared in control.columns
+from sim import plant, sensors, thrusters
 from sim.gnc import JIT, Rzyx
 
 EYE3 = np.eye(3)
@@ -40,31 +68,9 @@ CS_FSP = 28  # 28:32 free-ROV set point [north, east, down, psi]
 CS_MODE = 32
 CS_LAST_MODE = 33
 CS_ALLOC_F = 34  # 34:34+M_MAX externally allocated thruster forces (ALLOC_EXTERNAL)
-M_MAX = 8
 N_CS = CS_ALLOC_F + M_MAX
 
-# --- log columns ---
-L_T = 0
-L_TREE = 1  # 1:7 true tree eta (NED, rad)
-L_ROV = 7  # 7:13 true ROV eta
-L_ETA_HAT = 13  # 13:16 estimated tree [north, east, psi]
-L_NU_HAT = 16  # 16:19 estimated tree [u, v, r]
-L_BIAS = 19  # 19:22 estimated bias
-L_ETA_D = 22  # 22:25 reference pose
-L_DETA_D = 25  # 25:28 reference rate
-L_TAU_TREE = 28  # 28:31 commanded force on the tree (tree axes)
-L_TAU_ROV = 31  # 31:37 commanded ROV wrench
-L_TAU_ACH = 37  # 37:43 achieved ROV wrench
-L_F = 43  # 43:43+M_MAX thruster forces
-L_N = L_F + M_MAX  # propeller speeds [rev/s]
-L_UTIL = L_N + M_MAX  # utilisation 0..1
-L_TERMS = L_UTIL + M_MAX  # 12: P, I, D, FF parts of tau_tree
-L_Y = L_TERMS + 12  # 11 held sensor values
-L_MODE = L_Y + 11
-L_NIS = L_MODE + 1  # 3: normalised innovation squared of position (2) and heading
-L_ACCEPT = L_NIS + 3  # 5: 1 where a fresh sample was accepted this step
-L_SITE = L_ACCEPT + 5  # 4: crane tip north, east [m], wire rest length [m], tension [N]
-N_LOG = L_SITE + 4
+
 
 
 class ControlArrays(NamedTuple):
@@ -152,14 +158,8 @@ def allocate(tau6: np.ndarray, C: ControlArrays) -> np.ndarray:
 
 @njit(**JIT)
 def speeds_from_forces(f: np.ndarray, C: ControlArrays) -> np.ndarray:
-    """Inverse thruster model (eq. 3.22) with the direction-dependent coefficient."""
-    n = np.empty(f.shape[0])
-    for i in range(f.shape[0]):
-        if f[i] >= 0.0:
-            n[i] = min(np.sqrt(f[i] / C.k_pos[i]), C.n_max[i])
-        else:
-            n[i] = -min(np.sqrt(-f[i] / C.k_neg[i]), C.n_max[i])
-    return n
+    """Propeller speeds for thruster forces: the inverse thruster model (sim.thrusters)."""
+    return thrusters.speed_from_thrust(f, C.k_pos, C.k_neg, C.n_max)
 
 
 @njit(**JIT)
@@ -313,9 +313,10 @@ def control_step(t: float, x: np.ndarray, y: np.ndarray, fresh: np.ndarray,
 @njit(**JIT)
 def finish_step(x: np.ndarray, f: np.ndarray, env_k: np.ndarray, xhat: np.ndarray,
                 Pc: np.ndarray, C: ControlArrays, P: plant.PlantArrays, dt: float,
-                log_row: np.ndarray):
-    """Thrusters, plant step and observer prediction, given the allocated forces f.
-    Returns (x_next, xhat, Pc)."""
+                t_next: float, held_y: np.ndarray, log_row: np.ndarray):
+    """Thrusters, plant step and observer prediction, given the allocated forces f, and the
+    row's plant columns. Returns (x_next, xhat, Pc). The one step body after allocation: the
+    compiled chunk and the Python chunk (QP allocation) both end every step here."""
     n = speeds_from_forces(f, C)
     ach = C.T6 @ f
     m = f.shape[0]
@@ -333,19 +334,33 @@ def finish_step(x: np.ndarray, f: np.ndarray, env_k: np.ndarray, xhat: np.ndarra
             tau_tree[:] = 0.0
         xhat, Pc = ekf.predict(xhat, Pc, tau_tree, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h,
                                C.p_eq, C.T_b, C.GQG)
+    write_plant_row(log_row, t_next, x_next, held_y, env_k, P)
     return x_next, xhat, Pc
+
+
+@njit(**JIT)
+def write_plant_row(row: np.ndarray, t: float, x: np.ndarray, y: np.ndarray, env_k: np.ndarray,
+                    P: plant.PlantArrays) -> None:
+    """Time, plant state, held sensor values and the site into a log row."""
+    row[L_T] = t
+    row[L_TREE:L_TREE + 6] = x[0:6]
+    row[L_TREE_NU:L_TREE_NU + 6] = x[6:12]
+    row[L_ROV:L_ROV + 6] = x[12:18]
+    row[L_ROV_NU:L_ROV_NU + 6] = x[18:24]
+    row[L_Y:L_Y + 11] = y
+    log_site(row, x, env_k, P)
 
 
 @njit(**JIT)
 def log_site(row: np.ndarray, x: np.ndarray, env_k: np.ndarray, P: plant.PlantArrays) -> None:
     """The vessel's crane tip, the wire's payout and its tension at the tree, into a log row."""
-    row[L_SITE] = env_k[plant.E_CT]
-    row[L_SITE + 1] = env_k[plant.E_CT + 1]
-    row[L_SITE + 2] = env_k[plant.E_LREST]
+    row[L_CRANE] = env_k[plant.E_CT]
+    row[L_CRANE + 1] = env_k[plant.E_CT + 1]
+    row[L_WIRE_LEN] = env_k[plant.E_LREST]
     R_t = Rzyx(x[3], x[4], x[5])
     p_att = x[0:3] + R_t @ P.tree_r_att
     f = plant.wire_force_n(p_att, env_k, P.tree_W0)
-    row[L_SITE + 3] = np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
+    row[L_TENSION] = np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
 
 
 @njit(**JIT)
@@ -365,12 +380,29 @@ def run_chunk(k0: int, x: np.ndarray, held_y: np.ndarray, xhat: np.ndarray, Pc: 
         tau6, xhat, Pc, cs = control_step(t, x, held_y, fresh[j], xhat, Pc, cs, target, C,
                                           Q, dt, row)
         f = allocate(tau6, C)
-        x, xhat, Pc = finish_step(x, f, env[j], xhat, Pc, C, P, dt, row)
-        row[L_T] = t + dt
-        row[L_TREE:L_TREE + 6] = x[0:6]
-        row[L_ROV:L_ROV + 6] = x[12:18]
-        row[L_Y:L_Y + 11] = held_y
-        log_site(row, x, env[j], P)
+        x, xhat, Pc = finish_step(x, f, env[j], xhat, Pc, C, P, dt, t + dt, held_y, row)
         if not np.all(np.isfinite(x)):
             return x, held_y, xhat, Pc, cs, log, j
     return x, held_y, xhat, Pc, cs, log, n
+
+
+@njit(**JIT)
+def run_open_chunk(k0: int, x: np.ndarray, held_y: np.ndarray, n_rps: np.ndarray,
+                   env: np.ndarray, noise: np.ndarray, fresh: np.ndarray, P: plant.PlantArrays,
+                   dt: float):
+    """The plant with control off: len(env) steps at fixed propeller speeds ``n_rps``, sensors
+    sampled at the end of each step. Returns (x, held_y, log (n, N_LOG), n_done); n_done < n
+    when the plant diverged."""
+    n = env.shape[0]
+    log = np.zeros((n, N_LOG))
+    m = n_rps.shape[0]
+    for j in range(n):
+        row = log[j]
+        x = plant.rk4_step(x, n_rps, env[j], P, dt)
+        if not np.all(np.isfinite(x)):
+            return x, held_y, log, j
+        held_y = sensors.sample(x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
+        for i in range(m):
+            row[L_N + i] = n_rps[i]
+        write_plant_row(row, (k0 + j + 1) * dt, x, held_y, env[j], P)
+    return x, held_y, log, n

@@ -1,8 +1,9 @@
 """Compiled reference-model steps used inside the closed-loop kernel.
 
-The models themselves (equations, limits, proofs of the limits, tests) are in
-``control.reference``; this module compiles their kernels with numba and packs their
-parameters into one array so the loop can carry them.
+The models themselves (equations, limits and why the limits hold) are in ``control.reference``;
+this module compiles their kernels with numba, packs their parameters into one array so the
+loop can carry them, and steps them: ``reference_step(kind, state, target, dt, params)`` returns
+the new state and changes none of its arguments (tests: tests/test_reference.py).
 
 State (9): reference position, velocity, acceleration per axis [north, east, psi]. Parameters
 ``params`` (5, 3), rows:
@@ -31,6 +32,7 @@ _ZERO3 = np.zeros(3)
 
 
 def pack_first_order(p: reference.FirstOrderParams) -> np.ndarray:
+    """The (5, 3) ``params`` of the first-order model."""
     out = np.zeros((5, 3))
     out[0] = 1.0 / p.time_constant_s
     out[3] = p.max_rate
@@ -38,6 +40,7 @@ def pack_first_order(p: reference.FirstOrderParams) -> np.ndarray:
 
 
 def pack_third_order(p: reference.ThirdOrderParams) -> np.ndarray:
+    """The (5, 3) ``params`` of the third-order model."""
     return np.vstack([p.k_pos, p.k_vel, p.k_acc, p.max_speed, p.max_accel])
 
 

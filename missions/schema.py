@@ -9,12 +9,14 @@ interface), radians inside.
 from __future__ import annotations
 
 import tomllib
+import typing
 from pathlib import Path
 from typing import Annotated, Literal
 
 import tomli_w
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from control.config import Allocation, Feedback, Mode, Reference
 from sim.params import KdVector, KiVector, KpVector
 
 FORMAT_VERSION = 1
@@ -78,9 +80,9 @@ class Setup(_Model):
     heading_deg: float = Field(default=0.0, ge=-360.0, le=360.0, description="initial heading")
     current: CurrentSetup = CurrentSetup(speed_mps=0.0, direction_deg=0.0)
     waves: WaveSetup | None = None
-    feedback: Literal["perfect", "ekf"] = "perfect"
-    allocation: Literal["pinv", "priority", "qp"] = "priority"
-    reference: Literal["first", "third"] = "third"
+    feedback: Feedback = "perfect"
+    allocation: Allocation = "priority"
+    reference: Reference = "third"
     feedforward: bool = False
     heave_force_n: float = Field(default=0.0, ge=-1.0e5, le=1.0e5)
     r_mount_config_m: Annotated[list[Finite], Field(min_length=3, max_length=3)] | None = Field(
@@ -155,7 +157,7 @@ class GainsLeg(_Leg):
 
 class ModeLeg(_Leg):
     type: Literal["mode"]
-    mode: Literal["tree", "free"]
+    mode: Mode
     grip: bool | None = Field(default=None, description="also grip (true) or release (false)")
 
 
@@ -340,3 +342,13 @@ def dump_mission(mission: Mission) -> str:
 def library_names() -> list[str]:
     """Missions in the library."""
     return sorted(p.stem for p in LIBRARY_DIR.glob("*.toml"))
+
+
+def leg_models() -> dict[str, type[BaseModel]]:
+    """Leg type name -> its pydantic model, in the order of ``schema.Leg``."""
+    union = typing.get_args(Leg)[0]
+    out: dict[str, type[BaseModel]] = {}
+    for model in typing.get_args(union):
+        tag = typing.get_args(model.model_fields["type"].annotation)[0]
+        out[str(tag)] = model
+    return out

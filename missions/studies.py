@@ -8,12 +8,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from control.closed_loop import ClosedLoop, ControlSettings
+from control.config import ControlSettings
+from control.simulation import Simulation
 from missions import runner, schema
 from sim import environment as envmod
 from sim import params
 from sim.gnc import ssa
-from sim.simulator import Simulator
 
 # Thesis table 4.1: (T, Hs) -> (uncontrolled N, E, psi_deg), (controlled N, E, psi_deg)
 TABLE_4_1 = {
@@ -60,17 +60,17 @@ def wave_case(period_s: float, hs_m: float, duration_s: float, seed: int) -> tup
     waves = envmod.WaveParams(significant_height_m=hs_m, peak_period_s=period_s,
                               direction_rad=math.radians(WAVE_DIRECTION_DEG))
     warmup = 120.0
-    sim = Simulator(ps, tree_depth_m=100.0, waves=waves, seed=seed)
-    sim.run(warmup)
-    traj = sim.run(duration_s).x
+    sim = Simulation(ps, tree_depth_m=100.0, waves=waves, seed=seed, control=False)
+    sim.run_for(warmup)
+    traj = sim.run_for(duration_s)["tree_eta_n"]
     psi = np.unwrap(traj[:, 5])
     unc = (_rms_about(traj[:, 0], traj[:, 0].mean()), _rms_about(traj[:, 1], traj[:, 1].mean()),
            math.degrees(_rms_about(psi, psi.mean())))
-    cl = ClosedLoop(ps, tree_depth_m=100.0, waves=waves, seed=seed,
+    cl = Simulation(ps, tree_depth_m=100.0, waves=waves, seed=seed,
                     settings=ControlSettings(feedforward=True))
-    set_point = cl.sim.x[[0, 1, 5]].copy()
-    cl.run(warmup)
-    log = cl.run(duration_s).tree_eta_n
+    set_point = cl.eta_estimate
+    cl.run_for(warmup)
+    log = cl.run_for(duration_s)["tree_eta_n"]
     err_psi = np.array([ssa(v) for v in log[:, 5] - set_point[2]])
     ctl = (_rms_about(log[:, 0], set_point[0]), _rms_about(log[:, 1], set_point[1]),
            math.degrees(_rms_about(err_psi, 0.0)))
@@ -92,7 +92,8 @@ def table_4_2(seed: int | None = None) -> list[Row]:
     for name, (param, change, *thesis) in TABLE_4_2.items():
         r = runner.run_mission(schema.load_mission(name), seed=seed)
         rows.append(Row(f"{param:6s} {change:>5s}  ({name})",
-                        (r.rms_north_m, r.rms_east_m, r.rms_heading_deg), tuple(thesis)))
+                        (r.rms_north_m, r.rms_east_m, r.rms_heading_deg),
+                        (float(thesis[0]), float(thesis[1]), float(thesis[2]))))
     return rows
 
 

@@ -19,7 +19,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from control import loop
 from missions import runner, schema
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
@@ -48,10 +47,10 @@ def print_table(name: str, results: dict[str, runner.MissionResult]) -> None:
 def rotation_figure(results: dict[str, runner.MissionResult]) -> Path:
     fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     for law, r in results.items():
-        d = r.log.data
-        t = d[:, loop.L_T]
-        psi = np.degrees(np.unwrap(d[:, loop.L_TREE + 5]))
-        ref = np.degrees(d[:, loop.L_ETA_D + 2])
+        assert r.log is not None
+        t = r.log.t_s
+        psi = np.degrees(np.unwrap(r.log["tree_eta_n"][:, 5]))
+        ref = np.degrees(r.log["eta_ref_n"][:, 2])
         if law == "thesis":
             ax[0].plot(t, ref, "k--", lw=1, label="reference")
         ax[0].plot(t, psi, label=f"heading, {law} law")
@@ -73,15 +72,14 @@ def square_figure(results: dict[str, runner.MissionResult]) -> Path:
     fig, (ax, ax_err) = plt.subplots(1, 2, figsize=(12, 5.5),
                                      gridspec_kw={"width_ratios": [1, 1.4]})
     for law, r in results.items():
-        d = r.log.data
+        assert r.log is not None
         start = int(r.legs[-1].start_s / 0.01)
+        ref, tree = r.log["eta_ref_n"][start:], r.log["tree_eta_n"][start:]
         if law == "thesis":
-            ax.plot(d[start:, loop.L_ETA_D + 1], d[start:, loop.L_ETA_D], "k--", lw=1,
-                    label="reference")
-        ax.plot(d[start:, loop.L_TREE + 1], d[start:, loop.L_TREE], label=f"tree, {law} law")
-        err = np.hypot(d[start:, loop.L_TREE] - d[start:, loop.L_ETA_D],
-                       d[start:, loop.L_TREE + 1] - d[start:, loop.L_ETA_D + 1])
-        ax_err.plot(d[start:, loop.L_T], err, label=law)
+            ax.plot(ref[:, 1], ref[:, 0], "k--", lw=1, label="reference")
+        ax.plot(tree[:, 1], tree[:, 0], label=f"tree, {law} law")
+        err = np.hypot(tree[:, 0] - ref[:, 0], tree[:, 1] - ref[:, 1])
+        ax_err.plot(r.log.t_s[start:], err, label=law)
     ax.set_xlabel("east [m]")
     ax.set_ylabel("north [m]")
     ax.set_aspect("equal")

@@ -1,20 +1,31 @@
 """Guidance-navigation-control vocabulary of Fossen (2011): one small pure function per formula.
 
 Every function is compiled with numba so the plant and the control loop can call it from
-their own compiled code; each is also an ordinary Python callable. Angles are radians,
-``eta = [x, y, z, phi, theta, psi]`` (NED) and ``nu = [u, v, w, p, q, r]`` (BODY).
+their own compiled code; each is also an ordinary Python callable (the exception,
+``quaternion_wxyz_from_rpy_radians``, is plain Python for the edges that draw and record).
+Angles are radians, ``eta = [x, y, z, phi, theta, psi]`` (NED) and ``nu = [u, v, w, p, q, r]``
+(BODY).
 """
 
 from __future__ import annotations
 
+import math
+from typing import Literal, TypedDict
+
 import numpy as np
 from numba import njit
+
 
 # Compile options for the numeric core: no Python-style zero-division checks. No fast-math:
 # reassociation and fused multiply-add depend on how the compiler inlines, so a freshly
 # compiled run and one from numba's cache could differ in the last bits, and a run must be
 # reproducible to the bit from its seed.
-JIT = dict(cache=True, error_model="numpy")
+class _JitOptions(TypedDict):
+    cache: bool
+    error_model: Literal["python", "numpy"]
+
+
+JIT: _JitOptions = {"cache": True, "error_model": "numpy"}
 
 # Named indices into eta / nu (SNAME 1950, thesis table 2.1).
 X, Y, Z, PHI, THETA, PSI = 0, 1, 2, 3, 4, 5
@@ -23,8 +34,11 @@ U, V, W, P, Q, R = 0, 1, 2, 3, 4, 5
 
 @njit(**JIT)
 def ssa(angle: float) -> float:
-    """Smallest signed angle: maps any angle [rad] into [-pi, pi)."""
-    return (angle + np.pi) % (2.0 * np.pi) - np.pi
+    """Smallest signed angle: maps any angle [rad] into [-pi, pi). Branch-free, so it works on
+    arrays too. (angle + pi) mod 2 pi rounds to 2 pi for angles just below -pi: folded back."""
+    wrapped = (angle + np.pi) % (2.0 * np.pi)
+    wrapped = wrapped - 2.0 * np.pi * (wrapped >= 2.0 * np.pi)
+    return wrapped - np.pi
 
 
 @njit(**JIT)
@@ -241,3 +255,14 @@ def mm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
                 s += A[i, k] * B[k, j]
             out[i, j] = s
     return out
+
+
+def quaternion_wxyz_from_rpy_radians(phi: float, theta: float, psi: float) -> np.ndarray:
+    """Unit quaternion [w, x, y, z] of R_nb = Rzyx(phi, theta, psi) = Rz(psi) Ry(theta) Rx(phi)
+    (Fossen 2011 eq. 2.18): q = qz(psi) qy(theta) qx(phi), so its rotation matrix is Rzyx and
+    its norm is 1. Plain Python (not compiled): for the edges that draw and record poses."""
+    cr, sr = math.cos(phi / 2.0), math.sin(phi / 2.0)
+    cp, sp = math.cos(theta / 2.0), math.sin(theta / 2.0)
+    cy, sy = math.cos(psi / 2.0), math.sin(psi / 2.0)
+    return np.array([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
+                     cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy])

@@ -115,7 +115,7 @@ class RovSpec(_Strict):
 
     @field_validator("rigid_body_mass", "added_mass")
     @classmethod
-    def _mass_matrix(cls, value: list[list[float]], info) -> list[list[float]]:  # type: ignore[no-untyped-def]
+    def _mass_matrix(cls, value: list[list[float]], info) -> list[list[float]]:
         return _matrix6(value, info.field_name)
 
 
@@ -177,15 +177,17 @@ class SensorsSpec(_Strict):
     gyro: SensorSpec = Field(description="ROV body angular rate [rad/s]")
 
 
-def _gain_vector(limit: float) -> object:
-    """[surge, sway, yaw] gains, each in [0, limit]."""
-    return Annotated[list[Annotated[float, Field(ge=0.0, le=limit, allow_inf_nan=False)]],
-                     Field(min_length=3, max_length=3)]
-
-
-KpVector = _gain_vector(1.0e7)
-KiVector = _gain_vector(1.0e6)
-KdVector = _gain_vector(1.0e8)
+GAIN_LIMITS = {"kp": 1.0e7, "ki": 1.0e6, "kd": 1.0e8}
+"""Largest accepted controller gain per term; parameter files, missions, the console and the
+control system all check against these."""
+_THREE = Field(min_length=3, max_length=3)
+KpVector = Annotated[list[Annotated[float, Field(ge=0.0, le=GAIN_LIMITS["kp"],
+                                                 allow_inf_nan=False)]], _THREE]
+"""[surge, sway, yaw] proportional gains, each in [0, GAIN_LIMITS["kp"]]."""
+KiVector = Annotated[list[Annotated[float, Field(ge=0.0, le=GAIN_LIMITS["ki"],
+                                                 allow_inf_nan=False)]], _THREE]
+KdVector = Annotated[list[Annotated[float, Field(ge=0.0, le=GAIN_LIMITS["kd"],
+                                                 allow_inf_nan=False)]], _THREE]
 
 
 class GainsSpec(_Strict):

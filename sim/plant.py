@@ -32,6 +32,7 @@ from sim.gnc import (
     rotation_to_vector,
 )
 from sim.params import ParameterSet
+from sim.thrusters import thrust_from_speed
 
 # State layout.
 ETA_T = slice(0, 6)
@@ -146,18 +147,6 @@ def _contact_params(ps: ParameterSet) -> dict:
         contact_k=float(k), contact_c=float(2.0 * 0.7 * omega * m_heave),
         guide_k=float(k_guide), guide_c=float(2.0 * 0.7 * (k_guide * m_surge / n_posts) ** 0.5),
         friction_mu=0.3)
-
-
-@njit(**JIT)
-def thruster_forces(n_rps: np.ndarray, k_pos: np.ndarray, k_neg: np.ndarray,
-                    n_max: np.ndarray) -> np.ndarray:
-    """Thrust of each thruster [N] from its propeller speed [rev/s], saturated at the rated speed:
-    f = k_pos n^2 forwards, -k_neg n^2 backwards (eq. 2.13 with u = n|n|)."""
-    f = np.empty(n_rps.shape[0])
-    for i in range(n_rps.shape[0]):
-        n = min(max(n_rps[i], -n_max[i]), n_max[i])
-        f[i] = k_pos[i] * n * n if n >= 0.0 else -k_neg[i] * n * n
-    return f
 
 
 @njit(**JIT)
@@ -370,7 +359,7 @@ def rov_wrench(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays
     nu_rel, v_c_dot_b = _relative_velocity(R_r, nu, env[E_VC:E_VC + 3], env[E_AC:E_AC + 3])
     tau = _hydro(P.rov_M_rb, P.rov_M_a, P.rov_D_l, P.rov_D_nl, nu, nu_rel, v_c_dot_b)
     tau -= gvect(P.rov_W, P.rov_B, eta[4], eta[3], P.rov_r_cg, P.rov_r_cb)
-    tau += mv(P.thr_T, thruster_forces(n_rps, P.thr_k_pos, P.thr_k_neg, P.thr_n_max))
+    tau += mv(P.thr_T, thrust_from_speed(n_rps, P.thr_k_pos, P.thr_k_neg, P.thr_n_max))
     return tau
 
 

@@ -97,12 +97,3 @@ def vertical_stiffness(wire: WireProperties, W0: float, L: float, current_speed_
     compliance = elastic_compliance(wire.axial_stiffness_n, L)
     compliance += geometric_compliance(q, w, W0, L, abs(F0))
     return 1.0 / compliance
-
-
-def static_stretch(wire: WireProperties, W0: float, L: float) -> float:
-    """Elastic stretch of the wire under the load and its own weight [m].
-
-    The tension grows from W0 at the load to W0 + w L at the top, so the stretch is
-    (W0 L + w L^2 / 2) / EA."""
-    w = wire.submerged_weight_per_length()
-    return (W0 * L + 0.5 * w * L**2) / wire.axial_stiffness_n

@@ -46,6 +46,7 @@ def test_simulate_tree_alone_has_no_rov():
     (["--params", "nowhere"], "unknown parameter set 'nowhere'"),
     (["--depth", "1"], "depth must put the tree"),
     (["--push", "nan@0"], "--push must be finite"),
+    (["--duration", "0.015"], "duration 0.015 s is not a whole number of 0.01 s steps"),
 ])
 def test_bad_input_gets_a_clear_error(args, message):
     proc = run_cli("simulate", "--duration", "1", *args, check=False)

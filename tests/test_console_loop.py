@@ -1,4 +1,4 @@
-"""The console's loop: the engine steps exactly what it is asked, runs missions leg by leg,
+"""The console's loop: the session steps exactly what it is asked, runs missions leg by leg,
 is deterministic, and the asyncio task paces it to the wall clock, applies commands between
 steps and survives bad ones."""
 
@@ -11,16 +11,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app import console_loop as cmd
-from app.console_engine import (
-    ConsoleEngine,
+from app.console import (
     ConsoleError,
+    Gains,
+    PacedLoop,
+    Session,
     prepare_run,
     station_keeping_mission,
 )
-from app.console_loop import ConsoleLoop
-from control import loop
-from control.closed_loop import Gains
+from app.console import commands as cmd
 from missions import runner, schema
 
 MOVE = {"format_version": 1, "name": "loop-test",
@@ -29,18 +28,18 @@ MOVE = {"format_version": 1, "name": "loop-test",
                  {"type": "rotate", "angle_deg": 10.0, "settle_s": 2.0}]}
 
 
-def engine_for(mission: dict, tmp_path: Path, run_legs: bool = True) -> ConsoleEngine:
-    return ConsoleEngine(prepare_run(schema.parse_mission(mission), run_legs), tmp_path)
+def engine_for(mission: dict, tmp_path: Path, run_legs: bool = True) -> Session:
+    return Session(prepare_run(schema.parse_mission(mission), run_legs), tmp_path)
 
 
 def test_engine_steps_exactly_what_it_is_asked(tmp_path: Path) -> None:
-    eng = ConsoleEngine(prepare_run(station_keeping_mission("full-scale", 100.0), False),
+    eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False),
                         tmp_path)
     for n in (1, 7, 100, 250):
-        t0 = eng.cl.t_s
+        t0 = eng.sim.t_s
         eng.advance(n)
-        assert eng.cl.t_s == pytest.approx(t0 + n * 0.01)
-        assert eng.last_row[loop.L_T] == pytest.approx(eng.cl.t_s)
+        assert eng.sim.t_s == pytest.approx(t0 + n * 0.01)
+        assert eng.last_row[0] == pytest.approx(eng.sim.t_s), "t_s is the first column"
 
 
 def test_engine_runs_a_mission_in_small_slices_to_the_end(tmp_path: Path) -> None:
@@ -50,10 +49,10 @@ def test_engine_runs_a_mission_in_small_slices_to_the_end(tmp_path: Path) -> Non
         eng.advance(37)  # an odd slice: requests are cut across ticks
         if eng.mission_status.leg_index:
             legs_seen.add(eng.mission_status.leg_type)
-        assert eng.cl.t_s < 600.0, "the mission never ended"
+        assert eng.sim.t_s < 600.0, "the mission never ended"
     assert eng.mission_status.state == "completed"
     assert legs_seen == {"move", "rotate"}
-    snap = eng.snapshot(1, False, 1.0, ConsoleLoop(eng).snapshot.stats)
+    snap = eng.snapshot(1, False, 1.0, PacedLoop(eng).snapshot.stats)
     deadline = time.monotonic() + 10.0
     while snap.mission.result is None and time.monotonic() < deadline:
         time.sleep(0.05)
@@ -72,7 +71,7 @@ def test_same_seed_same_commands_same_state(tmp_path: Path) -> None:
     b = engine_for(MOVE, tmp_path / "b")
     for eng in (a, b):
         eng.advance(300)
-        eng.cl.set_gains(Gains((2500.0, 2500.0, 2000.0), (175.0, 175.0, 75.0),
+        eng.sim.set_gains(Gains((2500.0, 2500.0, 2000.0), (175.0, 175.0, 75.0),
                                (8000.0, 8000.0, 38500.0)))
         eng.advance(300)
     assert np.array_equal(a.last_row, b.last_row)
@@ -93,7 +92,7 @@ def test_engine_refuses_what_cannot_be_done_now(tmp_path: Path) -> None:
         eng.start_recording("../x")
 
 
-async def _run_for(console: ConsoleLoop, seconds: float) -> None:
+async def _run_for(console: PacedLoop, seconds: float) -> None:
     task = asyncio.create_task(console.run())
     await asyncio.sleep(seconds)
     console.stop()
@@ -102,10 +101,10 @@ async def _run_for(console: ConsoleLoop, seconds: float) -> None:
 
 def test_loop_keeps_wall_clock_pace_at_each_speed(tmp_path: Path) -> None:
     async def scenario() -> dict[float, float]:
-        eng = ConsoleEngine(prepare_run(station_keeping_mission("full-scale", 100.0), False),
+        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False),
                             tmp_path)
         eng.advance(1)  # compiled code warmed up
-        console = ConsoleLoop(eng)
+        console = PacedLoop(eng)
         task = asyncio.create_task(console.run())
         rates = {}
         for speed in (1.0, 5.0, 0.25):
@@ -124,9 +123,9 @@ def test_loop_keeps_wall_clock_pace_at_each_speed(tmp_path: Path) -> None:
 
 def test_pause_step_and_commands_between_steps(tmp_path: Path) -> None:
     async def scenario() -> None:
-        eng = ConsoleEngine(prepare_run(station_keeping_mission("full-scale", 100.0), False),
+        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False),
                             tmp_path)
-        console = ConsoleLoop(eng, paused=True)
+        console = PacedLoop(eng, paused=True)
         task = asyncio.create_task(console.run())
         await asyncio.sleep(0.2)
         t0 = console.snapshot.t_s
@@ -151,9 +150,9 @@ def test_pause_step_and_commands_between_steps(tmp_path: Path) -> None:
 
 def test_commands_from_threads_are_applied_by_the_loop(tmp_path: Path) -> None:
     async def scenario() -> None:
-        eng = ConsoleEngine(prepare_run(station_keeping_mission("full-scale", 100.0), False),
+        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False),
                             tmp_path)
-        console = ConsoleLoop(eng)
+        console = PacedLoop(eng)
         task = asyncio.create_task(console.run())
         target = Gains((3000.0, 3000.0, 3000.0), (100.0, 100.0, 50.0),
                        (9000.0, 9000.0, 40000.0))
@@ -167,11 +166,11 @@ def test_commands_from_threads_are_applied_by_the_loop(tmp_path: Path) -> None:
 
 
 def test_published_snapshots_cannot_be_changed_by_readers(tmp_path: Path) -> None:
-    eng = ConsoleEngine(prepare_run(station_keeping_mission("full-scale", 100.0), False),
+    eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False),
                         tmp_path)
     eng.advance(500)
     time.sleep(0.15)
-    snap = ConsoleLoop(eng).snapshot
+    snap = PacedLoop(eng).snapshot
     assert len(snap.trend) > 0
     with pytest.raises(ValueError):
         snap.trend[0, 0] = 1.0

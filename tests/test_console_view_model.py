@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from app.alarms import AlarmLimits, AlarmMonitor
-from control import loop
+from app.console.alarms import AlarmLimits, AlarmMonitor
+from control.columns import N_LOG, LogRows
 from missions import schema
 from sim import gnc
 from sim import wire as wire_mod
@@ -91,7 +91,7 @@ def test_camera_presets_look_at_the_job() -> None:
 
 # ---------------------------------------------------------------------- mission builder
 def test_builder_offers_every_leg_type_of_the_schema() -> None:
-    models = mb.leg_models()
+    models = schema.leg_models()
     assert set(models) == set(schema.LEG_TYPES)
     for name, model in models.items():
         specs = mb.field_specs(model)
@@ -100,14 +100,14 @@ def test_builder_offers_every_leg_type_of_the_schema() -> None:
 
 
 def test_builder_reads_bounds_and_kinds_from_the_models() -> None:
-    rotate = {s.name: s for s in mb.field_specs(mb.leg_models()["rotate"])}
+    rotate = {s.name: s for s in mb.field_specs(schema.leg_models()["rotate"])}
     assert (rotate["angle_deg"].lo, rotate["angle_deg"].hi) == (-1080.0, 1080.0)
     assert rotate["angle_deg"].kind == "number" and rotate["angle_deg"].required
-    move = {s.name: s for s in mb.field_specs(mb.leg_models()["move"])}
+    move = {s.name: s for s in mb.field_specs(schema.leg_models()["move"])}
     assert move["heading_deg"].optional and move["relative"].kind == "bool"
-    mode = {s.name: s for s in mb.field_specs(mb.leg_models()["mode"])}
+    mode = {s.name: s for s in mb.field_specs(schema.leg_models()["mode"])}
     assert mode["mode"].choices == ("tree", "free") and mode["grip"].kind == "tristate"
-    waypoints = {s.name: s for s in mb.field_specs(mb.leg_models()["waypoints"])}
+    waypoints = {s.name: s for s in mb.field_specs(schema.leg_models()["waypoints"])}
     assert waypoints["points_ne_m"].kind == "json"
 
 
@@ -115,7 +115,7 @@ def test_every_leg_type_builds_with_its_initial_values_or_names_the_missing_fiel
     setups = [schema.load_mission(n).setup for n in schema.library_names()]
     with_frame = [s for s in setups if getattr(s, "docking_frame", None) is not None]
     setup = with_frame[0] if with_frame else schema.Setup(params="full-scale", depth_m=100.0)
-    for leg_type, model in mb.leg_models().items():
+    for leg_type, model in schema.leg_models().items():
         values = {s.name: mb.parse_input(s, mb.initial_value(s)) for s in mb.field_specs(model)}
         leg = mb.build_leg(leg_type, values)
         try:
@@ -130,11 +130,11 @@ def test_every_leg_type_builds_with_its_initial_values_or_names_the_missing_fiel
 
 
 def test_builder_inputs_parse_and_bad_values_name_the_field() -> None:
-    specs = {s.name: s for s in mb.field_specs(mb.leg_models()["waypoints"])}
+    specs = {s.name: s for s in mb.field_specs(schema.leg_models()["waypoints"])}
     assert mb.parse_input(specs["points_ne_m"], "[[1, 2], [3, 4]]") == [[1, 2], [3, 4]]
     with pytest.raises(ValueError, match="points_ne_m"):
         mb.parse_input(specs["points_ne_m"], "[[1, 2")
-    move = {s.name: s for s in mb.field_specs(mb.leg_models()["move"])}
+    move = {s.name: s for s in mb.field_specs(schema.leg_models()["move"])}
     assert mb.parse_input(move["heading_deg"], "") is None
     assert mb.parse_input(move["heading_deg"], "45") == 45.0
     with pytest.raises(ValueError, match="heading_deg"):
@@ -147,11 +147,11 @@ def test_builder_inputs_parse_and_bad_values_name_the_field() -> None:
 
 
 # ---------------------------------------------------------------------- alarms
-def rows(t: np.ndarray, util: float = 0.0, err_m: float = 0.0) -> np.ndarray:
-    out = np.zeros((len(t), loop.N_LOG))
-    out[:, loop.L_T] = t
-    out[:, loop.L_UTIL] = util
-    out[:, loop.L_TREE] = err_m
+def rows(t: np.ndarray, util: float = 0.0, err_m: float = 0.0) -> LogRows:
+    out = LogRows(np.zeros((len(t), N_LOG)), n_thrusters=4)
+    out["t_s"][:] = t
+    out["thruster_utilisation"][:, 0] = util
+    out["tree_eta_n"][:, 0] = err_m
     return out
 
 
@@ -172,7 +172,7 @@ def test_saturation_alarm_needs_more_than_two_seconds_without_a_break() -> None:
     m.update(rows(t + 1.5, util=1.0), 300e3)
     assert "saturation" in active(m)
     broken = rows(t + 3.0, util=1.0)
-    broken[-1, loop.L_UTIL] = 0.5
+    broken["thruster_utilisation"][-1, 0] = 0.5
     m.update(broken, 300e3)
     assert "saturation" not in active(m)
 
@@ -188,13 +188,13 @@ def test_position_slack_innovation_and_dropout_alarms() -> None:
     e = monitor(uses_sensors=True)
     t = np.arange(1, 401) * 0.01
     r = rows(t)
-    r[:, loop.L_ACCEPT:loop.L_ACCEPT + 5] = 1.0
-    r[:, loop.L_NIS:loop.L_NIS + 3] = 9.0  # nine times the expected innovation
+    r["accepted"][:] = 1.0
+    r["nis"][:] = 9.0  # nine times the expected innovation
     e.update(r, 300e3)
     assert "innovation" in active(e)
-    r[:, loop.L_NIS:loop.L_NIS + 3] = 1.0
-    r[:, loop.L_ACCEPT + 3] = 0.0  # the DVL stops delivering
+    r["nis"][:] = 1.0
+    r["accepted"][:, 3] = 0.0  # the DVL stops delivering
     e.update(r, 300e3)
-    e.update(rows(t + 4.0) + 0.0, 300e3)
+    e.update(rows(t + 4.0), 300e3)
     assert {"dropout"} <= active(e) and "innovation" not in active(e)
     assert any("dvl" in a.message or "position" in a.message for a in e.state if a.active)

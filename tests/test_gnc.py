@@ -7,7 +7,18 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from sim.gnc import Hmtrx, Rzyx, Smtrx, Tzyx, coriolis_force, cross, euler_from_rotation, m2c, ssa
+from sim.gnc import (
+    Hmtrx,
+    Rzyx,
+    Smtrx,
+    Tzyx,
+    coriolis_force,
+    cross,
+    euler_from_rotation,
+    m2c,
+    quaternion_wxyz_from_rpy_radians,
+    ssa,
+)
 
 angle = st.floats(-10.0, 10.0, allow_nan=False)
 small_pitch = st.floats(-1.4, 1.4, allow_nan=False)  # away from the +-90 deg singularity
@@ -29,6 +40,24 @@ def test_rotation_matches_scipy_intrinsic_zyx(phi, theta, psi):
     np.testing.assert_allclose(Rzyx(phi, theta, psi), expected, atol=1e-12)
 
 
+def rotation_of_quaternion(w: float, x: float, y: float, z: float) -> np.ndarray:
+    """The rotation matrix of a unit quaternion [w, x, y, z], written out (independent of
+    sim.gnc)."""
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+@given(angle, angle, angle)
+def test_quaternion_is_the_zyx_rotation(phi, theta, psi):
+    """Law: the quaternion of (phi, theta, psi) has unit norm and rotates as Rzyx, at any
+    angles (no singularity); 1e-12 is the round-off of a few products of sines and cosines."""
+    q = quaternion_wxyz_from_rpy_radians(phi, theta, psi)
+    assert q.shape == (4,)
+    assert math.isclose(float(q @ q), 1.0, abs_tol=1e-12)
+    np.testing.assert_allclose(rotation_of_quaternion(*q), Rzyx(phi, theta, psi), atol=1e-12)
+
+
 @given(st.floats(-3.0, 3.0), st.floats(-1.4, 1.4), st.floats(-3.0, 3.0))
 def test_euler_round_trip(phi, theta, psi):
     np.testing.assert_allclose(euler_from_rotation(Rzyx(phi, theta, psi)), [phi, theta, psi],
@@ -42,6 +71,15 @@ def test_ssa_lands_in_half_open_interval(a):
     # same angle: differs by a whole number of turns
     turns = (a - out) / (2 * math.pi)
     assert abs(turns - round(turns)) < 1e-6 * max(1.0, abs(a))
+
+
+def test_ssa_folds_the_rounding_edge_below_minus_pi():
+    """(a + pi) mod 2 pi rounds to exactly 2 pi for a just below -pi; the result must still be
+    in [-pi, pi), and the same for arrays."""
+    edge = np.nextafter(-math.pi, -4.0)
+    assert -math.pi <= ssa(edge) < math.pi
+    out = ssa(np.array([edge, -math.pi, math.pi, 3 * math.pi]))
+    assert np.all(out >= -math.pi) and np.all(out < math.pi)
 
 
 @given(vec3, vec3)

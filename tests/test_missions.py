@@ -151,6 +151,15 @@ def test_run_command_json_plots_and_exit_codes(tmp_path):
     assert json.loads(proc.stdout)["legs"][0]["timed_out"] is True
 
 
+def test_run_list_names_every_library_mission():
+    """`rov-console run --list` (formerly `scenario --list`) lists the library and exits 0."""
+    proc = run_cli("run", "--list")
+    assert proc.returncode == 0, proc.stderr
+    listed = {line.split()[0] for line in proc.stdout.splitlines() if line.strip()}
+    assert listed == set(schema.library_names())
+    assert set(REQUIRED) <= listed
+
+
 def test_run_command_rejects_a_bad_file_with_exit_2(tmp_path):
     path = tmp_path / "bad.toml"
     path.write_text(BAD)

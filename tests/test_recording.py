@@ -14,22 +14,27 @@ import subprocess
 import sys
 import threading
 import time
+import tomllib
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
 from mcap.reader import make_reader
+from mcap.writer import Writer
+from scipy.spatial.transform import Rotation
 from typer.testing import CliRunner
 
-from app import recording
+from app import cli, recording
 from app.log_cli import log_app
-from control import loop
-from control.closed_loop import ClosedLoop, ControlSettings
+from app.recording import channels, messages
+from control.columns import COLUMN_NAMES, LAYOUT, N_LOG, Layout, LogRows
+from control.config import ControlSettings
+from control.simulation import Simulation
 from missions import schema
 from sim import params
 from sim.docking import DockingFrame
+from sim.drawing import attachment_point_n, rov_drawing_box_m
 from sim.gnc import Rzyx
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -42,6 +47,11 @@ FOXGLOVE = {"/tf": "foxglove.FrameTransforms", "/scene": "foxglove.SceneUpdate",
             "/log": "foxglove.Log"}
 EVENTS = [(2.0, "leg", "leg 1: hold", {"leg": 1}), (7.5, "alarm", "compass frozen", {}),
           (12.0, "gains", "kp x2", {"kp": [100.0, 100.0, 600.0]})]
+MISSION = "model-square-ekf-400"
+STARTED = datetime(2024, 5, 1, 12, 0, tzinfo=UTC)
+SESSION_KEYS = {"mission_name", "mission_toml", "seed", "settings", "gains", "params_name",
+                "label", "started_utc", "start_t_s", "dt_s", "crane_tip_n", "wire_length_m",
+                "docking_frame"}
 
 
 def first_in_each_slot(t_s: np.ndarray, rate_hz: float) -> np.ndarray:
@@ -54,25 +64,23 @@ def record_run(path: Path, *, seed: int = 0, feedback: str = "perfect", seconds:
                flush_interval_s: float = 0.5, with_events: bool = True) -> np.ndarray:
     """Record a real closed-loop run in 1 s calls; returns the full source log."""
     ps = params.load("model-scale")
-    cl = ClosedLoop(ps, tree_depth_m=100.0, seed=seed,
-                    settings=ControlSettings(feedback=feedback))  # type: ignore[arg-type]
-    mission = schema.dump_mission(schema.load_mission("model-square-ekf-400"))
+    sim = Simulation(ps, tree_depth_m=100.0, seed=seed,
+                     settings=ControlSettings(feedback=feedback))  # type: ignore[arg-type]
     dock = DockingFrame(np.array([1.5, 1.0]), math.radians(20.0), 101.0)
-    meta = {"seed": str(seed), "mission": mission, "software": "test",
-            "gains": {"kp": list(cl.gains.kp), "ki": list(cl.gains.ki)}}
+    meta = recording.session_metadata(sim, schema.load_mission(MISSION), seed=seed,
+                                      label="test", docking=dock, started_utc=STARTED)
     pieces = []
-    with recording.SessionRecorder(path, metadata=meta, params=ps,
-                                   n_thrusters=cl.ps.rov.thrusters.T.shape[1],
+    with recording.SessionRecorder(path, metadata=meta, params=ps, n_thrusters=sim.n_thrusters,
                                    flush_interval_s=flush_interval_s) as rec:
         pending = list(EVENTS) if with_events else []
         for k in range(int(seconds)):
             if k == 5:
-                cl.set_target(1.5, 1.2, math.radians(30.0))
-            data = cl.run(1.0).data
-            pieces.append(data)
-            rec.write_log(data, crane_tip_n=cl.sim.crane_tip_n,
-                          wire_length_m=cl.sim.wire_length_m, docking=dock)
-            while pending and pending[0][0] <= cl.t_s:
+                sim.set_target(1.5, 1.2, math.radians(30.0))
+            rows = sim.run_for(1.0)
+            pieces.append(rows.data)
+            rec.write_log(rows, crane_tip_n=sim.crane_tip_n, wire_length_m=sim.wire_length_m,
+                          docking=dock)
+            while pending and pending[0][0] <= sim.t_s:
                 rec.event(*pending.pop(0))
     return np.vstack(pieces)
 
@@ -112,34 +120,60 @@ def node_read(path: Path) -> dict:
 # ------------------------------------------------------------------------------------ layout
 
 
-def test_column_names_tile_the_log_layout():
+def block(rows: np.ndarray, name: str) -> np.ndarray:
+    """A block of rows in this software's layout (control.columns)."""
+    return LAYOUT.take(rows, name)
+
+
+def test_column_names_are_the_declared_log_row():
     names = recording.column_names()
-    assert len(names) == loop.N_LOG == len(set(names))
-    assert names[loop.L_T] == "t_s"
-    assert names[loop.L_TREE + 5] == "tree_yaw_rad"
-    assert names[loop.L_Y + 4] == "y_heading_rad"
-    assert names[loop.L_ACCEPT + 4] == "accepted_gyro"
+    assert names == list(COLUMN_NAMES) == recording.COLUMNS
+    assert len(names) == N_LOG == len(set(names))
+    assert names[LAYOUT.slice("t_s")] == ["t_s"]
+    assert names[LAYOUT.slice("tree_eta_n")][5] == "tree_yaw_rad"
+    assert names[LAYOUT.slice("y")][4] == "y_heading_rad"
+    assert names[LAYOUT.slice("accepted")][4] == "accepted_gyro"
 
 
-@given(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5), st.floats(-7.0, 7.0))
-def test_quaternion_is_the_zyx_rotation(phi: float, theta: float, psi: float):
-    """Law: the quaternion's rotation matrix is R_zyx (Fossen eq. 2.18), and it is a unit one."""
-    q = recording.quaternion_from_rpy_radians(phi, theta, psi)
-    x, y, z, w = q["x"], q["y"], q["z"], q["w"]
-    r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                  [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                  [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-    assert x * x + y * y + z * z + w * w == pytest.approx(1.0, abs=1e-12)
-    np.testing.assert_allclose(r, Rzyx(phi, theta, psi), atol=1e-12)
+def test_plot_fields_read_their_block_by_name():
+    """Every block of a row gets its own values; each field must find its element and convert
+    its unit (degrees, rpm), whatever offset the block has in the row."""
+    row = 0.001 * np.arange(1.0, N_LOG + 1.0)  # distinct: a field reading another column shows
+    value = {name: row[k] for k, name in enumerate(LAYOUT.names)}
+    plots = {ch.topic: messages.plot_message(ch, row) for ch in recording.plot_channels(5)}
+    assert plots["/tree/state"]["yaw_deg"] == math.degrees(value["tree_yaw_rad"])
+    assert plots["/rov/state"]["down_m"] == value["rov_down_m"]
+    assert plots["/tree/estimate"]["bias_yaw_nm"] == value["bias_yaw_newton_m"]
+    assert plots["/reference"]["error_yaw_deg"] == pytest.approx(
+        math.degrees(value["tree_yaw_rad"] - value["ref_yaw_rad"]), rel=1e-12)
+    assert plots["/measurements"]["heading_deg"] == math.degrees(value["y_heading_rad"])
+    assert plots["/measurements"]["accepted_gyro"] == value["accepted_gyro"]
+    assert plots["/control/forces"]["rov_ach_pitch_nm"] == value["tau_rov_ach_pitch_newton_m"]
+    assert plots["/control/forces"]["mode"] == value["mode"]
+    assert plots["/thrusters"]["thruster2_speed_rpm"] == 60.0 * value["thruster2_speed_rps"]
+    assert plots["/control/terms"]["ff_sway_n"] == value["term_ff_sway_newton"]
+    assert all(p["t_s"] == value["t_s"] for p in plots.values())
+    with pytest.raises(ValueError, match="tree_eta_n"):
+        channels.PlotField("beyond", "tree_eta_n", 6)
+    with pytest.raises(ValueError, match="no_such_block"):
+        channels.PlotField("nothing", "no_such_block")
 
 
 def test_attachment_point_is_above_the_centre_in_body_axes():
     eta = np.array([3.0, -2.0, 100.0, 0.0, 0.0, 1.0])
-    np.testing.assert_allclose(recording.attachment_point_n(eta, 2.5), [3.0, -2.0, 97.5])
+    np.testing.assert_allclose(attachment_point_n(eta, 2.5), [3.0, -2.0, 97.5])
     tilted = np.array([0.0, 0.0, 100.0, 0.0, math.radians(10.0), 0.0])
-    p = recording.attachment_point_n(tilted, 2.0)  # nose up: the top leans aft (south)
+    p = attachment_point_n(tilted, 2.0)  # nose up: the top leans aft (south)
     np.testing.assert_allclose(p, [-2.0 * math.sin(math.radians(10.0)), 0.0,
                                    100.0 - 2.0 * math.cos(math.radians(10.0))], atol=1e-12)
+
+
+def test_rov_is_drawn_about_minervas_size():
+    """Minerva (appendix B.4, 460 kg) is 1.44 x 0.82 x 0.8 m; the drawn box is an open frame
+    of twice its displaced water, 1.6 : 1 : 0.9, so 1.37 x 0.85 x 0.77 m (to the centimetre)."""
+    box = rov_drawing_box_m(params.load("model-scale"))
+    np.testing.assert_allclose(box, [1.37, 0.85, 0.77], atol=0.005)
+    assert np.prod(box) == pytest.approx(2.0 * 460.0 / 1025.0, rel=1e-12)
 
 
 # ------------------------------------------------------------------------- complete file
@@ -148,8 +182,8 @@ def test_attachment_point_is_above_the_centre_in_body_axes():
 def test_mcap_reader_sees_every_channel_at_its_rate(session):
     path, source = session
     channels, msgs, _ = mcap_messages(path)
-    n_numeric = len(first_in_each_slot(source[:, loop.L_T], NUMERIC_HZ))
-    n_scene = len(first_in_each_slot(source[:, loop.L_T], SCENE_HZ))
+    n_numeric = len(first_in_each_slot(block(source, "t_s"), NUMERIC_HZ))
+    n_scene = len(first_in_each_slot(block(source, "t_s"), SCENE_HZ))
     # rows at 0.01 .. 20.00 s: slot 0 (t < 0.05 s) and slots 1 .. 400
     assert n_numeric == RUN_S * NUMERIC_HZ + 1 and n_scene == RUN_S * SCENE_HZ + 1
     expected = {"/session/log": n_numeric, "/tf": n_numeric, "/scene": n_scene,
@@ -171,28 +205,37 @@ def test_mcap_reader_sees_every_channel_at_its_rate(session):
 def test_messages_carry_the_rows_in_foxglove_frames(session):
     path, source = session
     _, msgs, _ = mcap_messages(path)
-    rows = source[first_in_each_slot(source[:, loop.L_T], NUMERIC_HZ)]
+    rows = source[first_in_each_slot(block(source, "t_s"), NUMERIC_HZ)]
     k = 150
+    tree_eta, ref = block(rows, "tree_eta_n")[k], block(rows, "eta_ref_n")[k]
     t_ns, tf = msgs["/tf"][k]
-    assert t_ns == round(rows[k, loop.L_T] * 1e9)
+    assert t_ns == round(block(rows, "t_s")[k] * 1e9)
     frames = {x["child_frame_id"]: x for x in tf["transforms"]}
     assert frames["ned"]["parent_frame_id"] == "world"
     assert frames["ned"]["rotation"] == {"x": 1.0, "y": 0.0, "z": 0.0, "w": 0.0}
     tree = frames["tree"]["translation"]
-    assert [tree["x"], tree["y"], tree["z"]] == rows[k, loop.L_TREE:loop.L_TREE + 3].tolist()
+    assert [tree["x"], tree["y"], tree["z"]] == tree_eta[0:3].tolist()
+    last_eta = block(rows, "tree_eta_n")[-1]
+    assert last_eta[5] > 0.1 and last_eta[4] < -0.005  # turned and pitched: a rotation to check
+    last = {x["child_frame_id"]: x["rotation"] for x in msgs["/tf"][-1][1]["transforms"]}
+    q = last["tree"]  # Foxglove's {x, y, z, w}, as scipy reads it
+    np.testing.assert_allclose(Rotation.from_quat([q["x"], q["y"], q["z"], q["w"]]).as_matrix(),
+                               Rzyx(*last_eta[3:6]), atol=1e-12)
     state = msgs["/tree/state"][k][1]
-    assert state["yaw_deg"] == pytest.approx(math.degrees(rows[k, loop.L_TREE + 5]), rel=1e-12)
-    ref = msgs["/reference"][k][1]
-    assert ref["error_north_m"] == pytest.approx(rows[k, loop.L_TREE] - rows[k, loop.L_ETA_D])
+    assert state["yaw_deg"] == pytest.approx(math.degrees(tree_eta[5]), rel=1e-12)
+    reference = msgs["/reference"][k][1]
+    assert reference["error_north_m"] == pytest.approx(tree_eta[0] - ref[0])
     scene = msgs["/scene"][30][1]
     ents = {e["id"]: e for e in scene["entities"]}
     assert set(ents) == {"tree", "rov", "reference", "wire", "docking_frame"}
     assert ents["tree"]["frame_locked"] and ents["tree"]["frame_id"] == "tree"
     assert [ents["tree"]["cubes"][0]["size"][a] for a in "xyz"] == [1.0, 1.5, 1.2]
+    rov_box = rov_drawing_box_m(params.load("model-scale")).tolist()
+    assert [ents["rov"]["cubes"][0]["size"][a] for a in "xyz"] == rov_box
     assert len(ents["docking_frame"]["cylinders"]) == 2  # the model's two guideposts
     wire = ents["wire"]["lines"][0]["points"]
     assert [wire[0][a] for a in "xyz"] == [1.0, 1.0, 0.0]  # crane tip
-    assert wire[1]["z"] < rows[0, loop.L_TREE + 2] - 0.5  # attachment above the tree's centre
+    assert wire[1]["z"] < block(rows, "tree_eta_n")[0, 2] - 0.5  # attachment above the centre
 
 
 SCALARS = {"boolean": bool, "string": str, "number": (int, float), "integer": int}
@@ -253,26 +296,129 @@ def test_metadata_holds_the_setup(session):
     path, _ = session
     _, _, meta = mcap_messages(path)
     setup = {k: json.loads(v) for k, v in meta["setup"].items()}
+    assert set(setup) == SESSION_KEYS | set(channels.RESERVED_SETUP_KEYS)
     assert setup["params"] == params.load("model-scale").spec.model_dump(mode="json")
     assert setup["columns"] == recording.COLUMNS
-    assert setup["seed"] == "0"
-    assert setup["mission"].startswith("format_version = 1")
+    assert setup["seed"] == 0 and setup["label"] == "test"
+    assert setup["mission_name"] == MISSION
+    mission = schema.parse_mission(tomllib.loads(setup["mission_toml"]))
+    assert mission == schema.load_mission(MISSION)
     assert setup["gains"]["kp"] == list(params.load("model-scale").gains.kp)
+    assert setup["settings"]["feedback"] == "perfect"
+    assert setup["started_utc"] == STARTED.isoformat() and setup["start_t_s"] == 0.0
+    assert setup["crane_tip_n"] == [1.0, 1.0, 0.0]
+    assert setup["docking_frame"] == {"center_n": [1.5, 1.0], "heading_rad": math.radians(20.0),
+                                      "landing_depth_m": 101.0}
     assert setup["recorder"]["software_version"] == recording.software_version()
     assert setup["recorder"]["numeric_rate_hz"] == NUMERIC_HZ
+    assert setup["recorder"]["format_version"] == recording.FORMAT_VERSION == 2
 
 
 def test_load_session_returns_the_decimated_rows_exactly(session):
     path, source = session
     data = recording.load_session(path)
-    expected = source[first_in_each_slot(source[:, loop.L_T], NUMERIC_HZ)]
+    expected = source[first_in_each_slot(block(source, "t_s"), NUMERIC_HZ)]
     assert data.complete and data.problem == ""
-    assert data.rows.shape == expected.shape == (RUN_S * NUMERIC_HZ + 1, loop.N_LOG)
+    assert data.rows.shape == expected.shape == (RUN_S * NUMERIC_HZ + 1, N_LOG)
     assert np.array_equal(data.rows, expected)
-    assert np.array_equal(data.t_s, expected[:, loop.L_T])
+    assert np.array_equal(data.t_s, block(expected, "t_s"))
+    assert np.array_equal(data.log["tree_eta_n"], block(expected, "tree_eta_n"))
+    assert data.log["thruster_force"].shape == (len(expected), 5)  # Minerva's five
     assert [(e["t_s"], e["kind"], e["text"], e["data"]) for e in data.events] == EVENTS
-    assert data.end_time_s == pytest.approx(source[-1, loop.L_T])
-    assert data.metadata["seed"] == "0"
+    assert data.end_time_s == pytest.approx(block(source, "t_s")[-1])
+    assert data.metadata["seed"] == 0
+    assert recording.recorded_mission_name(data.metadata) == MISSION
+    frame = recording.recorded_docking_frame(data.metadata)
+    assert frame is not None and frame.center_n.tolist() == [1.5, 1.0]
+    assert frame.heading_rad == math.radians(20.0) and frame.landing_depth_m == 101.0
+
+
+def columns_before_control_columns() -> list[str]:
+    """Flat names as the recorder wrote them before the log row was declared in
+    control.columns: no velocity blocks, newtons spelt _n and _nm, the site block last."""
+    pose = ("north_m", "east_m", "down_m", "roll_rad", "pitch_rad", "yaw_rad")
+    axes3 = ("surge_n", "sway_n", "yaw_nm")
+    axes6 = ("surge_n", "sway_n", "heave_n", "roll_nm", "pitch_nm", "yaw_nm")
+    held = ("pos_north_m", "pos_east_m", "pos_down_m", "depth_m", "heading_rad", "dvl_u_mps",
+            "dvl_v_mps", "dvl_w_mps", "gyro_p_rad_s", "gyro_q_rad_s", "gyro_r_rad_s")
+    thr = range(1, 9)
+    return ["t_s", *(f"tree_{n}" for n in pose), *(f"rov_{n}" for n in pose),
+            "est_tree_north_m", "est_tree_east_m", "est_tree_yaw_rad", "est_tree_u_mps",
+            "est_tree_v_mps", "est_tree_r_rad_s", *(f"bias_{n}" for n in axes3),
+            "ref_north_m", "ref_east_m", "ref_yaw_rad", "ref_north_rate_mps",
+            "ref_east_rate_mps", "ref_yaw_rate_rad_s", *(f"tau_tree_{n}" for n in axes3),
+            *(f"tau_rov_cmd_{n}" for n in axes6), *(f"tau_rov_ach_{n}" for n in axes6),
+            *(f"thruster{i}_force_n" for i in thr), *(f"thruster{i}_speed_rps" for i in thr),
+            *(f"thruster{i}_utilisation" for i in thr),
+            *(f"term_{p}_{a}" for p in ("p", "i", "d", "ff") for a in axes3),
+            *(f"y_{n}" for n in held), "mode", "nis_north", "nis_east", "nis_heading",
+            *(f"accepted_{s}" for s in ("position", "depth", "compass", "dvl", "gyro")),
+            "crane_tip_north_m", "crane_tip_east_m", "wire_rest_length_m", "wire_tension_n"]
+
+
+def write_session_by_hand(path: Path, columns: list[str], rows: np.ndarray, setup: dict) -> None:
+    """A session file as an earlier recorder wrote it (plain mcap writer, no SessionRecorder)."""
+    with path.open("wb") as f:
+        w = Writer(f)
+        w.start(profile="", library="rov-console 0.1")
+        sid = w.register_schema("rov_console.SessionLogRow", "jsonschema", b"{}")
+        cid = w.register_channel("/session/log", "json", sid,
+                                 {"kind": "table", "columns": json.dumps(columns)})
+        w.add_metadata("setup", {k: json.dumps(v) for k, v in setup.items()})
+        for i, row in enumerate(rows):
+            t_ns = round(row[0] * 1e9)
+            w.add_message(cid, log_time=t_ns, publish_time=t_ns, sequence=i,
+                          data=json.dumps({"t_s": row[0], "row": row.tolist()}).encode())
+        w.finish()
+
+
+def test_recordings_of_an_older_layout_are_read_by_block_name(tmp_path):
+    """A file written before control.columns (other column order, old unit spelling): its rows
+    are read by block name from where that file put them."""
+    columns = columns_before_control_columns()
+    assert columns != recording.COLUMNS and len(columns) != N_LOG
+    rows = np.arange(3.0 * len(columns)).reshape(3, len(columns)) + 0.5
+    rows[:, 0] = [0.05, 0.10, 0.15]
+    path = tmp_path / "old.mcap"
+    write_session_by_hand(path, columns, rows, {"columns": columns, "mission": "harbour test",
+                                                "recorder": {"n_thrusters": 5}})
+    data = recording.load_session(path)
+    assert data.complete and data.columns == columns
+    assert np.array_equal(data.t_s, [0.05, 0.10, 0.15])
+    assert np.array_equal(data.log["tree_eta_n"], rows[:, 1:7])
+    bias = columns.index("bias_surge_n")
+    assert np.array_equal(data.log["bias_tree"], rows[:, bias:bias + 3])
+    assert np.array_equal(data.log["wire_tension"], rows[:, -1])
+    assert np.array_equal(data.log["thruster_force"],
+                          rows[:, columns.index("thruster1_force_n"):][:, :5])
+    with pytest.raises(KeyError, match="rov_nu_b"):
+        data.log["rov_nu_b"]  # that file has no velocities
+    assert recording.recorded_mission_name(data.metadata) == "harbour test"
+
+
+def test_run_and_console_recordings_share_one_metadata_layout(tmp_path):
+    """`rov-console run --log` writes session_metadata; files of the two older layouts (run:
+    mission = the TOML; console: mission = the name) still give the mission's name and file."""
+    spec = schema.load_mission(MISSION)
+    sim = Simulation(params.load("model-scale"), tree_depth_m=100.0)
+    with cli._open_recorder(str(tmp_path / "run.mcap"), spec, sim, None) as rec:
+        rec.write_log(sim.run_for(0.1))
+    meta = recording.load_session(tmp_path / "run.mcap").metadata
+    assert set(meta) == SESSION_KEYS | set(channels.RESERVED_SETUP_KEYS)
+    assert meta["seed"] == spec.setup.seed and meta["mission_name"] == spec.name
+    assert meta["params_name"] == "model-scale" and meta["docking_frame"] is None
+    assert recording.recorded_docking_frame(meta) is None
+    assert recording.session_metadata(sim, spec, seed=spec.setup.seed + 7)["seed"] == \
+        spec.setup.seed + 7
+    toml = schema.dump_mission(spec)
+    older = [{"mission": toml, "mission_name": spec.name},
+             {"mission": spec.name, "mission_toml": toml}]
+    for m in (meta, *older):
+        assert recording.recorded_mission_name(m, "?") == spec.name
+        text = recording.recorded_mission_toml(m)
+        assert text is not None and schema.parse_mission(tomllib.loads(text)) == spec
+    assert recording.recorded_mission_name({}, "?") == "?"
+    assert recording.recorded_mission_toml({}) is None
 
 
 def test_javascript_reader_agrees_on_a_complete_file(session):
@@ -343,17 +489,17 @@ def test_non_mcap_input_is_a_clear_error(tmp_path, content):
 CHILD = """
 import sys, time
 from sim import params
-from control.closed_loop import ClosedLoop
+from control.simulation import Simulation
 from app.recording import SessionRecorder
 ps = params.load("model-scale")
-cl = ClosedLoop(ps, tree_depth_m=100.0)
-cl.run(0.1)
-with SessionRecorder(sys.argv[1], metadata={"seed": "0"}, params=ps, n_thrusters=5,
+sim = Simulation(ps, tree_depth_m=100.0)
+sim.run_for(0.1)
+with SessionRecorder(sys.argv[1], metadata={"seed": 0}, params=ps, n_thrusters=5,
                      flush_interval_s=0.5) as rec:
     while True:
-        data = cl.run(0.2).data
-        rec.write_log(data, crane_tip_n=cl.sim.crane_tip_n, wire_length_m=cl.sim.wire_length_m)
-        print(f"{time.monotonic():.6f} {data[-1, 0]:.6f}", flush=True)
+        rows = sim.run_for(0.2)
+        rec.write_log(rows, crane_tip_n=sim.crane_tip_n, wire_length_m=sim.wire_length_m)
+        print(f"{time.monotonic():.6f} {rows.t_s[-1]:.6f}", flush=True)
         time.sleep(0.002)
 """
 
@@ -412,17 +558,17 @@ class FakeClock:
 def test_flush_inside_calls_follows_the_wall_clock(tmp_path, monkeypatch):
     monkeypatch.setattr(recording.SessionRecorder, "_start_flusher", lambda self: None)
     ps = params.load("model-scale")
-    cl = ClosedLoop(ps, tree_depth_m=100.0)
+    sim = Simulation(ps, tree_depth_m=100.0)
     clock = FakeClock()
     path = tmp_path / "clock.mcap"
     with recording.SessionRecorder(path, metadata={}, params=ps, n_thrusters=5,
                                    flush_interval_s=0.5, clock=clock) as rec:
-        rec.write_log(cl.run(1.0).data)
+        rec.write_log(sim.run_for(1.0).data)
         clock.now = 0.4
-        rec.write_log(cl.run(1.0).data)
+        rec.write_log(sim.run_for(1.0).data)
         assert len(recording.load_session(path).rows) == 0  # 0.4 s < 0.5 s: still buffered
         clock.now = 0.6
-        rec.write_log(cl.run(1.0).data)  # flushes at its first row
+        rec.write_log(sim.run_for(1.0).data)  # flushes at its first row
         assert len(recording.load_session(path).rows) == 21 + 20 + 1
         clock.now = 1.0
         rec.event(3.0, "leg", "no flush yet")
@@ -436,13 +582,13 @@ def test_flush_inside_calls_follows_the_wall_clock(tmp_path, monkeypatch):
 
 def test_idle_recorder_flushes_from_its_thread(tmp_path):
     ps = params.load("model-scale")
-    cl = ClosedLoop(ps, tree_depth_m=100.0)
+    sim = Simulation(ps, tree_depth_m=100.0)
     clock = FakeClock()
     path = tmp_path / "idle.mcap"
     rec = recording.SessionRecorder(path, metadata={}, params=ps, n_thrusters=5,
                                     flush_interval_s=0.5, clock=clock)
     try:
-        rec.write_log(cl.run(1.0).data)
+        rec.write_log(sim.run_for(1.0).data)
         time.sleep(0.3)
         assert len(recording.load_session(path).rows) == 0  # the clock has not moved
         clock.now = 0.5  # the caller stays idle: the background thread flushes
@@ -455,7 +601,7 @@ def test_idle_recorder_flushes_from_its_thread(tmp_path):
         rec.close()  # idempotent
     assert recording.load_session(path).complete
     with pytest.raises(recording.RecordingError, match="closed"):
-        rec.write_log(cl.run(0.1).data)
+        rec.write_log(sim.run_for(0.1).data)
 
 
 def test_recorder_refuses_bad_input_and_existing_files(tmp_path):
@@ -475,17 +621,21 @@ def test_recorder_refuses_bad_input_and_existing_files(tmp_path):
     with recording.SessionRecorder(tmp_path / "b.mcap", metadata={}, params=ps,
                                    n_thrusters=5, docking=dock) as rec:
         with pytest.raises(ValueError, match="shape"):
-            rec.write_log(np.zeros((3, loop.N_LOG - 1)))
+            rec.write_log(np.zeros((3, N_LOG - 1)))
+        reordered = Layout.from_names(list(reversed(COLUMN_NAMES)))
+        with pytest.raises(ValueError, match="layout"):
+            rec.write_log(LogRows(np.zeros((3, N_LOG)), layout=reordered))
         with pytest.raises(ValueError, match="JSON"):
             rec.event(1.0, "leg", "x", {"bad": object()})
-        rows = np.zeros((2, loop.N_LOG))
-        rows[:, loop.L_T] = [0.05, 0.10]
-        rows[1, loop.L_NIS] = np.nan
+        rows = LogRows(np.zeros((2, N_LOG)))
+        rows["t_s"][:] = [0.05, 0.10]
+        rows["nis"][1, 0] = np.nan
         rec.write_log(rows)
         with pytest.raises(ValueError, match="forward in time"):
             rec.write_log(rows)  # the same rows again: refused, not silently dropped
     data = recording.load_session(tmp_path / "b.mcap")
-    assert math.isnan(data.rows[1, loop.L_NIS]) and data.rows[0, loop.L_NIS] == 0.0
+    assert math.isnan(data.log["nis"][1, 0]) and data.log["nis"][0, 0] == 0.0
+    assert not np.isnan(data.log["nis"][1, 1:]).any()
     _, msgs, _ = mcap_messages(tmp_path / "b.mcap")
     (_, scene), = msgs["/scene"]
     assert "docking_frame" in {e["id"] for e in scene["entities"]}
@@ -545,7 +695,7 @@ def test_log_export_csv_matches_the_rows(session, tmp_path):
         tree = list(csv.DictReader(f))
     assert len(tree) == len(data.rows)
     np.testing.assert_allclose([float(r["yaw_deg"]) for r in tree],
-                               np.degrees(data.rows[:, loop.L_TREE + 5]), rtol=1e-12)
+                               np.degrees(data.log["tree_eta_n"][:, 5]), rtol=1e-12)
     assert [float(r["t_s"]) for r in tree] == data.t_s.tolist()
     with (out / "events.csv").open() as f:
         assert [r["kind"] for r in csv.DictReader(f)] == [e[1] for e in EVENTS]

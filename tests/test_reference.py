@@ -1,4 +1,7 @@
-"""Tests of control/reference.py: angle helpers, first-order and third-order reference models.
+"""Reference models (control/reference.py) as the control loop steps them (control/refkernel.py).
+
+Every run here goes through ``refkernel.reference_step``, the compiled step the closed loop
+calls, with the parameters packed as ``control.config`` packs them.
 
 Tolerances:
 - ROUNDOFF (1e-12 relative): results that are exact in real arithmetic (exact discretisation,
@@ -13,41 +16,31 @@ Tolerances:
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
+from control import loop, refkernel
 from control.reference import (
     BRAKING_FRACTION,
-    EAST,
-    NORTH,
-    PSI,
     FirstOrderParams,
-    FirstOrderState,
-    HeadingMode,
-    ReferenceOutput,
     ThirdOrderParams,
-    ThirdOrderState,
     first_order_kernel,
-    initial_state,
-    simulate_reference,
-    ssa,
-    step_response,
     third_order_kernel,
-    unwrap_heading_target,
-    update_first_order,
-    update_third_order,
-    wrap_heading,
 )
 
 ROUNDOFF = 1e-12
 PI = math.pi
+NORTH, EAST, PSI = 0, 1, 2
+"""Axes of a reference [north, east, heading]."""
 
-positive = st.floats(min_value=1e-3, max_value=1e3)
-angles = st.floats(min_value=-1e4, max_value=1e4, allow_nan=False)
+FloatArray = NDArray[np.float64]
+Params = FirstOrderParams | ThirdOrderParams
 
 
 def first_order_params(time_constant_s: float = 5.0, max_rate: float = 0.05) -> FirstOrderParams:
@@ -63,75 +56,62 @@ def third_order_params(
 
 
 # --------------------------------------------------------------------------------------------
-# Angles
+# Running the compiled step
 # --------------------------------------------------------------------------------------------
 
 
-@given(angles)
-def test_ssa_scalar_in_range_and_congruent(angle: float) -> None:
-    wrapped = ssa(angle)
-    assert -PI <= wrapped < PI
-    turns = (angle - wrapped) / (2 * PI)
-    # 1e4 rad carries about 2e-12 rad of rounding; 1e-9 turn is far above it.
-    assert abs(turns - round(turns)) < 1e-9
+@dataclass(frozen=True)
+class Run:
+    """A run of the reference model: sample 0 is the start, sample k is at ``k * dt``."""
+
+    time_s: FloatArray
+    """(N+1,) [s]."""
+    eta_d: FloatArray
+    """(N+1, 3) desired pose [m, m, rad], psi continuous."""
+    eta_dot_d: FloatArray
+    """(N+1, 3) desired velocity [m/s, m/s, rad/s]."""
+    eta_ddot_d: FloatArray
+    """(N+1, 3) desired acceleration [m/s^2, m/s^2, rad/s^2]."""
 
 
-@given(st.lists(angles, min_size=1, max_size=20))
-def test_ssa_array_matches_scalar(values: list[float]) -> None:
-    wrapped = ssa(np.array(values))
-    assert np.all(wrapped >= -PI) and np.all(wrapped < PI)
-    np.testing.assert_allclose(wrapped, [ssa(v) for v in values], rtol=0, atol=ROUNDOFF)
+def packed(params: Params) -> tuple[int, FloatArray]:
+    """The loop's model kind and (5, 3) parameter array, as control.config builds them."""
+    if isinstance(params, FirstOrderParams):
+        return loop.REF_FIRST, refkernel.pack_first_order(params)
+    return loop.REF_THIRD, refkernel.pack_third_order(params)
 
 
-@pytest.mark.parametrize(
-    "angle", [PI, -PI, 3 * PI, -3 * PI, np.nextafter(PI, 0.0), np.nextafter(-PI, -4.0), -1e-300]
-)
-def test_ssa_edges_stay_in_half_open_interval(angle: float) -> None:
-    for wrapped in (ssa(angle), float(ssa(np.array([angle]))[0]), wrap_heading(angle)):
-        assert -PI <= wrapped < PI
+def at_rest(pose: ArrayLike) -> FloatArray:
+    """Reference state (9,) resting at ``pose`` (3,): zero rate and acceleration."""
+    state = np.zeros(9)
+    state[0:3] = pose
+    return state
 
 
-def test_ssa_pi_maps_to_minus_pi() -> None:
-    assert ssa(PI) == -PI
-    assert wrap_heading(3 * PI) == pytest.approx(-PI, abs=ROUNDOFF)
+def run_reference(params: Params, targets: ArrayLike, dt: float,
+                  start: FloatArray | None = None) -> Run:
+    """Step the compiled model over ``targets`` (N, 3), one target per step, from ``start``
+    (default: at rest at the origin)."""
+    kind, p = packed(params)
+    targets = np.array(targets, dtype=np.float64)
+    state = np.zeros(9) if start is None else np.array(start, dtype=np.float64)
+    states = np.empty((targets.shape[0] + 1, 9))
+    states[0] = state
+    for k in range(targets.shape[0]):
+        state = refkernel.reference_step(kind, state, targets[k], dt, p)
+        states[k + 1] = state
+    time_s = dt * np.arange(targets.shape[0] + 1)
+    return Run(time_s, states[:, 0:3], states[:, 3:6], states[:, 6:9])
 
 
-@given(
-    st.floats(min_value=-20, max_value=20),
-    st.floats(min_value=-20, max_value=20),
-    st.sampled_from([-1, 0, 1]),
-)
-def test_unwrap_heading_target_laws(current: float, target: float, direction: int) -> None:
-    unwrapped = unwrap_heading_target(current, target, direction)
-    delta = unwrapped - current
-    assert abs(ssa(unwrapped - target)) < 1e-9  # same heading as the target
-    if direction > 0:
-        assert 0.0 <= delta < 2 * PI
-    elif direction < 0:
-        assert -2 * PI < delta <= 0.0
-    else:
-        assert -PI <= delta < PI
-
-
-def test_unwrap_heading_target_full_turns() -> None:
-    psi = 0.3
-    assert unwrap_heading_target(psi, psi, +1, extra_turns=1) == pytest.approx(psi + 2 * PI)
-    assert unwrap_heading_target(psi, psi, -1, extra_turns=1) == pytest.approx(psi - 2 * PI)
-    # 10 deg -> 350 deg clockwise is +340 deg, counter-clockwise -20 deg.
-    start, goal = math.radians(10), math.radians(350)
-    assert unwrap_heading_target(start, goal, +1) == pytest.approx(math.radians(350))
-    assert unwrap_heading_target(start, goal, -1) == pytest.approx(math.radians(-10))
-    assert unwrap_heading_target(start, goal, 0) == pytest.approx(math.radians(-10))
-
-
-@pytest.mark.parametrize(("direction", "extra_turns"), [(2, 0), (-2, 0), (0, 1), (1, -1)])
-def test_unwrap_heading_target_rejects_bad_arguments(direction: int, extra_turns: int) -> None:
-    with pytest.raises(ValueError, match="direction|extra_turns"):
-        unwrap_heading_target(0.0, 1.0, direction, extra_turns)
+def step_response(params: Params, target: ArrayLike, dt: float, n_steps: int,
+                  start: FloatArray | None = None) -> Run:
+    """``n_steps`` steps of ``dt`` towards a constant ``target`` (3,)."""
+    return run_reference(params, np.tile(np.asarray(target, float), (n_steps, 1)), dt, start)
 
 
 # --------------------------------------------------------------------------------------------
-# Headings in both models
+# Headings: the kernels take the plain difference and never wrap psi_d
 # --------------------------------------------------------------------------------------------
 
 HEADING_MODELS = [
@@ -141,58 +121,27 @@ HEADING_MODELS = [
 
 
 @pytest.mark.parametrize("params", HEADING_MODELS)
-def test_heading_takes_the_short_way(params: FirstOrderParams | ThirdOrderParams) -> None:
-    start = initial_state(params, [0.0, 0.0, math.radians(10)])
-    run = step_response(params, [0.0, 0.0, math.radians(350)], 0.05, 1200, state=start)
+def test_heading_stays_continuous_across_pi(params: Params) -> None:
+    # From 170 deg to -170 deg the short way is +20 deg: Simulation.set_target makes the
+    # target 190 deg, and psi_d goes there without being wrapped.
+    run = step_response(params, [0.0, 0.0, math.radians(190)], 0.05, 1200,
+                        start=at_rest([0.0, 0.0, math.radians(170)]))
     psi = run.eta_d[:, PSI]
-    # Short way: -20 deg, ending at psi_d = -10 deg (not +340 deg).
-    assert psi[-1] == pytest.approx(math.radians(-10), abs=1e-6)
-    assert np.all(np.diff(psi) <= ROUNDOFF)
-    assert psi.max() <= math.radians(10) + ROUNDOFF
+    assert psi[-1] == pytest.approx(math.radians(190), abs=1e-6)
+    assert np.all(np.diff(psi) >= -ROUNDOFF)
 
 
 @pytest.mark.parametrize("params", HEADING_MODELS)
-def test_heading_stays_continuous_across_pi(params: FirstOrderParams | ThirdOrderParams) -> None:
-    start = initial_state(params, [0.0, 0.0, math.radians(170)])
-    run = step_response(params, [0.0, 0.0, math.radians(-170)], 0.05, 1200, state=start)
-    # +20 deg the short way; psi_d is not wrapped, it ends at 190 deg > pi.
-    assert run.eta_d[-1, PSI] == pytest.approx(math.radians(190), abs=1e-6)
-    assert wrap_heading(run.eta_d[-1, PSI]) == pytest.approx(math.radians(-170), abs=1e-6)
-
-
-@pytest.mark.parametrize("params", HEADING_MODELS)
-def test_absolute_mode_turns_a_full_circle_and_back(
-    params: FirstOrderParams | ThirdOrderParams,
-) -> None:
+def test_full_circle_target_turns_a_full_circle_and_back(params: Params) -> None:
     psi0 = 0.3
-    full_turn = unwrap_heading_target(psi0, psi0, +1, extra_turns=1)
-    start = initial_state(params, [1.0, 1.0, psi0])
     n_steps = 3000  # 150 s: 360 deg at 5 deg/s is 72 s, plus accel, decel and settling
-    run = step_response(
-        params,
-        [1.0, 1.0, full_turn],
-        0.05,
-        n_steps,
-        state=start,
-        heading_mode=HeadingMode.ABSOLUTE,
-    )
+    run = step_response(params, [1.0, 1.0, psi0 + 2 * PI], 0.05, n_steps,
+                        start=at_rest([1.0, 1.0, psi0]))
     psi = run.eta_d[:, PSI]
     assert psi[-1] == pytest.approx(psi0 + 2 * PI, abs=1e-6)
     assert np.all(np.diff(psi) >= -ROUNDOFF)
-    # The same numeric target in the default mode is "already there": no motion at all.
-    still = step_response(params, [1.0, 1.0, full_turn], 0.05, 100, state=start)
-    np.testing.assert_allclose(still.eta_d[:, PSI], psi0, atol=1e-9)
-    # And back counter-clockwise from psi0 + 2 pi to psi0.
-    back_target = unwrap_heading_target(psi[-1], psi[-1], -1, extra_turns=1)
-    assert back_target == pytest.approx(psi0, abs=1e-6)
-    back = step_response(
-        params,
-        [1.0, 1.0, back_target],
-        0.05,
-        n_steps,
-        state=initial_state(params, run.eta_d[-1]),
-        heading_mode=HeadingMode.ABSOLUTE,
-    )
+    assert np.all(run.eta_d[:, 0:2] == 1.0)  # position untouched
+    back = step_response(params, [1.0, 1.0, psi0], 0.05, n_steps, start=at_rest(run.eta_d[-1]))
     assert back.eta_d[-1, PSI] == pytest.approx(psi0, abs=1e-6)
     assert np.all(np.diff(back.eta_d[:, PSI]) <= ROUNDOFF)
 
@@ -213,21 +162,22 @@ def test_first_order_rate_never_exceeds_max_rate(
     time_constant: float, max_rate: float, step: list[float], dt: float
 ) -> None:
     params = first_order_params(time_constant, max_rate)
-    run = step_response(params, step, dt, 200, heading_mode=HeadingMode.ABSOLUTE)
+    run = step_response(params, step, dt, 200)
     limit = max_rate * (1 + ROUNDOFF)
     assert np.all(np.abs(run.eta_dot_d) <= limit)
     # Positions up to 100 carry ~1e-14 of rounding, large next to max_rate * dt (>= 1e-6).
     position_roundoff = 1e-13 * (1.0 + np.abs(step).max())
     assert np.all(np.abs(np.diff(run.eta_d, axis=0)) <= limit * dt + position_roundoff)
-    # It moves towards the target and never past it.
-    assert np.all(np.abs(step - run.eta_d) <= np.abs(step) * (1 + ROUNDOFF))
+    # It moves towards the target and never past it (the pose is target - error: rounding
+    # of the size of the target's last bit).
+    assert np.all(np.abs(step - run.eta_d) <= np.abs(step) * (1 + ROUNDOFF) + position_roundoff)
 
 
 def test_first_order_small_step_is_exponential() -> None:
     time_constant, dt = 4.0, 0.01
     params = first_order_params(time_constant, max_rate=1.0)
     step = np.array([0.5, -0.2, 0.1])  # all below T * max_rate = 4: never rate limited
-    run = step_response(params, step, dt, 2000, heading_mode=HeadingMode.ABSOLUTE)
+    run = step_response(params, step, dt, 2000)
     decay = np.exp(-run.time_s / time_constant)[:, None]
     # Exact discretisation: only rounding separates it from the closed form.
     np.testing.assert_allclose(run.eta_d, step * (1 - decay), rtol=0, atol=1e-12)
@@ -240,7 +190,7 @@ def test_first_order_small_step_is_exponential() -> None:
 def test_first_order_large_step_moves_at_max_rate_until_close() -> None:
     time_constant, max_rate, dt, step = 5.0, 0.05, 0.01, 2.0
     params = first_order_params(time_constant, max_rate)
-    run = step_response(params, [step, -step, 0.0], dt, 10000, heading_mode=HeadingMode.ABSOLUTE)
+    run = step_response(params, [step, -step, 0.0], dt, 10000)
     north = run.eta_d[:, NORTH]
     t_sat = (step - time_constant * max_rate) / max_rate  # 35 s at the rate limit
     on_limit = run.time_s <= t_sat - dt
@@ -269,13 +219,10 @@ def test_first_order_two_half_steps_equal_one_step(
 ) -> None:
     # Exact discretisation is a semigroup: x(2 dt) from x(0) == x(dt) from x(dt).
     params = first_order_params(time_constant, max_rate)
-    target = np.array([error, -error, 0.5 * error])
-    start = FirstOrderState.at_rest(np.zeros(3))
-    mode = HeadingMode.ABSOLUTE
-    one, _ = update_first_order(start, target, 2 * dt, params, mode)
-    half, _ = update_first_order(start, target, dt, params, mode)
-    two, _ = update_first_order(half, target, dt, params, mode)
-    np.testing.assert_allclose(two.eta_d, one.eta_d, rtol=1e-9, atol=1e-12)
+    target = [error, -error, 0.5 * error]
+    one = step_response(params, target, 2 * dt, 1)
+    two = step_response(params, target, dt, 2)
+    np.testing.assert_allclose(two.eta_d[-1], one.eta_d[-1], rtol=1e-9, atol=1e-12)
 
 
 def test_first_order_ramp_lags_by_time_constant_times_rate() -> None:
@@ -283,7 +230,7 @@ def test_first_order_ramp_lags_by_time_constant_times_rate() -> None:
     params = first_order_params(time_constant, max_rate=0.05)  # lag 0.02 < T * max_rate = 0.1
     times = dt * np.arange(6000)
     targets = np.column_stack([rate * times, np.zeros_like(times), np.zeros_like(times)])
-    run = simulate_reference(params, targets, dt)
+    run = run_reference(params, targets, dt)
     lag = targets[-1, NORTH] - run.eta_d[-2, NORTH]  # target and pose at the same instant, 30 T
     # Sampled ramp: lag = rate * dt / (1 - exp(-dt / T)) = rate * (T + dt / 2) + O(dt^2).
     assert lag == pytest.approx(rate * dt / -math.expm1(-dt / time_constant), rel=1e-9)
@@ -315,27 +262,17 @@ def params_from_axes(axes: list[tuple[float, float, float, float]]) -> ThirdOrde
         min_size=1,
         max_size=4,
     ),
-    rates=st.lists(st.floats(min_value=-2, max_value=2), min_size=3, max_size=3),
-    use_rates=st.booleans(),
 )
 def test_third_order_never_exceeds_speed_or_accel(
     axes: list[tuple[float, float, float, float]],
     targets: list[list[float]],
-    rates: list[float],
-    use_rates: bool,
 ) -> None:
     params = params_from_axes(axes)
     dt = min(0.05, params.max_dt_s)
     n_steps = 1600
     # Piecewise-constant target that jumps while the model is moving (windup check).
     schedule = np.repeat(np.array(targets), -(-n_steps // len(targets)), axis=0)[:n_steps]
-    run = simulate_reference(
-        params,
-        schedule,
-        dt,
-        heading_mode=HeadingMode.ABSOLUTE,
-        target_rates=np.array(rates) if use_rates else None,
-    )
+    run = run_reference(params, schedule, dt)
     # Limits hold by construction; only rounding can exceed them.
     assert np.all(np.abs(run.eta_dot_d) <= params.max_speed * (1 + ROUNDOFF))
     assert np.all(np.abs(run.eta_ddot_d) <= params.max_accel * (1 + ROUNDOFF))
@@ -370,7 +307,7 @@ def test_third_order_step_settles_without_overshoot(
     slowest_pole = omega * (zeta - np.sqrt(zeta**2 - 1))
     duration = float(np.max(cruise + ramps + 14 / slowest_pole))
     dt = 0.05
-    run = step_response(params, step, dt, int(duration / dt), heading_mode=HeadingMode.ABSOLUTE)
+    run = step_response(params, step, dt, int(duration / dt))
     progress = run.eta_d / step  # 0 at the start, 1 at the target
     assert np.all(progress.max(axis=0) < 1.01)  # overshoot below 1 % of the step
     assert np.all(progress.min(axis=0) > -0.01)  # and no initial swing the wrong way
@@ -443,23 +380,38 @@ def test_third_order_two_metre_step_takes_cruise_plus_ramps() -> None:
     assert cruising.sum() * dt > 28.0
 
 
+def _third_order_ramp(params: ThirdOrderParams, targets: FloatArray, rates: FloatArray,
+                      dt: float) -> tuple[FloatArray, FloatArray]:
+    """Final pose and velocity (3,) of the third-order kernel following ``targets`` (N, 3) with
+    the target rate ``rates`` (3,) fed forward (the kernel's ``vel_ff``; the control loop
+    passes zero)."""
+    pose, vel, acc = np.zeros(3), np.zeros(3), np.zeros(3)
+    for target in targets:
+        delta, vel, acc = third_order_kernel(target - pose, vel, acc, rates, params.k_pos,
+                                             params.k_vel, params.k_acc, params.max_speed,
+                                             params.max_accel, dt)
+        pose = pose + delta
+    return pose, vel
+
+
 def test_third_order_ramp_with_feedforward_has_no_steady_state_error() -> None:
     omega, zeta, dt, rate = 0.5, 1.0, 0.01, 0.02
     params = third_order_params(omega, zeta, max_speed=0.05, max_accel=0.01)
     times = dt * np.arange(8000)
     targets = np.column_stack([rate * times, -rate * times, 0.5 * rate * times])
     rates = np.array([rate, -rate, 0.5 * rate])
-    with_ff = simulate_reference(params, targets, dt, target_rates=rates)
-    np.testing.assert_allclose(with_ff.eta_d[-1], targets[-1] + rates * dt, atol=1e-9)
-    np.testing.assert_allclose(with_ff.eta_dot_d[-1], rates, atol=1e-12)
-    # Without the feedforward the model is type 1: lag (2 z + 1) r_dot / w = 0.12 m.
-    without = simulate_reference(params, targets, dt)
+    pose, vel = _third_order_ramp(params, targets, rates, dt)
+    np.testing.assert_allclose(pose, targets[-1] + rates * dt, atol=1e-9)
+    np.testing.assert_allclose(vel, rates, atol=1e-12)
+    # Without the feedforward (the control loop's case) the model is type 1: it lags by
+    # (2 z + 1) r_dot / w = 0.12 m.
+    without = run_reference(params, targets, dt)
     lag = targets[-1] - without.eta_d[-2]
     np.testing.assert_allclose(lag, (2 * zeta + 1) * rates / omega, rtol=1e-6)
 
 
 # --------------------------------------------------------------------------------------------
-# Validation, purity, helpers
+# Parameters, purity, compilation
 # --------------------------------------------------------------------------------------------
 
 GOOD_FIRST = {"time_constant_s": 5.0, "max_rate": [0.05, 0.05, 0.05]}
@@ -491,92 +443,41 @@ def test_params_are_read_only() -> None:
         params.max_speed = np.ones(3)  # type: ignore[misc]
 
 
-@pytest.mark.parametrize("dt", [0.0, -0.01, math.nan, 10.0])
-def test_third_order_rejects_bad_dt(dt: float) -> None:
-    with pytest.raises(ValueError, match="dt"):
-        update_third_order(
-            ThirdOrderState.at_rest(np.zeros(3)), np.ones(3), dt, ThirdOrderParams(**GOOD_THIRD)
-        )
+def test_packed_params_are_the_loop_gains_and_limits() -> None:
+    """The rows control.refkernel documents: [k_pos or 1/T, k_vel, k_acc, max speed or rate,
+    max accel]; for w = 0.5, z = 1: k_pos = w / 3, k_vel = w, k_acc = 3 w."""
+    third = refkernel.pack_third_order(ThirdOrderParams(**GOOD_THIRD))
+    np.testing.assert_allclose(third[:, 0], [0.5 / 3, 0.5, 1.5, 0.05, 0.01], rtol=1e-15)
+    first = refkernel.pack_first_order(FirstOrderParams(**GOOD_FIRST))
+    np.testing.assert_allclose(first[:, 0], [0.2, 0.0, 0.0, 0.05, 0.0], rtol=1e-15)
 
 
-@pytest.mark.parametrize("dt", [0.0, -0.01, math.nan])
-def test_first_order_rejects_bad_dt(dt: float) -> None:
-    with pytest.raises(ValueError, match="dt"):
-        update_first_order(
-            FirstOrderState.at_rest(np.zeros(3)), np.ones(3), dt, FirstOrderParams(**GOOD_FIRST)
-        )
-
-
-@pytest.mark.parametrize("target", [[1.0, math.nan, 0.0], [1.0, 2.0], [0.0, 0.0, math.inf]])
-def test_updates_reject_bad_targets(target: list[float]) -> None:
-    with pytest.raises(ValueError, match="target"):
-        update_first_order(
-            FirstOrderState.at_rest(np.zeros(3)), target, 0.01, FirstOrderParams(**GOOD_FIRST)
-        )
-    with pytest.raises(ValueError, match="target"):
-        update_third_order(
-            ThirdOrderState.at_rest(np.zeros(3)), target, 0.01, ThirdOrderParams(**GOOD_THIRD)
-        )
-
-
-def test_updates_do_not_change_their_arguments() -> None:
+@pytest.mark.parametrize("params", [FirstOrderParams(**GOOD_FIRST), ThirdOrderParams(**GOOD_THIRD)],
+                         ids=["first", "third"])
+def test_step_does_not_change_its_arguments_and_is_deterministic(params: Params) -> None:
+    kind, p = packed(params)
+    state = np.array([0.1, 0.2, 0.3, 0.01, 0.0, -0.01, 0.001, 0.0, 0.0])
     target = np.array([3.0, -2.0, 4.0])
-    target_copy = target.copy()
-    first = FirstOrderState(eta_d=np.array([0.1, 0.2, 0.3]))
-    first_copy = first.eta_d.copy()
-    new_first, out_first = update_first_order(first, target, 0.1, FirstOrderParams(**GOOD_FIRST))
-    third = ThirdOrderState(
-        np.array([0.1, 0.2, 0.3]), np.array([0.01, 0.0, -0.01]), np.array([0.001, 0.0, 0.0])
-    )
-    third_copies = [third.eta_d.copy(), third.eta_dot_d.copy(), third.eta_ddot_d.copy()]
-    new_third, out_third = update_third_order(third, target, 0.1, ThirdOrderParams(**GOOD_THIRD))
-    np.testing.assert_array_equal(target, target_copy)
-    np.testing.assert_array_equal(first.eta_d, first_copy)
-    for array, copy in zip(
-        (third.eta_d, third.eta_dot_d, third.eta_ddot_d), third_copies, strict=True
-    ):
+    copies = state.copy(), target.copy(), p.copy()
+    new = refkernel.reference_step(kind, state, target, 0.1, p)
+    again = refkernel.reference_step(kind, state, target, 0.1, p)
+    for array, copy in zip((state, target, p), copies, strict=True):
         np.testing.assert_array_equal(array, copy)
-    assert isinstance(out_first, ReferenceOutput) and isinstance(out_third, ReferenceOutput)
-    assert not np.array_equal(new_first.eta_d, first.eta_d)
-    assert not np.array_equal(new_third.eta_d, third.eta_d)
-    np.testing.assert_array_equal(out_third.eta_d, new_third.eta_d)
+    np.testing.assert_array_equal(new, again)
+    assert new.shape == (9,)
+    assert not np.array_equal(new[0:3], state[0:3])
 
 
-def test_runs_are_deterministic_and_well_shaped() -> None:
-    params = ThirdOrderParams(**GOOD_THIRD)
-    start = ThirdOrderState.at_rest([1.0, 2.0, 3.0])
-    first = step_response(params, [2.0, 1.0, -3.0], 0.05, 300, state=start)
-    second = step_response(params, [2.0, 1.0, -3.0], 0.05, 300, state=start)
-    assert first.time_s.shape == (301,)
-    assert first.eta_d.shape == first.eta_dot_d.shape == first.eta_ddot_d.shape == (301, 3)
-    assert first.time_s[-1] == pytest.approx(15.0)
-    np.testing.assert_array_equal(first.eta_d[0], [1.0, 2.0, 3.0])
-    np.testing.assert_array_equal(first.eta_dot_d[0], 0.0)
-    np.testing.assert_array_equal(first.eta_d, second.eta_d)
-    with pytest.raises(ValueError, match="targets"):
-        simulate_reference(params, np.zeros((10, 2)), 0.05)
-
-
-@pytest.mark.slow
-def test_kernels_compile_with_numba(request: pytest.FixtureRequest) -> None:
-    if "slow" not in (request.config.option.markexpr or ""):
-        pytest.skip("compiles with numba (about 3 s): run with -m slow")
-    numba = pytest.importorskip("numba")
+def test_compiled_kernels_do_the_numpy_arithmetic() -> None:
+    """control.refkernel compiles the kernels of control.reference as they stand: the same
+    numbers to the last bits (1e-14 relative allows for numba's own exp and sqrt)."""
     error = np.array([2.0, -0.01, 0.3])
     first_args = (error, np.full(3, 5.0), np.full(3, 0.05), 0.01)
     params = ThirdOrderParams(**GOOD_THIRD)
-    third_args = (
-        error,
-        np.full(3, 0.01),
-        np.full(3, -0.001),
-        np.zeros(3),
-        params.k_pos,
-        params.k_vel,
-        params.k_acc,
-        params.max_speed,
-        params.max_accel,
-        0.01,
-    )
-    for kernel, args in ((first_order_kernel, first_args), (third_order_kernel, third_args)):
-        for jitted, plain in zip(numba.njit(kernel)(*args), kernel(*args), strict=True):
-            np.testing.assert_allclose(jitted, plain, rtol=1e-14, atol=1e-15)
+    third_args = (error, np.full(3, 0.01), np.full(3, -0.001), np.zeros(3), params.k_pos,
+                  params.k_vel, params.k_acc, params.max_speed, params.max_accel, 0.01)
+    pairs = ((refkernel._first_kernel, first_order_kernel, first_args),
+             (refkernel._third_kernel, third_order_kernel, third_args))
+    for jitted, plain, args in pairs:
+        for a, b in zip(jitted(*args), plain(*args), strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-14, atol=1e-15)

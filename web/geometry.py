@@ -1,43 +1,24 @@
 """Pure geometry for the 3D view, in NED (x north, y east, z down) like the core.
 
-The scene is drawn in NED directly: the view sets its up direction to -z.
+The scene is drawn in NED directly: the view sets its up direction to -z. Rotations and the
+wire's attachment point come from the core (one implementation, re-exported by
+``app.console``).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
+from app.console import Rzyx, attachment_point_n, quaternion_wxyz_from_rpy_radians
+
+__all__ = ["CameraPose", "attachment_point_n", "funnel_points_b", "loaded_wire_points_n",
+           "overview_camera", "polyline_segments", "quaternion_wxyz_from_rpy_radians",
+           "rov_camera", "top_down_camera"]
+
 FloatArray = NDArray[np.float64]
-
-
-def quaternion_wxyz_from_rpy_radians(phi: float, theta: float, psi: float) -> FloatArray:
-    """Unit quaternion [w, x, y, z] of R_nb = Rz(psi) Ry(theta) Rx(phi) (Fossen eq. 2.18)."""
-    cr, sr = math.cos(phi / 2), math.sin(phi / 2)
-    cp, sp = math.cos(theta / 2), math.sin(theta / 2)
-    cy, sy = math.cos(psi / 2), math.sin(psi / 2)
-    return np.array([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-                     cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy])
-
-
-def Rzyx(phi: float, theta: float, psi: float) -> FloatArray:  # noqa: N802 - book symbol
-    """Body-to-NED rotation matrix (Fossen eq. 2.18)."""
-    cphi, sphi = math.cos(phi), math.sin(phi)
-    cth, sth = math.cos(theta), math.sin(theta)
-    cpsi, spsi = math.cos(psi), math.sin(psi)
-    return np.array([
-        [cpsi * cth, -spsi * cphi + cpsi * sth * sphi, spsi * sphi + cpsi * cphi * sth],
-        [spsi * cth, cpsi * cphi + sphi * sth * spsi, -cpsi * sphi + sth * spsi * cphi],
-        [-sth, cth * sphi, cth * cphi]])
-
-
-def attachment_point_n(tree_eta_n: FloatArray, attachment_height_m: float) -> FloatArray:
-    """Where the wire holds the tree: z_a above its centre of gravity (eq. 2.22), in NED."""
-    eta = np.asarray(tree_eta_n, float)
-    return eta[0:3] + Rzyx(*eta[3:6]) @ np.array([0.0, 0.0, -attachment_height_m])
 
 
 def loaded_wire_points_n(top_n: FloatArray, bottom_n: FloatArray, length_m: float,

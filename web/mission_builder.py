@@ -23,16 +23,6 @@ TRISTATE = ("(unchanged)", "true", "false")
 SKIPPED_FIELDS = ("type",)
 
 
-def leg_models() -> dict[str, type[BaseModel]]:
-    """Leg type name -> its pydantic model, in the order of ``schema.Leg``."""
-    union = typing.get_args(schema.Leg)[0]
-    out: dict[str, type[BaseModel]] = {}
-    for model in typing.get_args(union):
-        tag = typing.get_args(model.model_fields["type"].annotation)[0]
-        out[str(tag)] = model
-    return out
-
-
 @dataclass(frozen=True)
 class FieldSpec:
     """One input of a leg in the builder."""
@@ -57,9 +47,9 @@ def _bounds(metadata: list) -> tuple[float | None, float | None]:
     lo = hi = None
     for m in metadata:
         if isinstance(m, annotated_types.Ge | annotated_types.Gt):
-            lo = float(m.ge if isinstance(m, annotated_types.Ge) else m.gt)
+            lo = float(m.ge if isinstance(m, annotated_types.Ge) else m.gt)  # type: ignore[arg-type]
         if isinstance(m, annotated_types.Le | annotated_types.Lt):
-            hi = float(m.le if isinstance(m, annotated_types.Le) else m.lt)
+            hi = float(m.le if isinstance(m, annotated_types.Le) else m.lt)  # type: ignore[arg-type]
     return lo, hi
 
 
@@ -84,7 +74,7 @@ def _kind(annotation: Any) -> tuple[FieldKind, bool, tuple[str, ...]]:
 
 def common_fields() -> set[str]:
     """Fields every leg type has (name, score, timeout): shown after the leg's own."""
-    fields = [set(m.model_fields) for m in leg_models().values()]
+    fields = [set(m.model_fields) for m in schema.leg_models().values()]
     return set.intersection(*fields) if fields else set()
 
 
@@ -169,7 +159,7 @@ def parse_input(spec: FieldSpec, raw: Any) -> Any:
 
 def build_leg(leg_type: str, values: dict[str, Any]) -> dict[str, Any]:
     """A leg dictionary (None values left out so their defaults apply)."""
-    if leg_type not in leg_models():
+    if leg_type not in schema.leg_models():
         raise ValueError(f"type: unknown leg type {leg_type!r}")
     return {"type": leg_type, **{k: v for k, v in values.items() if v is not None}}
 

@@ -12,21 +12,22 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import viser
 
-from app import console_loop as cmd
-from app.alarms import SATURATED
-from app.console_engine import (
+from app.console import (
+    SATURATED,
     ConsoleError,
+    Gains,
+    Snapshot,
     list_recordings,
     load_replay,
     prepare_run,
+    station_keeping_mission,
 )
-from app.console_state import Snapshot
-from control.closed_loop import Gains
+from app.console import commands as cmd
 from missions import schema
 from web import geometry as geo
 from web import mission_builder as mb
@@ -44,7 +45,10 @@ AXES = ("surge", "sway", "yaw")
 CAMERAS = ("Overview", "Top-down", "ROV camera")
 
 
-def _bar_color(utilisation: float) -> str:
+BarColor = Literal["red", "orange", "blue"]
+
+
+def _bar_color(utilisation: float) -> BarColor:
     if utilisation >= SATURATED:
         return "red"
     return "orange" if utilisation >= 0.8 else "blue"
@@ -138,7 +142,7 @@ class ClientPanel:
         self.mission_md = gui.add_markdown("")
         with gui.add_folder("Mission builder"):
             self.setup_pick = gui.add_dropdown("Set-up from", names, initial_value=names[0])
-            types = tuple(mb.leg_models())
+            types = tuple(schema.leg_models())
             self.leg_type = gui.add_dropdown("Leg type", types, initial_value=types[0])
             self.leg_type.on_update(lambda _: self._rebuild_leg_inputs())
             self._leg_anchor = gui.add_markdown("**Leg values**")
@@ -242,7 +246,7 @@ class ClientPanel:
         """Inputs for the chosen leg type, from its pydantic model's fields."""
         if self._leg_folder is not None:
             self._leg_folder.remove()
-        model = mb.leg_models()[self.leg_type.value]
+        model = schema.leg_models()[self.leg_type.value]
         self._leg_inputs = {}
         with self.gui.add_folder(f"{self.leg_type.value} leg",
                                  order=self._leg_anchor.order + 0.1) as folder:
@@ -317,7 +321,6 @@ class ClientPanel:
 
     def _on_reset(self, event: Any) -> None:
         snap = self.console.loop.snapshot
-        from app.console_engine import station_keeping_mission
 
         mission = station_keeping_mission(snap.scene.params_name, self.console.settings.depth_m)
         self._start(mission, run_legs=False)
@@ -347,8 +350,7 @@ class ClientPanel:
             return
         self._gain_touch = time.monotonic()
         values = {t: tuple(float(s.value) for s in row) for t, row in self.gain_sliders.items()}
-        self._run(lambda: cmd.SetGains(Gains(values["kp"], values["ki"],  # type: ignore[arg-type]
-                                             values["kd"])))
+        self._run(lambda: cmd.SetGains(Gains.of(values["kp"], values["ki"], values["kd"])))
 
     def _on_record(self, start: bool) -> None:
         if start:
@@ -367,7 +369,7 @@ class ClientPanel:
         names = self._recording_names()
         self.recordings.options = names
         if self.recordings.value not in names:
-            self.recordings.value = names[0]
+            self.recordings.value = names[0]  # type: ignore[misc]  # settable at run time
 
     def _on_open_replay(self, event: Any) -> None:
         name = str(self.recordings.value)
@@ -492,7 +494,7 @@ class ClientPanel:
         for bar, u in zip(self.bars, util, strict=False):
             value = round(100.0 * min(max(u, 0.0), 1.0), 1)
             if bar.value != value:
-                bar.value = value
+                bar.value = value  # type: ignore[misc]  # settable at run time
             color = _bar_color(u)
             if bar.color != color:
                 bar.color = color

@@ -13,7 +13,7 @@ import time
 import numpy as np
 import viser
 
-from app.console_state import SceneInfo, Snapshot
+from app.console import SceneInfo, Snapshot
 from web import geometry as geo
 
 TREE_COLOR = (235, 190, 40)
@@ -48,7 +48,7 @@ class SceneView:
         self._current_key: tuple[float, float] | None = None
         self.info: SceneInfo | None = None
         self._handles: list = []
-        self._current = None
+        self._current: viser.ArrowsHandle | None = None
 
     # ----------------------------------------------------------------- static parts
     def _build(self, info: SceneInfo) -> None:

@@ -14,7 +14,7 @@ from app.api.schemas import (
     PoseOut,
     TargetIn,
 )
-from app.console_loop import SetAllocation, SetGrip, SetMode, SetTarget
+from app.console.commands import SetAllocation, SetGrip, SetMode, SetTarget
 
 router = APIRouter(prefix="/api/control", tags=["control"])
 
@@ -27,22 +27,22 @@ def get_control(snapshot: SnapshotDep) -> ControlOut:
 
 @router.put("/mode", response_model=CommandOut)
 async def set_mode(body: ModeIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
-    return CommandOut(result=await run_command(console, SetMode(body.mode)))  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(console, SetMode(body.mode)))
 
 
 @router.put("/allocation", response_model=CommandOut)
 async def set_allocation(body: AllocationIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
-    return CommandOut(result=await run_command(  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(
         console, SetAllocation(body.allocation)))
 
 
 @router.put("/grip", response_model=CommandOut)
 async def set_grip(body: GripIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
-    return CommandOut(result=await run_command(console, SetGrip(body.grip)))  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(console, SetGrip(body.grip)))
 
 
 @router.put("/target", response_model=CommandOut)
 async def set_target(body: TargetIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
     """Where the tree should go (when no mission is running)."""
-    return CommandOut(result=await run_command(  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(
         console, SetTarget(body.north_m, body.east_m, body.heading_deg)))

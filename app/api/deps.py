@@ -7,10 +7,8 @@ from typing import Annotated
 from fastapi import Depends, HTTPException, Request, status
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
-from app.console import Console
-from app.console_engine import ConsoleError
-from app.console_loop import Command
-from app.console_state import Snapshot
+from app.console import Console, ConsoleError, Snapshot
+from app.console.commands import Command
 
 UNPROCESSABLE = 422
 """A request that is well-formed but names a value the console cannot use."""

@@ -8,7 +8,7 @@ from fastapi import APIRouter
 
 from app.api.deps import ConsoleDep, SnapshotDep, TokenDep, run_command
 from app.api.schemas import CommandOut, CurrentIn, CurrentOut, EnvironmentOut, VesselIn
-from app.console_loop import MoveVessel, SetCurrent
+from app.console.commands import MoveVessel, SetCurrent
 
 router = APIRouter(prefix="/api/environment", tags=["environment"])
 
@@ -25,12 +25,12 @@ def get_environment(snapshot: SnapshotDep) -> EnvironmentOut:
 @router.put("/current", response_model=CommandOut)
 async def set_current(body: CurrentIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
     """A steady, uniform current."""
-    return CommandOut(result=await run_command(  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(
         console, SetCurrent(body.speed_mps, body.direction_deg)))
 
 
 @router.put("/vessel", response_model=CommandOut)
 async def move_vessel(body: VesselIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
     """Move the vessel (and the crane tip) to a position at a speed."""
-    return CommandOut(result=await run_command(  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(
         console, MoveVessel(body.north_m, body.east_m, body.speed_mps)))

@@ -6,8 +6,8 @@ from fastapi import APIRouter, HTTPException
 
 from app.api.deps import UNPROCESSABLE, ConsoleDep, SnapshotDep, TokenDep, run_command
 from app.api.schemas import GainsIn, GainsOut
-from app.console_loop import SetGains
-from control.closed_loop import Gains
+from app.console import Gains
+from app.console.commands import SetGains
 
 router = APIRouter(prefix="/api/gains", tags=["gains"])
 
@@ -19,13 +19,13 @@ def gains_out(g: Gains) -> GainsOut:
 @router.get("", response_model=GainsOut)
 def get_gains(console: ConsoleDep, snapshot: SnapshotDep) -> GainsOut:
     """The live controller's gains (also while a replay is shown)."""
-    return gains_out(snapshot.gains or console.loop.engine.cl.gains)
+    return gains_out(snapshot.gains or console.loop.session.sim.gains)
 
 
 @router.put("", response_model=GainsOut)
 async def set_gains(body: GainsIn, console: ConsoleDep, _: TokenDep) -> GainsOut:
     try:
-        gains = Gains(tuple(body.kp), tuple(body.ki), tuple(body.kd))  # type: ignore[arg-type]
+        gains = Gains(tuple(body.kp), tuple(body.ki), tuple(body.kd))
     except ValueError as err:
         raise HTTPException(UNPROCESSABLE, str(err)) from None
     applied = await run_command(console, SetGains(gains))

@@ -19,17 +19,16 @@ from app.api.schemas import (
     UploadOut,
     ValidationOut,
 )
-from app.console_engine import prepare_run
-from app.console_loop import AbortMission, StartRun
+from app.console import prepare_run
+from app.console.commands import AbortMission, StartRun
 from missions import schema
-from web.mission_builder import leg_models
 
 router = APIRouter(prefix="/api/missions", tags=["missions"])
 
 
 def _summary(m: schema.Mission, source: str) -> MissionSummaryOut:
     return MissionSummaryOut(name=m.name, description=m.description, legs=len(m.legs),
-                             params=m.setup.params, source=source)  # type: ignore[arg-type]
+                             params=m.setup.params, source=source)
 
 
 def parse_text(body: MissionTextIn) -> schema.Mission:
@@ -51,7 +50,7 @@ def list_missions(console: ConsoleDep) -> MissionListOut:
     return MissionListOut(
         library=[_summary(schema.load_mission(n), "library") for n in library],
         uploaded=[_summary(console.find_mission(n), "upload") for n in uploaded],
-        leg_types=list(leg_models()))
+        leg_types=list(schema.leg_models()))
 
 
 @router.get("/current", response_model=MissionStatusOut)
@@ -63,7 +62,7 @@ def current_mission(snapshot: SnapshotDep) -> MissionStatusOut:
 @router.get("/leg-types", response_model=dict[str, dict])
 def leg_types() -> dict[str, dict]:
     """JSON schema of each leg type (what the mission builder offers)."""
-    return {name: model.model_json_schema() for name, model in leg_models().items()}
+    return {name: model.model_json_schema() for name, model in schema.leg_models().items()}
 
 
 @router.get("/{name}", response_model=MissionOut)
@@ -111,9 +110,9 @@ async def start(body: StartMissionIn, console: ConsoleDep, _: TokenDep) -> Comma
         run = await asyncio.to_thread(prepare_run, mission, body.run_legs)
     except ValueError as err:
         raise HTTPException(UNPROCESSABLE, str(err)) from None
-    return CommandOut(result=await run_command(console, StartRun(run)))  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(console, StartRun(run)))
 
 
 @router.post("/abort", response_model=CommandOut)
 async def abort(console: ConsoleDep, _: TokenDep) -> CommandOut:
-    return CommandOut(result=await run_command(console, AbortMission()))  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(console, AbortMission()))

@@ -7,8 +7,8 @@ from fastapi.responses import FileResponse
 
 from app.api.deps import UNPROCESSABLE, ConsoleDep, SnapshotDep, TokenDep, run_command
 from app.api.schemas import RecordingInfoOut, RecordingListOut, RecordingOut, RecordingStartIn
-from app.console_engine import ConsoleError, list_recordings, recording_path
-from app.console_loop import StartRecording, StopRecording
+from app.console import ConsoleError, list_recordings, recording_path
+from app.console.commands import StartRecording, StopRecording
 
 router = APIRouter(prefix="/api/recordings", tags=["recordings"])
 

@@ -8,8 +8,8 @@ from fastapi import APIRouter, HTTPException, status
 
 from app.api.deps import UNPROCESSABLE, ConsoleDep, SnapshotDep, TokenDep, run_command
 from app.api.schemas import ReplayOpenIn, ReplayOut, ReplaySeekIn, ReplayStateOut
-from app.console_engine import ConsoleError, load_replay
-from app.console_loop import CloseReplay, OpenReplay, PlayReplay, SeekReplay
+from app.console import ConsoleError, load_replay
+from app.console.commands import CloseReplay, OpenReplay, PlayReplay, SeekReplay
 
 router = APIRouter(prefix="/api/replay", tags=["replay"])
 

@@ -8,8 +8,8 @@ from fastapi import APIRouter, HTTPException
 
 from app.api.deps import UNPROCESSABLE, ConsoleDep, SnapshotDep, TokenDep, run_command
 from app.api.schemas import CommandOut, LoopOut, ResetIn, SpeedIn, StateOut, StepIn
-from app.console_engine import prepare_run, station_keeping_mission
-from app.console_loop import Pause, Resume, SetSpeed, StartRun, Step
+from app.console import prepare_run, station_keeping_mission
+from app.console.commands import Pause, Resume, SetSpeed, StartRun, Step
 from sim import params as params_mod
 
 router = APIRouter(prefix="/api/run", tags=["run"])
@@ -23,23 +23,23 @@ def get_run(snapshot: SnapshotDep) -> LoopOut:
 
 @router.post("/pause", response_model=CommandOut)
 async def pause(console: ConsoleDep, _: TokenDep) -> CommandOut:
-    return CommandOut(result=await run_command(console, Pause()))  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(console, Pause()))
 
 
 @router.post("/resume", response_model=CommandOut)
 async def resume(console: ConsoleDep, _: TokenDep) -> CommandOut:
-    return CommandOut(result=await run_command(console, Resume()))  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(console, Resume()))
 
 
 @router.post("/step", response_model=CommandOut)
 async def step(body: StepIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
     """Advance a paused run by ``steps`` plant steps."""
-    return CommandOut(result=await run_command(console, Step(body.steps)))  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(console, Step(body.steps)))
 
 
 @router.put("/speed", response_model=CommandOut)
 async def speed(body: SpeedIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
-    return CommandOut(result=await run_command(console, SetSpeed(body.speed)))  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(console, SetSpeed(body.speed)))
 
 
 @router.post("/reset", response_model=CommandOut)
@@ -53,4 +53,4 @@ async def reset(body: ResetIn, console: ConsoleDep, snapshot: SnapshotDep,
                             f", got {params!r}")
     depth = body.depth_m or console.settings.depth_m
     run = await asyncio.to_thread(prepare_run, station_keeping_mission(params, depth), False)
-    return CommandOut(result=await run_command(console, StartRun(run)))  # type: ignore[arg-type]
+    return CommandOut(result=await run_command(console, StartRun(run)))

@@ -8,10 +8,10 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from app.alarms import Alarm
-from app.console_state import MissionStatus, ReplayStatus, Snapshot
-from control.closed_loop import GAIN_LIMITS
+from app.console import Alarm, MissionStatus, ReplayStatus, Snapshot
+from control.config import Allocation, Mode
 from sim.gnc import ssa
+from sim.params import GAIN_LIMITS
 
 
 class _In(BaseModel):
@@ -145,10 +145,10 @@ class StateOut(BaseModel):
 
     @staticmethod
     def of(s: Snapshot) -> StateOut:
-        from app.alarms import SATURATED
+        from app.console import SATURATED
 
         return StateOut(
-            seq=s.seq, source=s.source, t_s=s.t_s,  # type: ignore[arg-type]
+            seq=s.seq, source=s.source, t_s=s.t_s,
             tree_eta_n=EtaOut.of(s.tree_eta_n), rov_eta_n=EtaOut.of(s.rov_eta_n),
             reference=PoseOut.of(s.eta_ref), estimate=PoseOut.of(s.eta_hat), mode=s.mode,
             allocation=s.allocation, grip=s.grip, mission=MissionStatusOut.of(s.mission),
@@ -218,11 +218,11 @@ class ControlOut(BaseModel):
 
 
 class ModeIn(_In):
-    mode: Literal["tree", "free"]
+    mode: Mode
 
 
 class AllocationIn(_In):
-    allocation: Literal["pinv", "priority", "qp"]
+    allocation: Allocation
 
 
 class GripIn(_In):

@@ -1,4 +1,4 @@
-"""Operator alarms computed from the closed loop's log rows (``control.loop.L_*`` columns).
+"""Operator alarms computed from the simulation's log rows (read by name, control.columns).
 
 Five alarms, each with a limit taken from the parameter set where the thesis gives one:
 
@@ -28,14 +28,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from control import loop
+from control.columns import LogRows
+from missions.scoring import SATURATED
 from sim.gnc import ssa
 from sim.params import ParameterSet
 from sim.sensors import SENSOR_NAMES
 
 FloatArray = NDArray[np.float64]
-SATURATED = 0.99
-"""Utilisation at or above which a thruster counts as saturated (as missions.runner)."""
 ALARM_NAMES = ("saturation", "position_error", "wire_slack", "innovation", "dropout")
 
 
@@ -102,18 +101,18 @@ class AlarmMonitor:
         self._nis = (deque(maxlen=self.limits.nis_window), deque(maxlen=self.limits.nis_window))
         self.state = tuple(Alarm(name, False, "") for name in ALARM_NAMES)
 
-    def update(self, rows: FloatArray, tension_n: float | None) -> tuple[Alarm, ...]:
-        """Advance with log rows (k, N_LOG) and the present wire tension (None: unknown)."""
+    def update(self, rows: LogRows, tension_n: float | None) -> tuple[Alarm, ...]:
+        """Advance with log rows and the present wire tension (None: unknown)."""
         if len(rows) == 0:
             return self.state
-        self._t_s = float(rows[-1, loop.L_T])
-        self.state = (self._saturation(rows), self._position(rows[-1]), self._slack(tension_n),
+        self._t_s = float(rows.t_s[-1])
+        self.state = (self._saturation(rows), self._position(rows), self._slack(tension_n),
                       self._innovation(rows), self._dropout(rows))
         return self.state
 
-    def _saturation(self, rows: FloatArray) -> Alarm:
-        util = rows[:, loop.L_UTIL:loop.L_UTIL + self.n_thrusters]
-        t = rows[:, loop.L_T]
+    def _saturation(self, rows: LogRows) -> Alarm:
+        util = rows["thruster_utilisation"][:, :self.n_thrusters]
+        t = rows.t_s
         for i in range(self.n_thrusters):
             below = np.flatnonzero(util[:, i] < SATURATED)
             if below.size == len(t):
@@ -131,10 +130,10 @@ class AlarmMonitor:
                                              f"{held[worst]:.1f} s")
         return Alarm("saturation", False, "")
 
-    def _position(self, row: FloatArray) -> Alarm:
-        err_m = math.hypot(row[loop.L_TREE] - row[loop.L_ETA_D],
-                           row[loop.L_TREE + 1] - row[loop.L_ETA_D + 1])
-        err_deg = abs(math.degrees(ssa(float(row[loop.L_TREE + 5] - row[loop.L_ETA_D + 2]))))
+    def _position(self, rows: LogRows) -> Alarm:
+        tree, ref = rows["tree_eta_n"][-1], rows["eta_ref_n"][-1]
+        err_m = math.hypot(tree[0] - ref[0], tree[1] - ref[1])
+        err_deg = abs(math.degrees(ssa(float(tree[5] - ref[2]))))
         if err_m > self.limits.position_error_m or err_deg > self.limits.heading_error_deg:
             return Alarm("position_error", True,
                          f"tree {err_m:.2f} m / {err_deg:.1f} deg off the reference")
@@ -145,24 +144,25 @@ class AlarmMonitor:
             return Alarm("wire_slack", True, f"wire tension {tension_n / 1e3:.1f} kN")
         return Alarm("wire_slack", False, "")
 
-    def _innovation(self, rows: FloatArray) -> Alarm:
+    def _innovation(self, rows: LogRows) -> Alarm:
         if not self.uses_sensors:
             return Alarm("innovation", False, "")
-        pos = rows[:, loop.L_ACCEPT] > 0.5
-        psi = rows[:, loop.L_ACCEPT + 2] > 0.5
-        self._nis[0].extend(0.5 * (rows[pos, loop.L_NIS] + rows[pos, loop.L_NIS + 1]))
-        self._nis[1].extend(rows[psi, loop.L_NIS + 2])
+        accepted, nis = rows["accepted"], rows["nis"]
+        pos = accepted[:, 0] > 0.5
+        psi = accepted[:, 2] > 0.5
+        self._nis[0].extend(0.5 * (nis[pos, 0] + nis[pos, 1]))
+        self._nis[1].extend(nis[psi, 2])
         for label, window in zip(("position", "heading"), self._nis, strict=True):
             if len(window) == window.maxlen and np.mean(window) > self.limits.nis_limit:
                 return Alarm("innovation", True, f"{label} innovation {np.mean(window):.1f} "
                                                  f"x expected")
         return Alarm("innovation", False, "")
 
-    def _dropout(self, rows: FloatArray) -> Alarm:
+    def _dropout(self, rows: LogRows) -> Alarm:
         if not self.uses_sensors:
             return Alarm("dropout", False, "")
-        t = rows[:, loop.L_T]
-        accepted = rows[:, loop.L_ACCEPT:loop.L_ACCEPT + len(SENSOR_NAMES)] > 0.5
+        t = rows.t_s
+        accepted = rows["accepted"] > 0.5
         for k in range(len(SENSOR_NAMES)):
             hits = np.flatnonzero(accepted[:, k])
             if hits.size:

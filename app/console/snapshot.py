@@ -13,10 +13,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from app.alarms import Alarm
-from control import loop
-from control.closed_loop import Gains
+from app.console.alarms import Alarm
+from control.columns import LogRows
+from control.config import MODES, Gains
 from sim.docking import DockingFrame, DockingLayout
+from sim.drawing import rov_drawing_box_m
 from sim.params import ParameterSet
 
 FloatArray = NDArray[np.float64]
@@ -28,8 +29,6 @@ TREND_COLUMNS = ("t_s", "north_m", "east_m", "psi_rad", "north_ref_m", "east_ref
 """Columns of ``Snapshot.trend``: the tree against the reference, one row per 0.1 s."""
 TREND_DECIMATION = 10
 """Plant steps per trend row (10 steps of 0.01 s = 0.1 s at the plant's 100 Hz)."""
-MODES = ("tree", "free")
-"""Controller modes by their code in the log column L_MODE."""
 
 
 @dataclass(frozen=True)
@@ -152,12 +151,6 @@ def frozen_copy(a: FloatArray) -> FloatArray:
     return _frozen(np.array(a, dtype=float, copy=True))
 
 
-def rov_drawing_size_m(ps: ParameterSet) -> Vec3:
-    """A box of water density with the ROV's mass, 1.6 : 1 : 1 (drawing only)."""
-    side = (float(ps.rov.M_rb[0, 0]) / 1000.0 / 1.6) ** (1.0 / 3.0)
-    return (1.6 * side, side, side)
-
-
 def default_docking_frame(ps: ParameterSet, center_ne: FloatArray, heading_rad: float,
                           tree_depth_m: float) -> DockingFrame:
     """The frame under the tree's start: post tops half a tree height below its bottom.
@@ -176,12 +169,12 @@ def scene_info(ps: ParameterSet, frame: DockingFrame, version: int) -> SceneInfo
         version=version, params_name=ps.name,
         tree_dimensions_m=(float(dims[0]), float(dims[1]), float(dims[2])),
         attachment_height_m=float(ps.tree.attachment_height_m),
-        rov_dimensions_m=rov_drawing_size_m(ps), layout=ps.spec.docking.to_numeric(),
+        rov_dimensions_m=tuple(float(v) for v in rov_drawing_box_m(ps)),  # type: ignore[arg-type]
+        layout=ps.spec.docking.to_numeric(),
         frame=frame, n_thrusters=int(ps.rov.thrusters.T.shape[1]),
         wire_weight_n_per_m=float(ps.wire.submerged_weight_per_length()),
         tree_weight_n=float(ps.tree.submerged_weight_n),
-        preset_gains=Gains(tuple(ps.gains.kp), tuple(ps.gains.ki),  # type: ignore[arg-type]
-                           tuple(ps.gains.kd)))
+        preset_gains=Gains.of(ps.gains.kp, ps.gains.ki, ps.gains.kd))
 
 
 @dataclass(frozen=True)
@@ -199,26 +192,30 @@ class RowView:
 
 
 def row_view(row: FloatArray, n_thrusters: int) -> RowView:
-    """Pick a log row (control.loop.L_* columns) apart."""
-    def seq(start: int, width: int) -> tuple[float, ...]:
-        return tuple(float(v) for v in row[start:start + width])
+    """Pick one log row (the layout of control.columns) apart."""
+    v = LogRows(row[None, :], n_thrusters)
 
-    mode_code = int(row[loop.L_MODE]) if math.isfinite(row[loop.L_MODE]) else 0
+    def seq(name: str) -> tuple[float, ...]:
+        return tuple(float(x) for x in np.atleast_1d(v[name][0]))
+
+    mode = float(v["mode"][0])
+    mode_code = int(mode) if math.isfinite(mode) else 0
     return RowView(
-        t_s=float(row[loop.L_T]), tree_eta_n=seq(loop.L_TREE, 6),  # type: ignore[arg-type]
-        rov_eta_n=seq(loop.L_ROV, 6),  # type: ignore[arg-type]
-        eta_ref=seq(loop.L_ETA_D, 3), eta_hat=seq(loop.L_ETA_HAT, 3),  # type: ignore[arg-type]
-        utilisation=seq(loop.L_UTIL, n_thrusters), force_n=seq(loop.L_F, n_thrusters),
+        t_s=float(v.t_s[0]), tree_eta_n=seq("tree_eta_n"),  # type: ignore[arg-type]
+        rov_eta_n=seq("rov_eta_n"),  # type: ignore[arg-type]
+        eta_ref=seq("eta_ref_n"), eta_hat=seq("eta_hat_n"),  # type: ignore[arg-type]
+        utilisation=seq("thruster_utilisation"), force_n=seq("thruster_force"),
         mode=MODES[mode_code] if 0 <= mode_code < len(MODES) else "tree")
 
 
-def trend_rows(rows: FloatArray) -> FloatArray:
+def trend_rows(rows: LogRows) -> FloatArray:
     """(k, 7) trend rows (TREND_COLUMNS) from log rows."""
     out = np.empty((len(rows), len(TREND_COLUMNS)))
-    out[:, 0] = rows[:, loop.L_T]
-    out[:, 1:3] = rows[:, loop.L_TREE:loop.L_TREE + 2]
-    out[:, 3] = rows[:, loop.L_TREE + 5]
-    out[:, 4:7] = rows[:, loop.L_ETA_D:loop.L_ETA_D + 3]
+    tree = rows["tree_eta_n"]
+    out[:, 0] = rows.t_s
+    out[:, 1:3] = tree[:, 0:2]
+    out[:, 3] = tree[:, 5]
+    out[:, 4:7] = rows["eta_ref_n"]
     return out
 
 
@@ -233,12 +230,13 @@ class TrendBuffer:
     def clear(self) -> None:
         self._count = 0
 
-    def extend(self, rows: FloatArray) -> None:
+    def extend(self, rows: LogRows) -> None:
         """Add the log rows that fall on the decimation grid."""
         if len(rows) == 0:
             return
-        steps = np.rint(rows[:, loop.L_T] / self.dt_s).astype(np.int64)
-        picked = rows[steps % TREND_DECIMATION == 0]
+        steps = np.rint(rows.t_s / self.dt_s).astype(np.int64)
+        picked = LogRows(rows.data[steps % TREND_DECIMATION == 0], rows.n_thrusters,
+                         layout=rows.layout)
         cap = len(self._data)
         for r in trend_rows(picked)[-cap:]:
             self._data[self._count % cap] = r

@@ -1,0 +1,74 @@
+"""The operator console's core: one ``Console`` holds its settings, the ``PacedLoop`` (an
+asyncio task stepping the ``Session`` in time with the wall clock), uploaded missions and the
+token. Readers (HTTP routes, the telemetry stream, the 3D view) take immutable ``Snapshot``s;
+writers submit ``commands``. This is the console's public API: ``app.api`` and ``web`` import
+from here.
+
+    settings.py   ConsoleSettings (options of ``rov-console serve``)
+    instance.py   Console
+    loop.py       PacedLoop: pacing, command queue, jitter statistics
+    commands.py   the commands (Pause, SetTarget, StartRun, ...)
+    session.py    Session: simulation, mission driver, alarms, recorder, replay
+    replay.py     recordings on disk and their replay
+    snapshot.py   Snapshot and the other immutable views
+    alarms.py     operator alarms from the log rows
+
+It also passes on the core's rotations (``Rzyx``, ``quaternion_wxyz_from_rpy_radians``) and the
+wire's attachment point, so the view draws with the same geometry as the simulation.
+"""
+
+from app.console import commands
+from app.console.alarms import ALARM_NAMES, Alarm
+from app.console.commands import SPEED_MAX, SPEED_MIN, Command
+from app.console.errors import ConsoleError
+from app.console.instance import Console, initial_run
+from app.console.loop import PacedLoop
+from app.console.replay import RECORDING_NAME, list_recordings, load_replay, recording_path
+from app.console.session import PreparedRun, Session, prepare_run, station_keeping_mission
+from app.console.settings import ConsoleSettings, is_loopback
+from app.console.snapshot import (
+    LoopStats,
+    MissionStatus,
+    ReplayStatus,
+    SceneInfo,
+    Snapshot,
+)
+from control.config import ALLOCATIONS, MODES, Gains
+from missions.scoring import SATURATED
+from sim.drawing import attachment_point_n
+from sim.gnc import Rzyx, quaternion_wxyz_from_rpy_radians
+
+__all__ = [
+    "ALARM_NAMES",
+    "ALLOCATIONS",
+    "MODES",
+    "RECORDING_NAME",
+    "SATURATED",
+    "SPEED_MAX",
+    "SPEED_MIN",
+    "Alarm",
+    "Command",
+    "Console",
+    "ConsoleError",
+    "ConsoleSettings",
+    "Gains",
+    "LoopStats",
+    "MissionStatus",
+    "PacedLoop",
+    "PreparedRun",
+    "ReplayStatus",
+    "Rzyx",
+    "SceneInfo",
+    "Session",
+    "Snapshot",
+    "attachment_point_n",
+    "commands",
+    "initial_run",
+    "is_loopback",
+    "list_recordings",
+    "load_replay",
+    "prepare_run",
+    "quaternion_wxyz_from_rpy_radians",
+    "recording_path",
+    "station_keeping_mission",
+]

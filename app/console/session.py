@@ -1,0 +1,417 @@
+"""``Session``: what the console's loop task owns — the ``Simulation``, the mission in
+progress (driven by the same ``MissionDriver`` as the headless runner), alarms, the session
+recorder and the replay — advanced a given number of plant steps at a time.
+
+Nothing here knows about wall-clock time, threads or the network: ``app.console.loop`` paces
+the session and feeds it commands; tests drive it directly. Only the loop task may call its
+methods.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, replace
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from app.console.alarms import AlarmLimits, AlarmMonitor
+from app.console.errors import ConsoleError
+from app.console.replay import Replay, recording_path
+from app.console.snapshot import (
+    LoopStats,
+    MissionStatus,
+    ReplayStatus,
+    RowView,
+    SceneInfo,
+    Snapshot,
+    TrendBuffer,
+    default_docking_frame,
+    frozen_copy,
+    row_view,
+    scene_info,
+)
+from app.recording import (
+    SessionData,
+    SessionRecorder,
+    recorded_docking_frame,
+    session_metadata,
+)
+from control.columns import LAYOUT, LogRows
+from control.simulation import Simulation, SimulationDiverged, steady_current
+from missions import schema
+from missions.driver import MissionDriver
+from missions.setup import build_simulation
+from sim import params as params_mod
+
+FloatArray = NDArray[np.float64]
+LABEL = re.compile(r"^[A-Za-z0-9._-]{0,60}$")
+RECORD_FLUSH_ROWS = 50
+"""Rows gathered before they are handed to the recorder (0.5 s of plant steps)."""
+
+
+@dataclass
+class PreparedRun:
+    """A simulation built away from the loop task (building takes a few tenths of a second),
+    ready to be swapped in between two ticks."""
+
+    mission: schema.Mission
+    sim: Simulation
+    run_legs: bool
+    """True: run the mission's legs; False: only its set-up, holding station."""
+
+
+def station_keeping_mission(params: str, depth_m: float) -> schema.Mission:
+    """A set-up with nothing to do: the console's start when no mission is given."""
+    return schema.parse_mission({
+        "format_version": 1, "name": "station keeping",
+        "description": "hold the tree where it hangs",
+        "setup": {"params": params, "depth_m": depth_m},
+        "legs": [{"type": "hold", "duration_s": 1.0}]}, "<console>")
+
+
+def prepare_run(mission: schema.Mission, run_legs: bool = True) -> PreparedRun:
+    """Build the simulation for a mission's set-up (call off the loop task)."""
+    return PreparedRun(mission, build_simulation(mission), run_legs)
+
+
+class Session:
+    """The live simulation with its mission, alarms, recorder and replay."""
+
+    def __init__(self, run: PreparedRun, recordings_dir: Path) -> None:
+        self.recordings_dir = recordings_dir
+        self._scene_version = 0
+        self._workers = ThreadPoolExecutor(max_workers=1, thread_name_prefix="console-score")
+        self.recorder: SessionRecorder | None = None
+        self.recording_name: str | None = None
+        self._recording_label = ""
+        self._rec_rows: list[FloatArray] = []
+        self.replay: Replay | None = None
+        self._trend_cache = frozen_copy(np.zeros((0, 7)))
+        self._trend_wall = 0.0
+        self._install(run)
+
+    # ------------------------------------------------------------------ set-up
+    def _install(self, run: PreparedRun) -> None:
+        self.sim = run.sim
+        self.mission = run.mission
+        self.driver = MissionDriver(run.mission, run.sim) if run.run_legs else None
+        self._result: Future | None = None
+        name = run.mission.name if run.run_legs else None
+        self.mission_status = MissionStatus(name=name, state="running" if run.run_legs else
+                                            "idle", legs_total=len(run.mission.legs)
+                                            if run.run_legs else 0)
+        sim = self.sim
+        frame = sim.docking_frame or default_docking_frame(
+            sim.ps, sim.crane_tip_n[0:2], float(sim.tree_eta_n[5]), float(sim.tree_eta_n[2]))
+        self._scene_version += 1
+        self.scene = scene_info(sim.ps, frame, self._scene_version)
+        self.monitor = AlarmMonitor(AlarmLimits.for_params(sim.ps), self.scene.n_thrusters,
+                                    self.scene.tree_weight_n,
+                                    uses_sensors=sim.settings.feedback == "ekf")
+        self.trend = TrendBuffer(sim.dt_s)
+        self.last_row = sim.present_row()
+        self.tension_n: float | None = sim.wire_tension_newton()
+        self.error: str | None = None
+        self.notices: tuple[str, ...] = ()
+
+    def replace_run(self, run: PreparedRun) -> None:
+        """Swap in a new simulation; a recording in progress goes on in a new file (the log's
+        time starts again at zero)."""
+        self.close_replay()
+        if self._mission_running:
+            self._finish_mission("aborted")
+        label = self._recording_label
+        was_recording = self.recorder is not None
+        if was_recording:
+            self.stop_recording()
+        self._install(run)
+        if was_recording:
+            self.start_recording(label)
+
+    # ------------------------------------------------------------------ stepping
+    @property
+    def _mission_running(self) -> bool:
+        return self.driver is not None and self.mission_status.state == "running"
+
+    def advance(self, n_steps: int) -> None:
+        """Advance the replay, or the live simulation (and its mission), by ``n_steps``."""
+        if self.replay is not None:
+            self.replay.advance(n_steps)
+            return
+        if self.error is not None or n_steps <= 0:
+            return
+        remaining = int(n_steps)
+        if self._mission_running:
+            assert self.driver is not None
+            rows = self.driver.advance(remaining)
+            self._follow_leg()
+            if len(rows):
+                self._take_rows(rows)
+            if self.driver.diverged:
+                self._diverged(self.driver.divergence)
+                return
+            if not self.driver.done:
+                return
+            self._finish_mission("completed")
+            remaining -= len(rows)
+            if remaining <= 0:
+                return
+        try:
+            rows = self.sim.step(remaining)
+        except SimulationDiverged as err:
+            self._diverged(str(err))
+            return
+        self._take_rows(rows)
+
+    def _follow_leg(self) -> None:
+        """Show the running leg (and note when a new one starts)."""
+        assert self.driver is not None
+        leg = self.driver.current_leg
+        status = self.mission_status
+        index = self.driver.leg_index + 1
+        if leg is not None and status.leg_index != index:
+            self.mission_status = MissionStatus(status.name, "running", index,
+                                                status.legs_total, leg.type, leg.name or None)
+            self.note("mission", f"leg {index} ({leg.type}) started",
+                      {"leg": index, "type": leg.type})
+
+    def _finish_mission(self, state: str) -> None:
+        driver = self.driver
+        if driver is None:
+            return
+        if state == "aborted":
+            driver.abort()
+        s = self.mission_status
+        self.mission_status = MissionStatus(s.name, state, s.leg_index, s.legs_total,
+                                            s.leg_type, s.leg_name)
+        self._result = self._workers.submit(lambda: driver.result().summary())
+        self.note("mission", f"mission {s.name} {state}", {"state": state})
+
+    def _diverged(self, message: str) -> None:
+        self.error = f"simulation diverged: {message}; reset to go on"
+        if self._mission_running:
+            self._finish_mission("diverged")
+        self.note("error", self.error, {})
+
+    def _follow_docking_frame(self) -> None:
+        """A mission leg may place (or move) the docking frame: redraw the site then."""
+        frame = self.sim.docking_frame
+        if frame is not None and frame is not self.scene.frame:
+            self._scene_version += 1
+            self.scene = replace(self.scene, frame=frame, version=self._scene_version)
+
+    def _take_rows(self, rows: LogRows) -> None:
+        self._follow_docking_frame()
+        self.last_row = rows.last()
+        self.trend.extend(rows)
+        self.tension_n = self.sim.wire_tension_newton()
+        before = {a.name: a.active for a in self.monitor.state}
+        for alarm in self.monitor.update(rows, self.tension_n):
+            if alarm.active != before.get(alarm.name):
+                self.note("alarm", f"{alarm.name} {'on' if alarm.active else 'off'}"
+                          f"{': ' + alarm.message if alarm.message else ''}",
+                          {"name": alarm.name, "active": alarm.active})
+        if self.recorder is not None:
+            self._rec_rows.append(rows.data)
+            if sum(len(r) for r in self._rec_rows) >= RECORD_FLUSH_ROWS:
+                self.flush_recording()
+
+    # ------------------------------------------------------------------ commands
+    def require_live(self, what: str) -> None:
+        if self.replay is not None:
+            raise ConsoleError(f"{what}: a replay is open; close it first")
+
+    def require_no_mission(self, what: str) -> None:
+        if self._mission_running:
+            raise ConsoleError(f"{what}: mission {self.mission_status.name!r} is running; "
+                               f"abort it first")
+
+    def abort_mission(self) -> None:
+        if not self._mission_running:
+            raise ConsoleError("no mission is running")
+        self._finish_mission("aborted")
+
+    def set_current(self, speed_mps: float, direction_deg: float) -> None:
+        """A steady current (no random walk) [m/s, towards deg]."""
+        self.sim.set_current(steady_current(speed_mps, math.radians(direction_deg)))
+
+    def move_vessel(self, north_m: float, east_m: float, speed_mps: float) -> None:
+        tip = self.sim.crane_tip_n
+        self.sim.move_vessel(np.array([north_m, east_m, tip[2]]), speed_mps)
+
+    # ------------------------------------------------------------------ recording
+    def note(self, kind: str, text: str, data: dict) -> None:
+        """An event in the recording (commands, alarms, mission progress)."""
+        if self.recorder is None:
+            return
+        self.flush_recording()
+        try:
+            self.recorder.event(self.sim.t_s, kind, text, data)
+        except Exception as err:
+            self._recording_failed(err)
+
+    def start_recording(self, label: str = "") -> str:
+        self.require_live("record")
+        if self.recorder is not None:
+            raise ConsoleError(f"already recording to {self.recording_name}")
+        if not LABEL.match(label):
+            raise ConsoleError(f"label may hold letters, digits, '.', '_' and '-' (at most 60), "
+                               f"got {label!r}")
+        self.recordings_dir.mkdir(parents=True, exist_ok=True)
+        stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
+        base = f"{stamp}-{label or self.mission.name.replace(' ', '-')}"
+        base = re.sub(r"[^A-Za-z0-9._-]", "-", base)[:100]
+        name = f"{base}.mcap"
+        k = 1
+        while (self.recordings_dir / name).exists():
+            k += 1
+            name = f"{base}-{k}.mcap"
+        metadata = session_metadata(self.sim, self.mission, label=label,
+                                    docking=self.scene.frame)
+        self.recorder = SessionRecorder(recording_path(self.recordings_dir, name),
+                                        metadata=metadata, params=self.sim.ps,
+                                        n_thrusters=self.scene.n_thrusters)
+        self.recording_name = name
+        self._recording_label = label
+        self._rec_rows = []
+        return name
+
+    def flush_recording(self) -> None:
+        if self.recorder is None or not self._rec_rows:
+            return
+        rows = np.vstack(self._rec_rows)
+        self._rec_rows = []
+        try:
+            self.recorder.write_log(rows, crane_tip_n=self.sim.crane_tip_n.copy(),
+                                    wire_length_m=float(self.sim.wire_length_m),
+                                    docking=self.scene.frame)
+        except Exception as err:
+            self._recording_failed(err)
+
+    def _recording_failed(self, err: Exception) -> None:
+        self.notices = (*self.notices[-4:], f"recording stopped: {err}")
+        recorder, self.recorder = self.recorder, None
+        self.recording_name = None
+        try:
+            if recorder is not None:
+                recorder.close()
+        except Exception:
+            pass
+
+    def stop_recording(self) -> str:
+        if self.recorder is None:
+            raise ConsoleError("not recording")
+        self.flush_recording()
+        name = self.recording_name or ""
+        recorder, self.recorder, self.recording_name = self.recorder, None, None
+        if recorder is not None:
+            recorder.close()
+        return name
+
+    # ------------------------------------------------------------------ replay
+    def open_replay(self, name: str, data: SessionData) -> ReplayStatus:
+        """Show a loaded recording (``load_replay``) instead of the live run."""
+        if name == self.recording_name:
+            raise ConsoleError(f"{name} is being recorded; stop the recording first")
+        self.replay = Replay(name, data, self._replay_scene(data), self.sim.dt_s)
+        return self.replay.status()
+
+    def _replay_scene(self, data: SessionData) -> SceneInfo:
+        """The scene of the recorded parameter set (the live one if it cannot be rebuilt)."""
+        meta = data.metadata or {}
+        try:
+            ps = params_mod.build(params_mod.parse_spec(meta["params"], "<recording>"))
+        except (KeyError, TypeError, ValueError):
+            return self.scene
+        frame = recorded_docking_frame(meta)
+        if frame is None:
+            first = np.asarray(data.rows, float)[0]
+            tree = LAYOUT.take(first, "tree_eta_n")
+            frame = default_docking_frame(ps, tree[0:2], float(tree[5]), float(tree[2]))
+        self._scene_version += 1
+        return scene_info(ps, frame, self._scene_version)
+
+    def close_replay(self) -> None:
+        if self.replay is not None:
+            self.replay = None
+            self._scene_version += 1
+            self.scene = replace(self.scene, version=self._scene_version)
+
+    def require_replay(self) -> Replay:
+        if self.replay is None:
+            raise ConsoleError("no replay is open")
+        return self.replay
+
+    # ------------------------------------------------------------------ reading
+    def _mission_result(self) -> MissionStatus:
+        if self._result is not None and self._result.done():
+            s = self.mission_status
+            try:
+                result = self._result.result()
+            except Exception as err:
+                result = {"error": str(err)}
+            self.mission_status = MissionStatus(s.name, s.state, s.leg_index, s.legs_total,
+                                                s.leg_type, s.leg_name, result)
+            self._result = None
+        return self.mission_status
+
+    def _trend(self) -> FloatArray:
+        now = time.monotonic()
+        if now - self._trend_wall > 0.1:
+            self._trend_cache = self.trend.view()
+            self._trend_wall = now
+        return self._trend_cache
+
+    def snapshot(self, seq: int, paused: bool, speed: float, stats: LoopStats) -> Snapshot:
+        """The state as of now (see ``Snapshot``)."""
+        if self.replay is not None:
+            return self._replay_snapshot(seq, paused, speed, stats)
+        sim = self.sim
+        v: RowView = row_view(self.last_row, self.scene.n_thrusters)
+        return Snapshot(
+            seq=seq, source="live", t_s=v.t_s, paused=paused, speed=speed,
+            tree_eta_n=v.tree_eta_n, rov_eta_n=v.rov_eta_n, eta_ref=v.eta_ref,
+            eta_hat=v.eta_hat, thruster_utilisation=v.utilisation, thruster_force_n=v.force_n,
+            mode=v.mode, allocation=sim.settings.allocation, grip=bool(sim.gripping),
+            gains=sim.gains, crane_tip_n=tuple(float(c) for c in sim.crane_tip_n),  # type: ignore[arg-type]
+            wire_length_m=float(sim.wire_length_m), wire_tension_n=self.tension_n,
+            current_speed_mps=sim.current_speed_mps,
+            current_direction_rad=sim.current_direction_rad,
+            wire_drag_n_per_m=float(sim.ps.wire.drag_per_length(sim.current_speed_mps)),
+            mission=self._mission_result(), alarms=self.monitor.state,
+            recording=self.recording_name, replay=None, scene=self.scene, stats=stats,
+            warnings=(*sim.startup.warnings, *self.notices), error=self.error,
+            trend=self._trend())
+
+    def _replay_snapshot(self, seq: int, paused: bool, speed: float,
+                         stats: LoopStats) -> Snapshot:
+        rp = self.replay
+        assert rp is not None
+        v = row_view(rp.row(), rp.scene.n_thrusters)
+        crane_tip_n, wire_length_m, tension_n = rp.site()
+        return Snapshot(
+            seq=seq, source="replay", t_s=v.t_s, paused=not rp.playing, speed=speed,
+            tree_eta_n=v.tree_eta_n, rov_eta_n=v.rov_eta_n, eta_ref=v.eta_ref,
+            eta_hat=v.eta_hat, thruster_utilisation=v.utilisation, thruster_force_n=v.force_n,
+            mode=v.mode, allocation=None, grip=None, gains=None,
+            crane_tip_n=crane_tip_n,
+            wire_length_m=wire_length_m, wire_tension_n=tension_n,
+            current_speed_mps=0.0, current_direction_rad=0.0, wire_drag_n_per_m=0.0,
+            mission=MissionStatus(name=rp.mission, state="replay"),
+            alarms=rp.monitor.state, recording=self.recording_name, replay=rp.status(),
+            scene=rp.scene, stats=stats, trend=rp.trend())
+
+    def close(self) -> None:
+        """Close the recording and the scoring worker (at shutdown)."""
+        if self.recorder is not None:
+            try:
+                self.stop_recording()
+            except Exception:
+                self.recorder = None
+        self._workers.shutdown(wait=False, cancel_futures=True)

@@ -1,0 +1,69 @@
+"""``ConsoleSettings``: the options of ``rov-console serve``, checked when made."""
+
+from __future__ import annotations
+
+import ipaddress
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from app.console.commands import SPEED_MAX, SPEED_MIN
+
+
+@dataclass(frozen=True)
+class ConsoleSettings:
+    """Options of ``rov-console serve``."""
+
+    host: str = "127.0.0.1"
+    """Address the HTTP API and the 3D view bind to."""
+    port: int = 8000
+    """HTTP port (API, OpenAPI, telemetry WebSocket)."""
+    viser_port: int = 8080
+    """Port of the 3D view (viser)."""
+    token: str | None = None
+    """Token for actions that change the run; None: one is generated at start."""
+    params: str = "full-scale"
+    """Parameter set when no mission is given."""
+    mission: str | None = None
+    """Library mission (or file) to load and start."""
+    depth_m: float = 400.0
+    """Tree depth when no mission is given [m]."""
+    recordings_dir: Path = Path("recordings")
+    """Where session recordings (MCAP) go."""
+    allow_remote: bool = False
+    """Binding to a non-loopback address must be asked for explicitly."""
+    view: bool = True
+    """Start the 3D view (viser); the API alone for tests."""
+    paused: bool = False
+    """Start paused."""
+    speed: float = 1.0
+    """Start speed (simulated s per wall-clock s)."""
+    announce: bool = False
+    """Print the addresses and the token once serving (the serve command)."""
+
+    def __post_init__(self) -> None:
+        if not is_loopback(self.host) and not self.allow_remote:
+            raise ValueError(f"host {self.host!r} is not a loopback address: binding to it "
+                             f"exposes the console to the network; pass allow_remote "
+                             f"(--allow-remote) to do it on purpose")
+        for name in ("port", "viser_port"):
+            value = getattr(self, name)
+            if not 0 <= value <= 65535:
+                raise ValueError(f"{name} must be in [0, 65535], got {value}")
+        if self.view and self.port == self.viser_port and self.port != 0:
+            raise ValueError(f"port and viser_port must differ, both are {self.port}")
+        if self.token is not None and len(self.token) < 8:
+            raise ValueError("token must have at least 8 characters")
+        if not (math.isfinite(self.speed) and SPEED_MIN <= self.speed <= SPEED_MAX):
+            raise ValueError(f"speed must be in [{SPEED_MIN}, {SPEED_MAX}], got {self.speed}")
+        if not (math.isfinite(self.depth_m) and 5.0 < self.depth_m <= 4000.0):
+            raise ValueError(f"depth_m must be in (5, 4000] m, got {self.depth_m}")
+
+
+def is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False

@@ -1,0 +1,275 @@
+"""Reading a session: ``load_session``, ``check_session`` and ``SessionData``.
+
+The file is scanned record by record; the reader stops at the first record that is cut off or
+damaged and returns everything before it, with ``complete=False`` and where it stopped. Reading
+never changes the file.
+
+The rows are read by block name whatever layout they were recorded in: ``data.log`` is a
+``LogRows`` over the file's own columns (``Layout.from_names``), so ``data.log["tree_eta_n"]``
+works on files written before the log row was declared in ``control.columns`` too.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import struct
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+import zstandard
+from mcap.exceptions import McapError
+from mcap.opcode import Opcode
+from mcap.records import Channel, Chunk, Header, Message, Metadata, Schema, Statistics
+from mcap.stream_reader import StreamReader, breakup_chunk
+from numpy.typing import NDArray
+
+from app.recording.channels import COLUMNS, EVENTS_TOPIC, SESSION_TOPIC, SETUP_RECORD
+from control.columns import M_MAX, Layout, LogRows
+
+FloatArray = NDArray[np.float64]
+
+MCAP_MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
+
+
+@dataclass(frozen=True)
+class SessionData:
+    """A session log as read back (complete or cut off)."""
+
+    metadata: dict
+    """The setup record, decoded."""
+    columns: list[str]
+    """Flat names of the row's columns, as recorded."""
+    t_s: FloatArray
+    """(n,) simulation time of each row [s]."""
+    rows: FloatArray
+    """(n, len(columns)) the rows of ``/session/log``, in the recorded column order."""
+    events: list[dict]
+    complete: bool
+    """Footer present and every record intact."""
+    message_counts: dict[str, int]
+    end_time_s: float
+    """Latest message time [s] (nan when there is none)."""
+    file_bytes: int = 0
+    intact_bytes: int = 0
+    """Bytes of whole, valid records from the start; the rest is cut off or damaged."""
+    problem: str = ""
+    """Why the file is not complete ('' when it is)."""
+
+    @property
+    def n_thrusters(self) -> int:
+        """Thrusters of the recorded ROV (the recorder's metadata; M_MAX when unknown)."""
+        recorder = self.metadata.get("recorder")
+        n = recorder.get("n_thrusters") if isinstance(recorder, dict) else None
+        return int(n) if isinstance(n, int) and 1 <= n <= M_MAX else M_MAX
+
+    @cached_property
+    def log(self) -> LogRows:
+        """The rows read by block name (``log["tree_eta_n"]`` is (n, 6)), laid out as recorded;
+        a block the file does not hold raises KeyError naming the blocks it has."""
+        return LogRows(self.rows, self.n_thrusters, layout=Layout.from_names(self.columns))
+
+
+@dataclass
+class FileScan:
+    """Everything found in the intact part of a file."""
+
+    file_bytes: int
+    intact_bytes: int = 8
+    complete: bool = False
+    problem: str = ""
+    header: Header | None = None
+    schemas: dict[int, Schema] = field(default_factory=dict)
+    channels: dict[int, Channel] = field(default_factory=dict)
+    metadata: dict[str, dict[str, str]] = field(default_factory=dict)
+    messages: dict[str, list[Message]] = field(default_factory=dict)
+    statistics: Statistics | None = None
+
+    def channels_in_order(self) -> list[Channel]:
+        return sorted(self.channels.values(), key=lambda c: c.id)
+
+
+_READ_ERRORS = (McapError, ValueError, struct.error, zstandard.ZstdError, EOFError)
+
+
+def _record_spans(buf: bytes) -> Iterator[tuple[int, int, int]]:
+    """(start, end, opcode) of each whole top-level record after the magic."""
+    pos = len(MCAP_MAGIC)
+    while pos + 9 <= len(buf):
+        opcode = buf[pos]
+        (length,) = struct.unpack_from("<Q", buf, pos + 1)
+        end = pos + 9 + length
+        if end > len(buf):
+            return
+        yield pos, end, opcode
+        pos = end
+
+
+def _parse_record(buf: bytes, start: int, end: int) -> list:
+    """The record at buf[start:end], a chunk broken up into its records (CRC checked)."""
+    reader = StreamReader(io.BytesIO(buf[start:end]), skip_magic=True, emit_chunks=True,
+                          validate_crcs=True)
+    record = next(iter(reader.records))
+    if isinstance(record, Chunk):
+        return breakup_chunk(record, validate_crc=True)
+    return [record]
+
+
+def _take(scan: FileScan, record: object) -> None:
+    if isinstance(record, Header):
+        scan.header = record
+    elif isinstance(record, Schema):
+        scan.schemas[record.id] = record
+    elif isinstance(record, Channel):
+        scan.channels[record.id] = record
+    elif isinstance(record, Metadata):
+        scan.metadata[record.name] = dict(record.metadata)
+    elif isinstance(record, Message):
+        channel = scan.channels.get(record.channel_id)
+        if channel is None:
+            raise ValueError(f"message on unknown channel {record.channel_id}")
+        scan.messages.setdefault(channel.topic, []).append(record)
+    elif isinstance(record, Statistics):
+        scan.statistics = record
+
+
+def _scan_file(path: Path) -> FileScan:
+    """Read every intact record; stop at the first cut-off or damaged one."""
+    try:
+        buf = path.read_bytes()
+    except OSError as err:
+        raise ValueError(f"{path}: cannot read: {err.strerror or err}") from None
+    if buf[:len(MCAP_MAGIC)] != MCAP_MAGIC:
+        what = "empty" if not buf else "does not start with the MCAP magic bytes"
+        raise ValueError(f"{path}: not an MCAP file ({what})")
+    scan = FileScan(file_bytes=len(buf))
+    _scan_records(buf, scan)
+    if scan.header is None:
+        raise ValueError(f"{path}: MCAP file without a readable header record "
+                         f"({len(buf)} bytes): {scan.problem or 'nothing to read'}")
+    return scan
+
+
+def _scan_records(buf: bytes, scan: FileScan) -> None:
+    """Fill ``scan`` from the records of ``buf`` up to the footer or the first bad record."""
+    known = {int(op) for op in Opcode}
+    for start, end, opcode in _record_spans(buf):
+        if opcode not in known:  # a newer writer's record: skipped, as the MCAP spec asks
+            scan.intact_bytes = end
+            continue
+        try:
+            for record in _parse_record(buf, start, end):
+                _take(scan, record)
+        except _READ_ERRORS as err:
+            scan.problem = f"damaged record (opcode {opcode:#04x}) at byte {start}: {err}"
+            return
+        scan.intact_bytes = end
+        if opcode == Opcode.FOOTER:
+            scan.complete = buf[end:] == MCAP_MAGIC
+            if scan.complete:
+                scan.intact_bytes = len(buf)
+            else:
+                scan.problem = f"footer at byte {start} is not followed by the closing magic"
+            return
+    scan.problem = (f"cut off at byte {scan.intact_bytes} of {len(buf)}: no footer "
+                    "(the writer did not finish: killed or still writing)")
+
+
+def _check_statistics(scan: FileScan) -> None:
+    """A complete file's statistics must agree with the messages read."""
+    if not scan.complete or scan.statistics is None:
+        return
+    for cid, n in scan.statistics.channel_message_counts.items():
+        topic = scan.channels[cid].topic if cid in scan.channels else f"#{cid}"
+        if len(scan.messages.get(topic, [])) != n:
+            scan.complete = False
+            scan.problem = (f"statistics say {n} messages on {topic}, "
+                            f"found {len(scan.messages.get(topic, []))}")
+
+
+def _decode_setup(scan: FileScan) -> dict:
+    out = {}
+    for key, text in scan.metadata.get(SETUP_RECORD, {}).items():
+        try:
+            out[key] = json.loads(text)
+        except json.JSONDecodeError:
+            out[key] = text
+    return out
+
+
+def _session_columns(scan: FileScan) -> list[str] | None:
+    for ch in scan.channels.values():
+        if ch.topic == SESSION_TOPIC and "columns" in ch.metadata:
+            return json.loads(ch.metadata["columns"])
+    return None
+
+
+def _rows(messages: list[Message], width: int) -> FloatArray:
+    """(n, width) rows of ``/session/log`` messages (null read as NaN)."""
+    rows = np.empty((len(messages), width))
+    for i, m in enumerate(messages):
+        values = json.loads(m.data)["row"]
+        if len(values) != width:
+            raise ValueError(f"{SESSION_TOPIC} message {i} has {len(values)} values for "
+                             f"{width} columns")
+        rows[i] = [math.nan if v is None else v for v in values]
+    return rows
+
+
+def read_scan(path: str | Path) -> tuple[FileScan, SessionData]:
+    """The raw scan of a file and what it holds (for check_session and export_csv)."""
+    scan = _scan_file(Path(path))
+    _check_statistics(scan)
+    setup = _decode_setup(scan)
+    columns = list(setup.get("columns") or _session_columns(scan) or COLUMNS)
+    layout = Layout.from_names(columns)
+    if not layout.has("t_s"):
+        raise ValueError(f"{path}: the recorded columns have no t_s")
+    rows = _rows(scan.messages.get(SESSION_TOPIC, []), len(columns))
+    events = [json.loads(m.data) for m in scan.messages.get(EVENTS_TOPIC, [])]
+    ends = [m.log_time for msgs in scan.messages.values() for m in msgs]
+    data = SessionData(
+        metadata=setup, columns=columns, t_s=layout.take(rows, "t_s").copy(), rows=rows,
+        events=events, complete=scan.complete,
+        message_counts={t: len(m) for t, m in sorted(scan.messages.items())},
+        end_time_s=max(ends) / 1e9 if ends else math.nan, file_bytes=scan.file_bytes,
+        intact_bytes=scan.intact_bytes, problem=scan.problem)
+    return scan, data
+
+
+def load_session(path: str | Path) -> SessionData:
+    """Read a session log, complete or cut off (up to its last intact record).
+
+    Raises ValueError naming the file when it is not an MCAP file at all."""
+    return read_scan(path)[1]
+
+
+def _channel_report(scan: FileScan, ch: Channel) -> dict:
+    msgs = scan.messages.get(ch.topic, [])
+    schema = scan.schemas.get(ch.schema_id)
+    return {"topic": ch.topic, "schema": schema.name if schema else "",
+            "encoding": ch.message_encoding, "messages": len(msgs),
+            "first_s": min(m.log_time for m in msgs) / 1e9 if msgs else None,
+            "last_s": max(m.log_time for m in msgs) / 1e9 if msgs else None}
+
+
+def check_session(path: str | Path) -> dict:
+    """What a file holds: status, where it stops, channels with counts, time range, metadata.
+
+    Raises ValueError naming the file when it is not an MCAP file at all."""
+    scan, data = read_scan(path)
+    channels = [_channel_report(scan, ch) for ch in scan.channels_in_order()]
+    starts = [c["first_s"] for c in channels if c["first_s"] is not None]
+    return {
+        "file": str(path), "status": "complete" if data.complete else "truncated",
+        "complete": data.complete, "problem": data.problem, "file_bytes": data.file_bytes,
+        "intact_bytes": data.intact_bytes, "writer": scan.header.library if scan.header else "",
+        "time_range_s": [min(starts), data.end_time_s] if starts else None,
+        "rows": len(data.rows), "events": len(data.events),
+        "metadata_records": sorted(scan.metadata),
+        "metadata_keys": sorted(data.metadata), "channels": channels,
+    }

@@ -1,0 +1,544 @@
+"""``Simulation``: the one owner of a running simulation.
+
+It holds everything that changes while a simulation runs: the plant state and the held sensor
+values, the environment (current, waves, the vessel's crane tip, the winch, the docking frame),
+and, with control on, the control system's state (observer, reference, controller, signal
+checks) with its compiled configuration. It steps all of it and takes every command through
+its own methods; nothing outside writes its arrays.
+
+    sim = Simulation(ps, tree_depth_m=400.0)     # closed loop (chapter 3 on chapter 2)
+    rows = sim.step(100)                          # LogRows: rows["tree_eta_n"] ...
+    sim.set_target(1.0, 1.0, math.radians(90))
+    rows = sim.run_for(60.0)                      # a whole number of steps, or ValueError
+
+With ``control=False`` it is the open-loop plant of ``rov-console simulate``: the thrusters
+turn at ``set_thruster_speeds`` and the control columns of the rows stay zero.
+
+Stepping goes in chunks of at most ``chunk_steps``: ``_chunk_inputs`` makes the environment and
+sensor noise for a chunk (the place where injected faults will change what the plant and the
+sensors see), then one compiled kernel advances the chunk (``control.loop``). Commands are
+applied between chunks. A state that stops being finite raises ``SimulationDiverged`` naming
+the time and which part went non-finite.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from control import allocation as alloc
+from control import loop, model, quality
+from control.columns import N_LOG, LogRows
+from control.config import (
+    ALLOCATIONS,
+    HEADING_MODES,
+    MODES,
+    Allocation,
+    ControlSettings,
+    Gains,
+    HeadingMode,
+    Mode,
+    control_arrays,
+    system_thruster_config,
+)
+from control.startup import StartupReport, check_mount_vector
+from sim import environment as envmod
+from sim import plant, sensors, site
+from sim import wire as wm
+from sim.docking import DockingFrame
+from sim.gnc import Rzyx, ssa
+from sim.params import ParameterSet
+
+FloatArray = NDArray[np.float64]
+DT_RANGE_S = (1e-4, 0.05)
+"""Plant step sizes accepted [s] (RK4 on the 2.5 Hz gripper mode is stable below 0.18 s)."""
+WIRE_LENGTH_RANGE_M = (1.0, 5000.0)
+WINCH_RATE_MAX_MPS = 2.0
+VESSEL_SPEED_MAX_MPS = 5.0
+HEAVE_FORCE_MAX_NEWTON = 1.0e5
+
+
+class SimulationDiverged(RuntimeError):
+    """The plant state stopped being finite."""
+
+
+def initial_state(ps: ParameterSet, tree_position_n: FloatArray, tree_heading_rad: float = 0.0,
+                  has_rov: bool = True) -> FloatArray:
+    """Tree at rest at the given position and heading, ROV (if any) exactly on its mount."""
+    x = np.zeros(plant.N_STATE)
+    x[0:3] = tree_position_n
+    x[5] = tree_heading_rad
+    R_t = Rzyx(0.0, 0.0, tree_heading_rad)
+    x[12:15] = tree_position_n + R_t @ ps.mount.r_rov_from_tree_tree_m
+    x[17] = tree_heading_rad + ps.mount.psi_rov_from_tree_rad if has_rov else 0.0
+    return x
+
+
+def finite_vector(name: str, value: object, length: int) -> FloatArray:
+    """A command vector of the right length with finite entries, else ValueError naming it."""
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (length,):
+        raise ValueError(f"{name} must have {length} entries, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
+def _in_range(name: str, value: float, lo: float, hi: float, unit: str,
+              lo_open: bool = False) -> float:
+    ok = math.isfinite(value) and (lo < value if lo_open else lo <= value) and value <= hi
+    if not ok:
+        bracket = "(" if lo_open else "["
+        raise ValueError(f"{name} must be in {bracket}{lo:g}, {hi:g}] {unit}, got {value}")
+    return float(value)
+
+
+def steady_current(speed_mps: float, direction_rad: float) -> envmod.CurrentParams:
+    """A current of fixed speed and direction (no random walk)."""
+    return envmod.CurrentParams(speed_mps=speed_mps, direction_rad=direction_rad,
+                                speed_min_mps=speed_mps, speed_max_mps=speed_mps,
+                                direction_min_rad=direction_rad, direction_max_rad=direction_rad)
+
+
+class Simulation:
+    """Plant, environment, sensors and (with ``control``) the control system, stepped together.
+
+    ``ps`` is what the control system is configured with; ``plant_ps`` (default: the same) is
+    the physical truth the plant simulates, for robustness studies."""
+
+    def __init__(self, ps: ParameterSet, *, tree_depth_m: float,
+                 settings: ControlSettings | None = None, control: bool = True,
+                 has_rov: bool = True,
+                 crane_tip_n: FloatArray | tuple[float, ...] = (1.0, 1.0, 0.0),
+                 current: envmod.CurrentParams | None = None,
+                 waves: envmod.WaveParams | None = None, seed: int = 0, dt_s: float = 0.01,
+                 tree_heading_rad: float = 0.0, chunk_steps: int = 100,
+                 plant_ps: ParameterSet | None = None, start_gripping: bool = True) -> None:
+        if not (DT_RANGE_S[0] <= dt_s <= DT_RANGE_S[1]):
+            raise ValueError(f"dt_s must be in [{DT_RANGE_S[0]:g}, {DT_RANGE_S[1]:g}] s, "
+                             f"got {dt_s}")
+        if control and not has_rov:
+            raise ValueError("control needs the ROV (has_rov=True)")
+        if not (isinstance(chunk_steps, int) and chunk_steps >= 1):
+            raise ValueError(f"chunk_steps must be a whole number >= 1, got {chunk_steps}")
+        self.ps = ps
+        self.plant_ps = plant_ps or ps
+        self.dt_s = dt_s
+        self.chunk_steps = chunk_steps
+        self.has_rov = has_rov
+        self.control_on = control
+        self._init_plant(tree_depth_m, crane_tip_n, current, waves, seed, tree_heading_rad,
+                         has_rov and start_gripping)
+        self.settings = settings or ControlSettings()
+        r_cfg = self.settings.r_mount_config_m
+        self.sysm = model.system_model(ps, self.wire_length_m,
+                                       None if r_cfg is None else np.asarray(r_cfg, float))
+        self.gains = self.settings.gains or Gains.of(ps.gains.kp, ps.gains.ki, ps.gains.kd)
+        self.thruster_config = system_thruster_config(ps, self.sysm)
+        self.C = control_arrays(ps, self.sysm, self.settings, self.gains,
+                                self.crane_tip_n[0:2], dt_s)
+        if has_rov and not start_gripping:
+            # the ROV waits free, 3 m further back and 1 m above its mount (a hook-up to come)
+            c, s = math.cos(self.x[5]), math.sin(self.x[5])
+            self.x[12:15] += np.array([-3.0 * c, -3.0 * s, -1.0])
+            self.held_y = sensors.true_outputs(self.x)
+        self.cs = np.zeros(loop.N_CS)
+        self.cs[loop.CS_MODE] = loop.MODE_TREE if start_gripping else loop.MODE_FREE
+        self.cs[loop.CS_LAST_MODE] = -1.0  # first step initialises the reference bumplessly
+        self.xhat, self.P_cov = self._initial_estimate()
+        w = quality.WINDOW
+        self.Q = loop.QualityState(np.zeros(sensors.N_Y), -np.ones(5), np.zeros(5, np.int64),
+                                   np.zeros((sensors.N_Y, w)), np.zeros((5, 4), np.int64))
+        eta0 = self.xhat[0:3] if self.settings.feedback == "ekf" else self.x[[0, 1, 5]]
+        self.target = np.array(eta0, float)
+        self.startup = (self.check_mount() if control and start_gripping
+                        else StartupReport(False, 0.0, 0.0))
+
+    def _init_plant(self, tree_depth_m: float, crane_tip_n: FloatArray | tuple[float, ...],
+                    current: envmod.CurrentParams | None, waves: envmod.WaveParams | None,
+                    seed: int, tree_heading_rad: float, gripping: bool) -> None:
+        ps = self.plant_ps
+        self.arrays = plant.plant_arrays(ps, has_rov=self.has_rov)
+        self.rng = np.random.default_rng(seed)
+        self.current_params = current or steady_current(0.0, 0.0)
+        self.current_state = envmod.initial_current(self.current_params)
+        self.wave_field = envmod.make_wave_field(waves, self.rng) if waves is not None else None
+        self.crane_tip_n = finite_vector("crane_tip_n", crane_tip_n, 3)
+        self.wire_length_m = site.wire_length_for_depth(
+            ps, tree_depth_m, self.crane_tip_n[2], self.current_state.speed_mps)
+        self.sensor_cfg = sensors.sensor_config(ps.sensors, self.dt_s)
+        self.thruster_speeds_rps = np.zeros(ps.rov.thrusters.T.shape[1])
+        self.push_newton = np.zeros(3)
+        self.gripping = gripping
+        self.crane_target_n = self.crane_tip_n.copy()
+        self.crane_speed_mps = 0.0
+        self.wire_target_m = self.wire_length_m
+        self.wire_rate_mps = 0.0
+        self.docking_frame: DockingFrame | None = None
+        tree_pos = np.array([self.crane_tip_n[0], self.crane_tip_n[1], tree_depth_m])
+        self.x = initial_state(ps, tree_pos, tree_heading_rad, self.has_rov)
+        self.held_y = sensors.true_outputs(self.x)
+        self.step_index = 0
+
+    def _initial_estimate(self) -> tuple[FloatArray, FloatArray]:
+        """EKF start: the first measurements moved to the tree origin, at rest, no bias."""
+        y = self.held_y
+        ne, psi, _, _ = loop.tree_measurements(y, y[4] - self.C.psi_rel, self.C)
+        x0 = np.zeros(9)
+        x0[0:2] = ne
+        x0[2] = psi
+        p0 = np.diag([1.0, 1.0, 0.01, 0.01, 0.01, 1e-4,
+                      *(np.asarray(self.ps.spec.observer.process_force_std) ** 2)])
+        return x0, p0
+
+    # ------------------------------------------------------------------ what it is now
+    @property
+    def t_s(self) -> float:
+        return self.step_index * self.dt_s
+
+    @property
+    def n_thrusters(self) -> int:
+        return int(self.ps.rov.thrusters.T.shape[1])
+
+    @property
+    def tree_eta_n(self) -> FloatArray:
+        """True tree pose [north, east, down, roll, pitch, yaw] (a copy)."""
+        return self.x[0:6].copy()
+
+    @property
+    def rov_eta_n(self) -> FloatArray:
+        """True ROV pose (a copy)."""
+        return self.x[12:18].copy()
+
+    @property
+    def plant_state(self) -> FloatArray:
+        """The 24-number plant state (a copy; see sim.plant)."""
+        return self.x.copy()
+
+    @property
+    def eta_estimate(self) -> FloatArray:
+        """What the controller believes: tree [north, east, psi]."""
+        if self.settings.feedback == "ekf":
+            return self.xhat[0:3].copy()
+        return self.x[[0, 1, 5]].copy()
+
+    @property
+    def reference(self) -> FloatArray:
+        """The reference model's state: pose (3), rate (3), acceleration (3) [NED, m, rad]."""
+        return self.cs[loop.CS_REF:loop.CS_REF + 9].copy()
+
+    @property
+    def mode(self) -> Mode:
+        return MODES[int(self.cs[loop.CS_MODE])]
+
+    @property
+    def quality_counters(self) -> NDArray[np.int64]:
+        """Signal-check counters: 5 sensors x (range, wild point, frozen, variance)."""
+        return self.Q.counters.copy()
+
+    @property
+    def winch_idle(self) -> bool:
+        """The winch has reached its commanded payout."""
+        return abs(self.wire_length_m - self.wire_target_m) < 1e-6
+
+    def vessel_at(self, target_n: FloatArray, tol_m: float = 1e-6) -> bool:
+        return bool(np.linalg.norm(self.crane_tip_n - np.asarray(target_n, float)) <= tol_m)
+
+    @property
+    def current_speed_mps(self) -> float:
+        return float(self.current_state.speed_mps)
+
+    @property
+    def current_direction_rad(self) -> float:
+        return float(self.current_state.direction_rad)
+
+    def wire_length_for_depth(self, tree_depth_m: float) -> float:
+        """Unstretched payout that hangs the tree's centre at ``tree_depth_m`` in the present
+        current (the plant's wire and tree)."""
+        return site.wire_length_for_depth(self.plant_ps, tree_depth_m, self.crane_tip_n[2],
+                                          self.current_state.speed_mps)
+
+    def wire_tension_newton(self) -> float:
+        """Present wire tension at the tree [N]."""
+        env = site.wire_environment(self.plant_ps, self.wire_length_m, self.crane_tip_n,
+                                    self.current_state.speed_mps,
+                                    self.current_state.direction_rad)
+        R_t = Rzyx(*self.x[3:6])
+        p_att = self.x[0:3] + R_t @ self.arrays.tree_r_att
+        return float(np.linalg.norm(plant.wire_force_n(p_att, env, self.arrays.tree_W0)))
+
+    def mount_pose_n(self) -> FloatArray:
+        """Where the ROV's origin belongs on the tree now: [north, east, down, psi] (truth of
+        the tree's pose, as the pilot sees it on the camera, and the configured r)."""
+        x = self.x
+        c, s = math.cos(x[5]), math.sin(x[5])
+        r = self.sysm.r_rov_from_tree_tree_m
+        return np.array([x[0] + c * r[0] - s * r[1], x[1] + s * r[0] + c * r[1], x[2] + r[2],
+                         x[5] + self.sysm.psi_rov_from_tree_rad])
+
+    def check_mount(self) -> StartupReport:
+        """The start-up check of the mount vector against the measured geometry."""
+        return check_mount_vector(self.held_y, self.sysm.r_rov_from_tree_tree_m,
+                                  self.crane_tip_n, self.wire_length_m, self.ps,
+                                  self.current_state.speed_mps)
+
+    def present_row(self) -> FloatArray:
+        """A log row for the present state (before the next step): time, plant, reference,
+        estimate, mode and site."""
+        row = np.zeros(N_LOG)
+        env = site.wire_environment(self.plant_ps, self.wire_length_m, self.crane_tip_n,
+                                    self.current_state.speed_mps,
+                                    self.current_state.direction_rad)
+        env[plant.E_LREST] = self.wire_length_m + site.self_weight_stretch(self.plant_ps,
+                                                                           self.wire_length_m)
+        loop.write_plant_row(row, self.t_s, self.x, self.held_y, env, self.arrays)
+        rows = LogRows(row[None, :])
+        rows["eta_ref_n"][0] = self.target
+        rows["eta_hat_n"][0] = self.eta_estimate
+        rows["mode"][0] = self.cs[loop.CS_MODE]
+        return row
+
+    # ------------------------------------------------------------------ control commands
+    def set_target(self, north_m: float, east_m: float, psi_rad: float,
+                   heading_mode: HeadingMode = "shortest") -> None:
+        """Where the tree should go. ``shortest``: the heading target is reached the short way
+        round from the present reference; ``absolute``: ``psi_rad`` is taken as it stands,
+        unwrapped, so +2 pi from 0 is a full turn."""
+        for name, v in (("north_m", north_m), ("east_m", east_m), ("psi_rad", psi_rad)):
+            if not math.isfinite(v):
+                raise ValueError(f"target {name} must be finite, got {v}")
+        if heading_mode not in HEADING_MODES:
+            raise ValueError(f"heading_mode must be one of {', '.join(HEADING_MODES)}, "
+                             f"got {heading_mode!r}")
+        psi_ref = self.cs[loop.CS_REF + 2] if self.cs[loop.CS_LAST_MODE] >= 0 else \
+            self.eta_estimate[2]
+        psi = psi_ref + ssa(psi_rad - psi_ref) if heading_mode == "shortest" else psi_rad
+        self.target = np.array([north_m, east_m, psi])
+
+    def set_gains(self, gains: Gains) -> None:
+        """New tree-controller gains, bumpless: the jump of the P and D terms at this instant
+        is moved into the integral, so the commanded force does not change."""
+        e = self.cs[loop.CS_E:loop.CS_E + 3]
+        de = self.cs[loop.CS_DE:loop.CS_DE + 3]
+        old_pd = -self.C.Kp * e - self.C.Kd * de
+        new_kp, new_kd = np.array(gains.kp), np.array(gains.kd)
+        new_pd = -new_kp * e - new_kd * de
+        self.cs[loop.CS_I:loop.CS_I + 3] += old_pd - new_pd
+        self.gains = gains
+        self.C = self.C._replace(Kp=new_kp, Ki=np.array(gains.ki), Kd=new_kd)
+
+    def set_mode(self, mode: Mode) -> None:
+        """Supervisor switch (section 3.4): tree controller or free-ROV station keeping. The
+        new controller starts from the last commanded thrust (no jump)."""
+        if mode not in MODES:
+            raise ValueError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
+        self.cs[loop.CS_MODE] = loop.MODE_TREE if mode == "tree" else loop.MODE_FREE
+
+    def set_grip(self, gripping: bool) -> None:
+        """Physically grip (True) or release (False) the tree."""
+        if not isinstance(gripping, bool | np.bool_):
+            raise ValueError(f"grip must be true or false, got {gripping!r}")
+        self.gripping = bool(gripping)
+
+    def set_allocation(self, kind: Allocation) -> None:
+        kinds = {"pinv": loop.ALLOC_PINV, "priority": loop.ALLOC_PRIORITY,
+                 "qp": loop.ALLOC_EXTERNAL}
+        if kind not in kinds:
+            raise ValueError(f"allocation must be one of {', '.join(ALLOCATIONS)}, got {kind!r}")
+        self.settings = replace(self.settings, allocation=kind)
+        self.C = self.C._replace(alloc_kind=kinds[kind])
+
+    def set_heave_force(self, force_newton: float) -> None:
+        """Constant heave force of the ROV while on the tree (positive = down) [N]."""
+        f = _in_range("heave force", force_newton, -HEAVE_FORCE_MAX_NEWTON,
+                      HEAVE_FORCE_MAX_NEWTON, "N")
+        self.C = self.C._replace(heave_n=f)
+        self.settings = replace(self.settings, heave_force_n=f)
+
+    def set_free_setpoint(self, north_m: float, east_m: float, down_m: float,
+                          psi_rad: float) -> None:
+        """Where the free-flying ROV should hold station (supervisor's free mode)."""
+        values = finite_vector("free-ROV set point", [north_m, east_m, down_m, psi_rad], 4)
+        self.cs[loop.CS_FSP:loop.CS_FSP + 4] = values
+
+    def reset_observer(self) -> None:
+        """Restart the EKF from the present measurements (after hook-up)."""
+        self.xhat, self.P_cov = self._initial_estimate()
+
+    # ------------------------------------------------------------------ plant commands
+    def set_thruster_speeds(self, n_rps: FloatArray) -> None:
+        """Propeller speeds while control is off [rev/s]."""
+        self.thruster_speeds_rps = finite_vector(
+            "thruster speed command [rev/s]", n_rps, self.thruster_speeds_rps.shape[0])
+
+    def set_push(self, force_newton: FloatArray) -> None:
+        """A steady external force on the tree's centre, NED [N]."""
+        self.push_newton = finite_vector("push force [N]", force_newton, 3)
+
+    def winch_to(self, length_m: float, rate_mps: float) -> None:
+        """Pay out (or haul in) the wire smoothly to ``length_m`` at ``rate_mps``."""
+        length = _in_range("wire length", length_m, *WIRE_LENGTH_RANGE_M, "m")
+        rate = _in_range("winch rate", rate_mps, 0.0, WINCH_RATE_MAX_MPS, "m/s", lo_open=True)
+        self.wire_target_m = length
+        self.wire_rate_mps = rate
+
+    def move_vessel(self, target_n: FloatArray, speed_mps: float) -> None:
+        """Move the vessel (the crane tip) smoothly to ``target_n`` at ``speed_mps``."""
+        target = finite_vector("crane tip target", target_n, 3)
+        speed = _in_range("vessel speed", speed_mps, 0.0, VESSEL_SPEED_MAX_MPS, "m/s",
+                          lo_open=True)
+        self.crane_target_n = target
+        self.crane_speed_mps = speed
+
+    def set_current(self, params: envmod.CurrentParams) -> None:
+        """A new current (and its random walk), starting from its nominal speed and
+        direction."""
+        self.current_params = params
+        self.current_state = envmod.initial_current(params)
+
+    def set_docking_frame(self, frame: DockingFrame | None) -> None:
+        """Put a docking frame (and the seabed) under the tree, or take it away."""
+        self.docking_frame = frame
+
+    # ------------------------------------------------------------------ stepping
+    def steps_in(self, duration_s: float) -> int:
+        """The number of plant steps in ``duration_s``; ValueError unless it is a finite,
+        non-negative, whole number of steps (to 1e-9 of a step)."""
+        if not (math.isfinite(duration_s) and duration_s >= 0.0):
+            raise ValueError(f"duration must be a finite number of seconds >= 0, got {duration_s}")
+        steps = duration_s / self.dt_s
+        n = round(steps)
+        if abs(steps - n) > 1e-9 * max(1.0, steps):
+            raise ValueError(f"duration {duration_s:g} s is not a whole number of "
+                             f"{self.dt_s:g} s steps ({steps:.6g} steps)")
+        return int(n)
+
+    def run_for(self, duration_s: float) -> LogRows:
+        """Advance by ``duration_s`` (a whole number of steps) and return its rows."""
+        return self.step(self.steps_in(duration_s))
+
+    def step(self, n: int) -> LogRows:
+        """Advance ``n`` plant steps (commands held) and return their log rows."""
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 0:
+            raise ValueError(f"steps must be a whole number >= 0, got {n!r}")
+        out = np.empty((int(n), N_LOG))
+        done = 0
+        while done < n:
+            k = min(self.chunk_steps, int(n) - done)
+            out[done:done + k] = self._chunk(k)
+            done += k
+        return LogRows(out, self.n_thrusters, self.Q.counters.copy())
+
+    def _sync_site(self) -> None:
+        """The vessel's position and the wire length are known on board: keep the control
+        plant model's wire spring (equilibrium point and stiffness) up to date."""
+        k_h = wm.horizontal_stiffness(self.plant_ps.wire.submerged_weight_per_length(),
+                                      self.ps.tree.submerged_weight_n, self.wire_length_m)
+        if (k_h != self.C.k_h) or np.any(self.C.p_eq != self.crane_tip_n[0:2]):
+            self.C = self.C._replace(k_h=float(k_h), p_eq=self.crane_tip_n[0:2].copy())
+
+    def _chunk_inputs(self, n: int) -> tuple[FloatArray, sensors.NoiseChunk]:
+        """Environment rows and sensor noise for the next n steps. Injected faults (sensor
+        dropouts, biases, winch slip, current surges) change these before the kernel runs."""
+        env = self._environment_chunk(n)
+        noise = sensors.draw_noise(self.sensor_cfg, self.rng, self.step_index, n)
+        return env, noise
+
+    def _chunk(self, n: int) -> FloatArray:
+        if self.control_on:
+            self._sync_site()
+        env, noise = self._chunk_inputs(n)
+        if not self.control_on:
+            x, held, log, ok = loop.run_open_chunk(
+                self.step_index, self.x, self.held_y, self.thruster_speeds_rps, env,
+                noise.noise, noise.fresh, self.arrays, self.dt_s)
+        elif self.C.alloc_kind == loop.ALLOC_EXTERNAL:
+            x, held, self.xhat, self.P_cov, self.cs, log, ok = self._chunk_qp(env, noise)
+        else:
+            x, held, self.xhat, self.P_cov, self.cs, log, ok = loop.run_chunk(
+                self.step_index, self.x, self.held_y, self.xhat, self.P_cov, self.cs,
+                self.target, env, noise.noise, noise.fresh, self.arrays, self.C, self.Q,
+                self.dt_s)
+        if ok < n:
+            self._diverged(x, ok)
+        self.x, self.held_y = x, held
+        self.step_index += n
+        return log
+
+    def _diverged(self, x: FloatArray, ok: int) -> None:
+        parts = {"tree pose": x[0:6], "tree velocity": x[6:12], "ROV pose": x[12:18],
+                 "ROV velocity": x[18:24]}
+        bad = [name for name, v in parts.items() if not np.all(np.isfinite(v))]
+        raise SimulationDiverged(f"plant state not finite at t = "
+                                 f"{(self.step_index + ok + 1) * self.dt_s:.2f} s "
+                                 f"({', '.join(bad) or 'state'})")
+
+    def _chunk_qp(self, env: FloatArray, noise: sensors.NoiseChunk):
+        """The compiled step body with the QP allocation (not compiled) in the middle."""
+        x, held, xhat, pc, cs = self.x, self.held_y, self.xhat, self.P_cov, self.cs
+        n = env.shape[0]
+        log = np.zeros((n, N_LOG))
+        for j in range(n):
+            k = self.step_index + j
+            held = sensors.sample(x, held, noise.noise[j], noise.fresh[j], sensors.Y_SENSOR)
+            tau6, xhat, pc, cs = loop.control_step(k * self.dt_s, x, held, noise.fresh[j],
+                                                   xhat, pc, cs, self.target, self.C, self.Q,
+                                                   self.dt_s, log[j])
+            f = np.asarray(alloc.allocate_qp(self.thruster_config, tau6).force_n)
+            x, xhat, pc = loop.finish_step(x, f, env[j], xhat, pc, self.C, self.arrays,
+                                           self.dt_s, (k + 1) * self.dt_s, held, log[j])
+            if not np.all(np.isfinite(x)):
+                return x, held, xhat, pc, cs, log, j
+        return x, held, xhat, pc, cs, log, n
+
+    # ------------------------------------------------------------------ environment rows
+    def _ramp(self, start: float, target: float, rate: float, n: int) -> FloatArray:
+        """Values after each of n steps moving from start towards target at rate."""
+        steps = np.arange(1, n + 1) * self.dt_s * rate
+        return start + np.sign(target - start) * np.minimum(steps, abs(target - start))
+
+    def _crane_path(self, n: int) -> FloatArray:
+        """(n, 3) crane-tip positions over the next n steps."""
+        delta = self.crane_target_n - self.crane_tip_n
+        dist = float(np.linalg.norm(delta))
+        if dist < 1e-12 or self.crane_speed_mps <= 0.0:
+            return np.repeat(self.crane_tip_n[None, :], n, axis=0)
+        frac = self._ramp(0.0, dist, self.crane_speed_mps, n) / dist
+        return self.crane_tip_n[None, :] + frac[:, None] * delta[None, :]
+
+    def _environment_chunk(self, n: int) -> FloatArray:
+        """(n, N_ENV) environment rows (sim.plant.E_*); advances the current, the winch and
+        the vessel to the end of the chunk."""
+        ps = self.plant_ps
+        self.current_state, speeds, dirs = envmod.advance_current(
+            self.current_state, self.current_params, self.dt_s, n, self.rng)
+        water_n = envmod.current_velocity_n(speeds, dirs)
+        accel_n = np.zeros_like(water_n)
+        if self.wave_field is not None:
+            t = self.t_s + self.dt_s * np.arange(n)
+            v_w, a_w = envmod.wave_kinematics_n(self.wave_field, t, float(self.x[2]),
+                                                float(self.x[0]), float(self.x[1]))
+            water_n = water_n + v_w
+            accel_n = accel_n + a_w
+        base = site.wire_environment(ps, self.wire_length_m, self.crane_tip_n,
+                                     float(np.mean(speeds)), float(np.mean(dirs)))
+        base[plant.E_PUSH:plant.E_PUSH + 3] = self.push_newton
+        base[plant.E_GRIP] = 1.0 if self.gripping else 0.0
+        if self.docking_frame is not None:
+            base[plant.E_FRAME:plant.E_FRAME + 2] = self.docking_frame.center_n
+            base[plant.E_FRAME_PSI] = self.docking_frame.heading_rad
+            base[plant.E_LAND] = self.docking_frame.landing_depth_m
+        env = np.repeat(base[None, :], n, axis=0)
+        env[:, plant.E_VC:plant.E_VC + 3] = water_n
+        env[:, plant.E_AC:plant.E_AC + 3] = accel_n
+        # winch and vessel move smoothly within the chunk
+        lengths = self._ramp(self.wire_length_m, self.wire_target_m, self.wire_rate_mps, n)
+        env[:, plant.E_LREST] = lengths + site.self_weight_stretch(ps, self.wire_length_m)
+        crane = self._crane_path(n)
+        env[:, plant.E_CT:plant.E_CT + 3] = crane
+        self.wire_length_m = float(lengths[-1])
+        self.crane_tip_n = crane[-1].copy()
+        return env

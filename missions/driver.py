@@ -1,0 +1,170 @@
+"""The one mission driver: advances a mission on a ``Simulation`` by a number of plant steps.
+
+The headless runner calls ``advance()`` with no limit (one request of the mission at a time,
+as fast as the machine allows); the console's loop calls ``advance(n)`` with the few steps of
+one tick. Either way the executors see the same thing: each request they yield runs in full,
+its rows are handed back (``MissionContext.last_log``) and the executor is resumed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Generator
+
+import numpy as np
+
+from control.columns import LogRows
+from control.simulation import Simulation, SimulationDiverged
+from missions import schema
+from missions.legs import LEG_EXECUTORS, MissionContext
+from missions.scoring import LegSpan, MissionResult, score
+from missions.setup import charted_frame
+
+
+class MissionDriver:
+    """A mission in progress on a simulation.
+
+    ``advance(max_steps)`` runs up to ``max_steps`` plant steps of the mission (None: to the
+    end of the mission's present request) and returns their rows; ``done`` says when the
+    mission is over; ``abort()`` ends it early; ``result()`` scores what was run."""
+
+    def __init__(self, mission: schema.Mission, sim: Simulation) -> None:
+        self.mission = mission
+        self.sim = sim
+        self.ctx = MissionContext(sim)
+        self.ctx.charted_frame = charted_frame(mission)
+        self.leg_index = -1
+        self.parts: list[LogRows] = []
+        self.rows = 0
+        self.spans: list[LegSpan] = []
+        self.diverged = False
+        self.divergence = ""
+        self.aborted = False
+        self._gen: Generator[float, None, bool] | None = None
+        self._leg_start = 0
+        self._pending = 0
+        """Steps of the present request not yet run."""
+        self._request_parts: list[LogRows] = []
+
+    # ------------------------------------------------------------------ state
+    @property
+    def done(self) -> bool:
+        return self.leg_index >= len(self.mission.legs) or self.aborted or self.diverged
+
+    @property
+    def current_leg(self) -> schema.Leg | None:
+        if 0 <= self.leg_index < len(self.mission.legs):
+            return self.mission.legs[self.leg_index]
+        return None
+
+    @property
+    def events(self) -> list[dict]:
+        return self.ctx.events
+
+    # ------------------------------------------------------------------ legs
+    def _start_leg(self) -> None:
+        self.leg_index += 1
+        self._leg_start = self.rows
+        if self.leg_index < len(self.mission.legs):
+            leg = self.mission.legs[self.leg_index]
+            self.ctx.event("leg", f"leg {self.leg_index + 1}/{len(self.mission.legs)}: "
+                                  f"{leg.type} {leg.name}".strip(), index=self.leg_index + 1,
+                           type=leg.type)
+            deadline = self.sim.t_s + leg.timeout_s
+            self._gen = LEG_EXECUTORS[leg.type](self.ctx, leg, deadline)
+
+    def _end_leg(self, ok: bool) -> None:
+        leg = self.current_leg
+        if leg is None:
+            return
+        self.spans.append(LegSpan(self.leg_index + 1, leg.type, leg.name, leg.score,
+                                  self._leg_start, self.rows, not ok))
+
+    def _next_request(self) -> bool:
+        """Ask the running leg how long to run next (starting legs as they end); False when
+        the mission is over. A request is rounded to the nearest whole number of plant steps
+        (on purpose: legs cut their waits at deadlines that need not fall on a step)."""
+        if self.leg_index < 0:
+            self._start_leg()
+        while not self.done:
+            assert self._gen is not None
+            try:
+                seconds = float(next(self._gen))
+            except StopIteration as stop:
+                self._end_leg(bool(stop.value))
+                self._start_leg()
+                continue
+            self._pending = int(round(seconds / self.sim.dt_s))
+            return True
+        return False
+
+    def _finish_request(self) -> None:
+        """Hand the rows of the request just run to the executor."""
+        data = LogRows.join(self._request_parts, self.sim.n_thrusters)
+        self._request_parts = []
+        if len(self.ctx.last_log):
+            self.ctx.previous_row = self.ctx.last_log.data[-1]
+        self.parts.append(data)
+        self.ctx.last_log = data
+        self.rows += len(data)
+
+    # ------------------------------------------------------------------ stepping
+    def advance(self, max_steps: int | None = None) -> LogRows:
+        """Run the mission for up to ``max_steps`` plant steps (None: the rest of the present
+        request). Returns the rows run. A divergence ends the mission (``diverged``,
+        ``divergence`` says why) and returns the rows before it."""
+        out: list[LogRows] = []
+        budget = max_steps
+        while not self.done and (budget is None or budget > 0):
+            if self._pending == 0 and not self._next_request():
+                break
+            if self._pending == 0:  # a wait cut at a deadline less than half a step away
+                self._finish_request()
+                continue
+            k = self._pending if budget is None else min(budget, self._pending)
+            try:
+                rows = self.sim.step(k)
+            except SimulationDiverged as err:
+                self._mark_diverged(str(err))
+                break
+            out.append(rows)
+            self._request_parts.append(rows)
+            self._pending -= k
+            if self._pending == 0:
+                self._finish_request()
+            if budget is None:
+                break
+            budget -= k
+        return LogRows.join(out, self.sim.n_thrusters)
+
+    def run_to_end(self) -> MissionResult:
+        while not self.done:
+            self.advance()
+        return self.result()
+
+    def _mark_diverged(self, message: str) -> None:
+        if self._request_parts:
+            self._finish_request()
+        self._end_leg(False)
+        self.diverged = True
+        self.divergence = message
+
+    def abort(self) -> None:
+        """End the mission now (the running leg counts as not finished)."""
+        if not self.done:
+            if self._request_parts:
+                self._finish_request()
+            self._end_leg(False)
+        self._pending = 0
+        self.aborted = True
+
+    def result(self) -> MissionResult:
+        data = LogRows.join(self.parts, self.sim.n_thrusters)
+        if not self.parts:
+            data = LogRows(np.zeros((0, data.data.shape[1])), self.sim.n_thrusters,
+                           self.sim.quality_counters)
+        result = score(self.mission.name, data, self.spans, self.sim.dt_s,
+                       float(self.sim.ps.tree.dimensions_m.max()), self.diverged,
+                       list(self.sim.startup.warnings))
+        result.landings = list(self.ctx.landings)
+        result.events = list(self.ctx.events)
+        return result

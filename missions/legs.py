@@ -1,0 +1,327 @@
+"""The leg types of a mission: one executor per type in ``LEG_EXECUTORS`` (a registry, not a
+chain of ifs).
+
+An executor sets targets and commands on the ``Simulation`` through its public methods and
+yields how long to run next, until its end condition (the reference has arrived and the settle
+time has passed, or a fixed duration), never longer than the leg's timeout. To add a leg type:
+a model in ``missions.schema``, an executor here, and its entry in ``LEG_EXECUTORS``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Generator, Iterator
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from control.columns import LAYOUT, LogRows
+from control.config import Gains
+from control.simulation import Simulation
+from missions import schema
+from missions.scoring import LandingResult
+from sim import docking
+from sim.docking import DockingFrame, DockingLayout
+from sim.gnc import ssa
+
+FloatArray = NDArray[np.float64]
+LegRun = Generator[float, None, bool]
+"""A leg in progress: yields seconds to run next, returns whether it finished in time."""
+CHUNK_S = 1.0
+"""How long an executor waiting for a condition runs between checks [s]."""
+ARRIVED_M = 1e-3
+ARRIVED_RAD = math.radians(0.01)
+
+
+class MissionContext:
+    """What an executor works with: the simulation and the present target.
+
+    Executors are generators: they set targets and ``yield`` how many seconds the simulation
+    should run next; the mission driver (``missions.driver``) runs it that long, hands the rows
+    back in ``last_log`` and resumes them. Their return value says whether the leg finished in
+    time. Executors use only the simulation's public methods."""
+
+    def __init__(self, sim: Simulation) -> None:
+        self.sim = sim
+        eta = sim.eta_estimate
+        self.target = np.array([eta[0], eta[1], eta[2]])
+        self.last_log = LogRows.empty(sim.n_thrusters)
+        self.previous_row: FloatArray | None = None
+        self.charted_frame: DockingFrame | None = None
+        self.events: list[dict] = []
+        self.landings: list[LandingResult] = []
+
+    def event(self, kind: str, text: str, **data: object) -> None:
+        """Note something for the log (leg changes, landings, gain changes)."""
+        self.events.append({"t_s": round(self.sim.t_s, 3), "kind": kind, "text": text,
+                            "data": data})
+
+    def set_target(self, north: float, east: float, psi: float) -> None:
+        self.target = np.array([north, east, psi])
+        self.sim.set_target(north, east, psi, heading_mode="absolute")
+
+    def reference_arrived(self) -> bool:
+        ref = self.sim.reference
+        return bool(abs(ref[0] - self.target[0]) < ARRIVED_M and
+                    abs(ref[1] - self.target[1]) < ARRIVED_M and
+                    abs(ref[2] - self.target[2]) < ARRIVED_RAD and
+                    np.all(np.abs(ref[3:5]) < 1e-4) and abs(ref[5]) < 1e-5)
+
+    def wait(self, seconds: float, deadline_s: float) -> Iterator[float]:
+        """Run for ``seconds``, cut at the deadline."""
+        remaining = min(seconds, deadline_s - self.sim.t_s)
+        if remaining > 0:
+            yield remaining
+
+    def run_until(self, done: Callable[[], bool], deadline_s: float) -> LegRun:
+        """Run in chunks until ``done()``; returns False if the deadline came first."""
+        while not done():
+            if self.sim.t_s >= deadline_s:
+                return False
+            yield CHUNK_S
+        return True
+
+    def go_and_settle(self, north: float, east: float, psi: float, settle_s: float,
+                      deadline_s: float) -> LegRun:
+        """Set the target, run until the reference arrives, then settle. Returns False on
+        timeout."""
+        self.set_target(north, east, psi)
+        if not (yield from self.run_until(self.reference_arrived, deadline_s)):
+            return False
+        yield from self.wait(settle_s, deadline_s)
+        return True
+
+
+Executor = Callable[[MissionContext, Any, float], LegRun]
+"""An executor: (context, the leg's model, deadline [s]) -> a leg run."""
+
+
+def _hold(ctx: MissionContext, leg: schema.HoldLeg, deadline: float) -> LegRun:
+    yield from ctx.wait(leg.duration_s, deadline)
+    return leg.duration_s <= leg.timeout_s
+
+
+def _rotate(ctx: MissionContext, leg: schema.RotateLeg, deadline: float) -> LegRun:
+    t = ctx.target
+    return (yield from ctx.go_and_settle(t[0], t[1], t[2] + math.radians(leg.angle_deg),
+                                         leg.settle_s, deadline))
+
+
+def _heading(ctx: MissionContext, heading_deg: float | None) -> float:
+    """A heading from a file, taken the short way from the present target."""
+    psi = ctx.target[2]
+    if heading_deg is None:
+        return psi
+    return psi + ssa(math.radians(heading_deg) - psi)
+
+
+def _move(ctx: MissionContext, leg: schema.MoveLeg, deadline: float) -> LegRun:
+    t = ctx.target
+    n, e = (t[0] + leg.north_m, t[1] + leg.east_m) if leg.relative else (leg.north_m, leg.east_m)
+    return (yield from ctx.go_and_settle(n, e, _heading(ctx, leg.heading_deg), leg.settle_s,
+                                         deadline))
+
+
+def _step(ctx: MissionContext, leg: schema.StepLeg, deadline: float) -> LegRun:
+    t = ctx.target
+    n, e = (t[0] + leg.north_m, t[1] + leg.east_m) if leg.relative else (leg.north_m, leg.east_m)
+    ctx.set_target(n, e, _heading(ctx, leg.heading_deg))
+    yield from ctx.wait(leg.duration_s, deadline)
+    return leg.duration_s <= leg.timeout_s
+
+
+def _corners(side: float, clockwise: bool) -> list[tuple[float, float]]:
+    """Square corners relative to the start: north first, then east (clockwise seen from
+    above in NED) or west."""
+    e = side if clockwise else -side
+    return [(side, 0.0), (side, e), (0.0, e), (0.0, 0.0)]
+
+
+def _square(ctx: MissionContext, leg: schema.SquareLeg, deadline: float) -> LegRun:
+    start = ctx.target.copy()
+    psi = _heading(ctx, leg.heading_deg)
+    for dn, de in _corners(leg.side_m, leg.clockwise):
+        ok = yield from ctx.go_and_settle(start[0] + dn, start[1] + de, psi, leg.settle_s,
+                                          deadline)
+        if not ok:
+            return False
+    return True
+
+
+def _waypoints(ctx: MissionContext, leg: schema.WaypointsLeg, deadline: float) -> LegRun:
+    start = ctx.target.copy()
+    for n, e in leg.points_ne_m:
+        tn, te = (start[0] + n, start[1] + e) if leg.relative else (n, e)
+        ok = yield from ctx.go_and_settle(tn, te, start[2], leg.settle_s, deadline)
+        if not ok:
+            return False
+    return True
+
+
+def _gains(ctx: MissionContext, leg: schema.GainsLeg, deadline: float) -> LegRun:
+    ctx.sim.set_gains(Gains.of(leg.kp, leg.ki, leg.kd))
+    return True
+    yield  # a generator that runs no time
+
+
+def _mode(ctx: MissionContext, leg: schema.ModeLeg, deadline: float) -> LegRun:
+    if leg.grip is not None:
+        ctx.sim.set_grip(leg.grip)
+    ctx.sim.set_mode(leg.mode)
+    return True
+    yield  # a generator that runs no time
+
+
+def _wire(ctx: MissionContext, leg: schema.WireLeg, deadline: float) -> LegRun:
+    sim = ctx.sim
+    sim.winch_to(sim.wire_length_m + leg.change_m, leg.rate_mps)
+    if not (yield from ctx.run_until(lambda: sim.winch_idle, deadline)):
+        return False
+    yield from ctx.wait(leg.settle_s, deadline)
+    return True
+
+
+def _vessel(ctx: MissionContext, leg: schema.VesselLeg, deadline: float) -> LegRun:
+    sim = ctx.sim
+    target = np.array([leg.north_m, leg.east_m, 0.0])
+    if leg.relative:
+        target[0:2] += sim.crane_tip_n[0:2]
+    sim.move_vessel(target, leg.speed_mps)
+    if not (yield from ctx.run_until(lambda: sim.vessel_at(target), deadline)):
+        return False
+    yield from ctx.wait(leg.settle_s, deadline)
+    return True
+
+
+def _heave(ctx: MissionContext, leg: schema.HeaveLeg, deadline: float) -> LegRun:
+    ctx.sim.set_heave_force(leg.force_n)
+    ctx.event("heave", f"heave force {leg.force_n:g} N")
+    return True
+    yield  # a generator that runs no time
+
+
+def _hookup(ctx: MissionContext, leg: schema.HookupLeg, deadline: float) -> LegRun:
+    cl = ctx.sim
+    cl.set_grip(False)
+    cl.set_mode("free")
+    yield 0.01  # the supervisor hands over to the free-ROV controller
+    while True:
+        mount = cl.mount_pose_n()
+        cl.set_free_setpoint(*mount)
+        rov = cl.rov_eta_n
+        miss = float(np.linalg.norm(rov[0:3] - mount[0:3]))
+        if miss <= leg.grip_tolerance_m and abs(ssa(rov[5] - mount[3])) < math.radians(2.0):
+            break
+        if cl.t_s >= deadline:
+            return False
+        yield CHUNK_S
+    cl.set_grip(True)
+    cl.reset_observer()
+    cl.set_mode("tree")
+    report = cl.check_mount()
+    for w in report.warnings:
+        ctx.event("alarm", w)
+    ctx.event("hookup", f"ROV gripped the tree ({miss:.3f} m from the mount)", miss_m=miss)
+    eta = cl.eta_estimate
+    ctx.target = eta.copy()
+    yield from ctx.wait(5.0, deadline)
+    return True
+
+
+def _aligned(cl: Simulation, frame: DockingFrame, layout: DockingLayout,
+             leg: schema.DockLeg) -> bool:
+    """Alignment as the operator sees it (the controller's estimate of the tree's pose)."""
+    eta = cl.eta_estimate
+    pose = np.array([eta[0], eta[1], 0.0, 0.0, 0.0, eta[2]])
+    chk = docking.check_alignment(pose, frame, layout)
+    return chk.miss_m <= leg.align_tolerance_m and abs(chk.heading_error_deg) <= \
+        leg.align_tolerance_deg
+
+
+def _first_contact(rows: LogRows, post_top: float, half_h: float) -> int | None:
+    bottom = rows["tree_eta_n"][:, 2] + half_h
+    hits = np.flatnonzero(bottom >= post_top)
+    return int(hits[0]) if hits.size else None
+
+
+def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
+    cl = ctx.sim
+    frame = ctx.charted_frame  # where the operator believes it is
+    real = cl.docking_frame  # where it is
+    if frame is None or real is None:
+        raise ValueError("a dock leg needs setup.docking_frame")
+    layout = cl.ps.spec.docking.to_numeric()
+    half_h = float(cl.plant_ps.tree.dimensions_m[2]) / 2.0
+    post_top = frame.post_top_depth_m(layout)
+    cl.winch_to(cl.wire_length_for_depth(post_top - leg.hover_m - half_h), 0.1)
+    psi = ctx.target[2] + ssa(frame.heading_rad - ctx.target[2])
+    ok = yield from ctx.go_and_settle(frame.center_n[0], frame.center_n[1], psi, 0.0, deadline)
+    if ok:
+        ok = yield from ctx.run_until(
+            lambda: cl.winch_idle and _aligned(cl, frame, layout, leg), deadline)
+    if not ok:
+        ctx.event("landing", "landing abandoned: not aligned over the frame in time")
+        return False
+    ctx.event("dock", "aligned over the frame: lowering")
+    cl.winch_to(cl.wire_length_for_depth(frame.landing_depth_m - half_h) + 0.3,
+                leg.lower_rate_mps)
+    contact: tuple[int, FloatArray, FloatArray] | None = None
+    while not cl.winch_idle:
+        if cl.t_s >= deadline:
+            return False
+        yield 0.5
+        rows = ctx.last_log
+        k = _first_contact(rows, post_top, half_h) if contact is None else None
+        if k is not None:
+            prev = rows.data[k - 1] if k > 0 else ctx.previous_row
+            row = rows.data[k]
+            contact = (k, row.copy(), (row if prev is None else prev).copy())
+    yield from ctx.wait(leg.settle_s, deadline)
+    result = _landing_result(cl, real, layout, contact)
+    ctx.landings.append(result)
+    verdict = "landed" if result.success else "FAILED landing"
+    ctx.event("landing", f"{verdict}: miss {result.miss_m:.3f} m, heading error "
+                         f"{result.heading_error_deg:.2f} deg, contact speed "
+                         f"{result.contact_speed_mps:.3f} m/s, rests on the {result.rests_on}",
+              **vars(result))
+    return True
+
+
+def _landing_result(cl: Simulation, frame: DockingFrame, layout: DockingLayout,
+                    contact: tuple[int, FloatArray, FloatArray] | None) -> LandingResult:
+    if contact is None:
+        return LandingResult(False, math.inf, math.nan, 0.0, "nothing", cl.t_s)
+    _, row, prev = contact
+    pose = LAYOUT.take(row, "tree_eta_n")
+    chk = docking.check_alignment(pose, frame, layout)
+    speed = float((pose[2] - LAYOUT.take(prev, "tree_eta_n")[2]) / cl.dt_s)
+    bottom = cl.tree_eta_n[2] + float(cl.plant_ps.tree.dimensions_m[2]) / 2.0
+    on_frame = bottom > frame.landing_depth_m - 0.2 * layout.post_height_m
+    success = chk.captured and speed <= layout.max_landing_speed_mps and on_frame
+    return LandingResult(bool(success), chk.miss_m, chk.heading_error_deg, speed,
+                         "frame" if on_frame else "posts", float(LAYOUT.take(row, "t_s")))
+
+
+def _lift(ctx: MissionContext, leg: schema.LiftLeg, deadline: float) -> LegRun:
+    cl = ctx.sim
+    frame = ctx.charted_frame
+    if frame is None:
+        raise ValueError("a lift leg needs setup.docking_frame")
+    layout = cl.ps.spec.docking.to_numeric()
+    half_h = float(cl.plant_ps.tree.dimensions_m[2]) / 2.0
+    post_top = frame.post_top_depth_m(layout)
+    cl.winch_to(cl.wire_length_for_depth(post_top - leg.height_m - half_h), leg.rate_mps)
+    if not (yield from ctx.run_until(lambda: cl.winch_idle, deadline)):
+        return False
+    ctx.event("lift", "tree lifted off the frame")
+    yield from ctx.wait(leg.settle_s, deadline)
+    return True
+
+
+LEG_EXECUTORS: dict[str, Executor] = {
+    "hold": _hold, "wait": _hold, "rotate": _rotate, "move": _move, "step": _step,
+    "square": _square, "waypoints": _waypoints, "gains": _gains, "mode": _mode,
+    "wire": _wire, "vessel": _vessel, "heave": _heave, "hookup": _hookup, "dock": _dock,
+    "lift": _lift,
+}

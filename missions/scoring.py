@@ -1,0 +1,182 @@
+"""The figures of a mission run (thesis chapter 4): per leg and for the scored legs, RMS of
+north, east and heading error against the reference, largest thruster utilisation, time in
+saturation, settling; the landings and the signal-check counters.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from control.columns import LogRows
+from sim.gnc import ssa
+from sim.sensors import SENSOR_NAMES
+
+FloatArray = NDArray[np.float64]
+SATURATED = 0.99
+"""Utilisation at or above which a thruster counts as saturated."""
+QUALITY_CHECKS = ("range", "wild_point", "frozen", "variance")
+
+
+@dataclass(frozen=True)
+class LegResult:
+    """Figures of one leg."""
+
+    index: int
+    type: str
+    name: str
+    start_s: float
+    duration_s: float
+    rms_north_m: float
+    rms_east_m: float
+    rms_heading_deg: float
+    max_utilisation: float
+    saturated_s: float
+    timed_out: bool
+
+
+@dataclass(frozen=True)
+class LandingResult:
+    """One landing on the docking frame (thesis chapter 5)."""
+
+    success: bool
+    miss_m: float
+    """Largest funnel-to-post distance when the funnels reached the post tops [m]."""
+    heading_error_deg: float
+    contact_speed_mps: float
+    """Vertical speed of the tree at that moment [m/s]."""
+    rests_on: str
+    """"frame" (funnels over the posts, down on the landing surface) or "posts"."""
+    t_contact_s: float
+
+
+@dataclass
+class MissionResult:
+    """Figures of a whole mission (the scored legs, or all legs if none is scored)."""
+
+    name: str
+    legs: list[LegResult]
+    rms_north_m: float
+    rms_east_m: float
+    rms_heading_deg: float
+    max_thruster_utilisation: float
+    saturated_time_s: float
+    settling_time_s: float | None
+    final_eta_n: list[float]
+    diverged: bool
+    warnings: list[str]
+    quality_counters: dict[str, dict[str, int]]
+    landings: list[LandingResult] = field(default_factory=list)
+    events: list[dict] = field(default_factory=list)
+    log: LogRows | None = field(default=None, repr=False)
+
+    @property
+    def failed(self) -> bool:
+        """A mission fails when it diverged, a leg timed out or a landing failed."""
+        return (self.diverged or any(leg.timed_out for leg in self.legs) or
+                any(not landing.success for landing in self.landings))
+
+    def summary(self) -> dict:
+        """JSON-ready figures."""
+        return {
+            "name": self.name, "rms_north_m": self.rms_north_m, "rms_east_m": self.rms_east_m,
+            "rms_heading_deg": self.rms_heading_deg,
+            "max_thruster_utilisation": self.max_thruster_utilisation,
+            "saturated_time_s": self.saturated_time_s, "settling_time_s": self.settling_time_s,
+            "final_eta_n": self.final_eta_n, "diverged": self.diverged,
+            "warnings": self.warnings, "quality_counters": self.quality_counters,
+            "legs": [vars(leg) for leg in self.legs],
+            "landings": [vars(landing) for landing in self.landings],
+            "failed": self.failed,
+        }
+
+
+@dataclass(frozen=True)
+class LegSpan:
+    """Rows [start, stop) of the mission's log belong to one leg."""
+
+    index: int
+    type: str
+    name: str
+    score: bool
+    start: int
+    stop: int
+    timed_out: bool
+
+
+def rms(values: FloatArray) -> float:
+    return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
+
+
+def tracking_figures(rows: LogRows, dt_s: float) -> tuple[float, float, float, float, float]:
+    """RMS north, east [m] and heading [deg] error of the true tree against the reference,
+    largest thruster utilisation and time with a thruster saturated [s]."""
+    tree, ref = rows["tree_eta_n"], rows["eta_ref_n"]
+    err_n = tree[:, 0] - ref[:, 0]
+    err_e = tree[:, 1] - ref[:, 1]
+    err_psi = np.array([ssa(v) for v in tree[:, 5] - ref[:, 2]])
+    util = rows["thruster_utilisation"]
+    umax = float(util.max()) if util.size else 0.0
+    sat = float(np.sum(np.any(util >= SATURATED, axis=1)) * dt_s) if util.size else 0.0
+    return rms(err_n), rms(err_e), math.degrees(rms(err_psi)), umax, sat
+
+
+def settling_time(rows: LogRows, dt_s: float, tol_m: float, tol_deg: float) -> float | None:
+    """Time from the last change of the reference until the tree stays within tol of it."""
+    ref = rows["eta_ref_n"]
+    tree = rows["tree_eta_n"]
+    moving = np.any(np.abs(np.diff(ref, axis=0)) > 1e-9, axis=1)
+    last_change = int(np.flatnonzero(moving)[-1]) + 1 if moving.any() else 0
+    err_pos = np.hypot(tree[:, 0] - ref[:, 0], tree[:, 1] - ref[:, 1])
+    err_psi = np.degrees(np.abs([ssa(v) for v in tree[:, 5] - ref[:, 2]]))
+    outside = (err_pos > tol_m) | (err_psi > tol_deg)
+    out_idx = np.flatnonzero(outside[last_change:])
+    if out_idx.size == 0:
+        return 0.0
+    last_out = last_change + int(out_idx[-1])
+    if last_out >= len(outside) - 1:
+        return None
+    return (last_out + 1 - last_change) * dt_s
+
+
+def counters_by_name(counters: NDArray[np.int64]) -> dict[str, dict[str, int]]:
+    """Signal-check counters as {sensor: {check: count}}."""
+    return {name: {check: int(counters[k, j]) for j, check in enumerate(QUALITY_CHECKS)}
+            for k, name in enumerate(SENSOR_NAMES)}
+
+
+def _take(rows: LogRows, start: int, stop: int) -> LogRows:
+    return LogRows(rows.data[start:stop], rows.n_thrusters, rows.quality_counters)
+
+
+def score(name: str, rows: LogRows, spans: list[LegSpan], dt_s: float, tree_size_m: float,
+          diverged: bool, warnings: list[str]) -> MissionResult:
+    """Score a mission's log: each leg, the scored legs together (all legs when none is
+    scored) and the whole run (utilisation, saturation, settling)."""
+    legs = []
+    scored: list[FloatArray] = []
+    for span in spans:
+        part = _take(rows, span.start, span.stop)
+        fig = tracking_figures(part, dt_s)
+        legs.append(LegResult(span.index, span.type, span.name, span.start * dt_s,
+                              (span.stop - span.start) * dt_s, *fig, span.timed_out))
+        if span.score:
+            scored.append(part.data)
+    scored_rows = LogRows(np.vstack(scored), rows.n_thrusters) if scored else rows
+    rms_n, rms_e, rms_psi, _, _ = tracking_figures(scored_rows, dt_s)
+    full = tracking_figures(rows, dt_s)
+    final = rows["tree_eta_n"][-1] if len(rows) else np.zeros(6)
+    final_eta = [float(v) for v in final[:3]] + [math.degrees(ssa(float(v))) for v in final[3:]]
+    tol_m = 0.1 * max(1.0, tree_size_m / 3.6)
+    warnings = list(warnings)
+    if any(leg.timed_out for leg in legs):
+        warnings.append("a leg timed out before its reference arrived: see legs[].timed_out")
+    return MissionResult(
+        name=name, legs=legs, rms_north_m=rms_n, rms_east_m=rms_e,
+        rms_heading_deg=rms_psi, max_thruster_utilisation=full[3], saturated_time_s=full[4],
+        settling_time_s=settling_time(rows, dt_s, tol_m, 2.0) if len(rows) else None,
+        final_eta_n=[round(v, 6) for v in final_eta], diverged=diverged, warnings=warnings,
+        quality_counters=counters_by_name(rows.quality_counters), log=rows)

@@ -1,0 +1,278 @@
+"""The contract of ``control.simulation.Simulation``, the one owner of a running simulation:
+time only in whole plant steps, one log row per step at the step's time, a named error when the
+plant diverges, open-loop rows without control, the same rows from the same seed, and commands
+that are checked before anything changes."""
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from control import loop
+from control.config import ControlSettings
+from control.simulation import Simulation, SimulationDiverged
+from sim import environment as envmod
+from sim import params, sensors
+from tests.helpers import steady_current
+
+MODEL = params.load("model-scale")
+
+CONTROL_BLOCKS = ("eta_hat_n", "nu_hat_tree", "bias_tree", "eta_ref_n", "eta_ref_rate_n",
+                  "tau_tree_cmd", "tau_rov_cmd_b", "tau_rov_ach_b", "thruster_force",
+                  "thruster_utilisation", "control_terms", "mode", "nis", "accepted")
+"""Log blocks the control system writes (nothing else does)."""
+
+
+def open_loop(**kwargs) -> Simulation:
+    return Simulation(MODEL, tree_depth_m=100.0, control=False, **kwargs)
+
+
+def closed_loop(**kwargs) -> Simulation:
+    return Simulation(MODEL, tree_depth_m=100.0, current=steady_current(), **kwargs)
+
+
+# --------------------------------------------------------------------------------------------
+# Time: whole steps, one row per step
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("duration", [0.015, 0.001, 1.0 + 1e-4])
+def test_run_for_refuses_a_duration_that_is_not_whole_steps(duration):
+    sim = open_loop()
+    before = sim.plant_state
+    message = f"duration {duration:g} s is not a whole number of 0.01 s steps"
+    with pytest.raises(ValueError, match=re.escape(message)):
+        sim.run_for(duration)
+    assert sim.t_s == 0.0
+    np.testing.assert_array_equal(sim.plant_state, before)
+
+
+@pytest.mark.parametrize("duration", [-0.01, math.nan, math.inf])
+def test_run_for_refuses_a_duration_that_is_not_a_time(duration):
+    with pytest.raises(ValueError, match="duration must be a finite number of seconds >= 0"):
+        open_loop().run_for(duration)
+
+
+def test_run_for_takes_durations_that_are_whole_steps_up_to_rounding():
+    sim = open_loop()
+    assert len(sim.run_for(0.03)) == 3  # 0.03 / 0.01 = 2.9999999999999996
+    assert len(sim.run_for(0.0)) == 0
+    assert sim.t_s == pytest.approx(0.03)
+
+
+@pytest.mark.parametrize("control", [False, True], ids=["open", "closed"])
+def test_step_returns_one_row_per_step_at_the_step_times(control):
+    sim = open_loop() if not control else closed_loop()
+    first = sim.step(5)
+    assert len(first) == 5
+    np.testing.assert_allclose(first.t_s, 0.01 * np.arange(1, 6), rtol=1e-12)
+    # across chunk boundaries (100 steps a chunk) the rows go on where they stopped
+    more = sim.step(250)
+    np.testing.assert_allclose(more.t_s, 0.01 * np.arange(6, 256), rtol=1e-12)
+    assert sim.t_s == pytest.approx(2.55)
+    # the last row is the state the simulation is in now
+    np.testing.assert_array_equal(more.plant_state()[-1], sim.plant_state)
+    assert len(sim.step(0)) == 0
+
+
+@pytest.mark.parametrize("n", [-1, 1.5, True, "3"])
+def test_step_refuses_what_is_not_a_number_of_steps(n):
+    with pytest.raises(ValueError, match="steps must be a whole number >= 0"):
+        open_loop().step(n)
+
+
+def test_bad_step_size_and_control_without_rov_are_refused():
+    with pytest.raises(ValueError, match=re.escape("dt_s must be in [0.0001, 0.05] s, got 0.2")):
+        Simulation(MODEL, tree_depth_m=100.0, dt_s=0.2)
+    with pytest.raises(ValueError, match=re.escape("control needs the ROV (has_rov=True)")):
+        Simulation(MODEL, tree_depth_m=100.0, has_rov=False)
+
+
+# --------------------------------------------------------------------------------------------
+# Divergence
+# --------------------------------------------------------------------------------------------
+
+
+def test_divergence_raises_a_named_error_with_the_time():
+    """A 1e30 N push: quadratic drag takes the velocity past 1e150 within the first step's
+    RK4 stages, and the second step overflows. The error names that time and what went
+    non-finite; the simulation stays at the last finite state it had (the chunk's start)."""
+    sim = open_loop()
+    sim.run_for(0.5)
+    before = sim.plant_state
+    sim.set_push(np.array([1e30, 0.0, 0.0]))
+    with pytest.raises(SimulationDiverged,
+                       match=r"plant state not finite at t = 0\.52 s \(tree pose, tree velocity"):
+        sim.run_for(1.0)
+    assert sim.t_s == pytest.approx(0.5)
+    np.testing.assert_array_equal(sim.plant_state, before)
+
+
+# --------------------------------------------------------------------------------------------
+# Open loop
+# --------------------------------------------------------------------------------------------
+
+
+def test_open_loop_rows_hold_the_plant_and_no_control():
+    sim = open_loop(current=steady_current())
+    speeds = np.array([10.0, -5.0, 3.0, 0.0, 8.0])
+    sim.set_thruster_speeds(speeds)
+    rows = sim.run_for(3.0)
+    for block in CONTROL_BLOCKS:
+        assert np.all(rows[block] == 0.0), block
+    np.testing.assert_array_equal(rows["thruster_speed"], np.tile(speeds, (len(rows), 1)))
+    np.testing.assert_array_equal(rows.plant_state()[-1], sim.plant_state)
+    np.testing.assert_array_equal(rows["tree_eta_n"][-1], sim.tree_eta_n)
+    np.testing.assert_array_equal(rows["rov_eta_n"][-1], sim.rov_eta_n)
+    assert rows.t_s[-1] == pytest.approx(sim.t_s)
+    # the site columns are the present site
+    np.testing.assert_array_equal(rows["crane_tip_ne"][-1], sim.crane_tip_n[0:2])
+    assert rows["wire_tension"][-1] == pytest.approx(sim.wire_tension_newton(), rel=1e-12)
+    # the thrust moved the pair: the rows are not trivially zero either
+    assert np.ptp(rows["rov_nu_b"][:, 0]) > 0.0
+
+
+def test_plant_state_is_a_copy():
+    sim = open_loop()
+    state = sim.plant_state
+    state[0] += 100.0
+    assert sim.plant_state[0] == pytest.approx(1.0)
+    eta = sim.tree_eta_n
+    eta[5] = 3.0
+    assert sim.tree_eta_n[5] == 0.0
+
+
+# --------------------------------------------------------------------------------------------
+# Determinism
+# --------------------------------------------------------------------------------------------
+
+WAVES = envmod.WaveParams(significant_height_m=8.0, peak_period_s=20.0, direction_rad=0.5)
+WANDERING = envmod.CurrentParams(speed_mps=0.1, direction_rad=1.0, speed_min_mps=0.0,
+                                 speed_max_mps=0.2, direction_min_rad=0.5,
+                                 direction_max_rad=1.5, speed_walk_mps_per_sqrt_s=0.01,
+                                 direction_walk_rad_per_sqrt_s=0.01)
+
+
+def test_same_seed_same_rows_open_loop():
+    def run(seed):
+        sim = Simulation(MODEL, tree_depth_m=100.0, control=False, current=WANDERING,
+                         waves=WAVES, seed=seed)
+        return sim.run_for(30.0)
+
+    a, b, c = run(7), run(7), run(8)
+    np.testing.assert_array_equal(a.data, b.data)
+    assert not np.array_equal(a["y"], c["y"])
+    assert not np.array_equal(a.plant_state(), c.plant_state())  # waves and current differ
+
+
+def test_same_seed_same_rows_closed_loop_with_sensors_and_ekf():
+    def run(seed):
+        sim = Simulation(MODEL, tree_depth_m=100.0, current=WANDERING, seed=seed,
+                         settings=ControlSettings(feedback="ekf"))
+        sim.run_for(5.0)
+        sim.set_target(1.5, 1.0, 0.3)
+        return sim.run_for(20.0)
+
+    a, b, c = run(7), run(7), run(8)
+    np.testing.assert_array_equal(a.data, b.data)
+    np.testing.assert_array_equal(a.quality_counters, b.quality_counters)
+    assert not np.array_equal(a["eta_hat_n"], c["eta_hat_n"])
+
+
+# --------------------------------------------------------------------------------------------
+# Commands are checked before anything changes
+# --------------------------------------------------------------------------------------------
+
+
+def snapshot(sim: Simulation) -> dict[str, object]:
+    """Everything the simulation holds: arrays copied, other values as they are."""
+    return {k: v.copy() if isinstance(v, np.ndarray) else v for k, v in vars(sim).items()}
+
+
+def assert_unchanged(sim: Simulation, before: dict[str, object]) -> None:
+    now = vars(sim)
+    assert now.keys() == before.keys()
+    for key, value in before.items():
+        if isinstance(value, np.ndarray):
+            np.testing.assert_array_equal(now[key], value, err_msg=key)
+        else:
+            assert now[key] is value or now[key] == value, key
+
+
+BAD_COMMANDS = [
+    pytest.param(lambda s: s.set_target(math.nan, 0.0, 0.0),
+                 "target north_m must be finite, got nan", id="target-nan"),
+    pytest.param(lambda s: s.set_target(0.0, 0.0, 0.0, heading_mode="sideways"),
+                 "heading_mode must be one of shortest, absolute, got 'sideways'",
+                 id="heading-mode"),
+    pytest.param(lambda s: s.winch_to(1e9, 0.1),
+                 "wire length must be in [1, 5000] m, got 1000000000.0", id="winch-length"),
+    pytest.param(lambda s: s.winch_to(100.0, 0.0),
+                 "winch rate must be in (0, 2] m/s, got 0.0", id="winch-rate"),
+    pytest.param(lambda s: s.move_vessel(np.array([5.0, 5.0, 0.0]), 50.0),
+                 "vessel speed must be in (0, 5] m/s, got 50.0", id="vessel-speed"),
+    pytest.param(lambda s: s.move_vessel(np.array([5.0, math.inf, 0.0]), 1.0),
+                 "crane tip target must be finite", id="vessel-target"),
+    pytest.param(lambda s: s.set_mode("x"), "mode must be one of tree, free, got 'x'",
+                 id="mode"),
+    pytest.param(lambda s: s.set_grip("yes"), "grip must be true or false, got 'yes'",
+                 id="grip"),
+    pytest.param(lambda s: s.set_allocation("magic"),
+                 "allocation must be one of pinv, priority, qp, got 'magic'", id="allocation"),
+    pytest.param(lambda s: s.set_heave_force(2e5),
+                 "heave force must be in [-100000, 100000] N, got 200000.0", id="heave"),
+    pytest.param(lambda s: s.set_free_setpoint(0.0, 0.0, math.nan, 0.0),
+                 "free-ROV set point must be finite", id="free-setpoint"),
+    pytest.param(lambda s: s.set_thruster_speeds(np.array([1.0, np.nan, 0.0, 0.0, 0.0])),
+                 "thruster speed command [rev/s] must be finite", id="thruster-nan"),
+    pytest.param(lambda s: s.set_thruster_speeds(np.array([1.0, 2.0])),
+                 "thruster speed command [rev/s] must have 5 entries, got shape (2,)",
+                 id="thruster-count"),
+    pytest.param(lambda s: s.set_push(np.array([np.inf, 0.0, 0.0])),
+                 "push force [N] must be finite", id="push"),
+]
+
+
+@pytest.mark.parametrize(("command", "message"), BAD_COMMANDS)
+def test_bad_command_names_field_and_range_and_changes_nothing(command, message):
+    sim = closed_loop()
+    sim.run_for(1.0)
+    before = snapshot(sim)
+    with pytest.raises(ValueError, match=re.escape(message)):
+        command(sim)
+    assert_unchanged(sim, before)
+    # and the simulation goes on as if nothing had been asked
+    rows = sim.run_for(0.1)
+    assert np.all(np.isfinite(rows.plant_state()))
+
+
+def test_good_commands_do_change_the_state():
+    """The counterpart of the test above: the same commands with good values do take effect
+    (so an unchanged state there is the refusal, not a command that never does anything)."""
+    sim = closed_loop()
+    sim.run_for(1.0)
+    sim.set_target(2.0, 1.0, 0.5)
+    np.testing.assert_allclose(sim.target, [2.0, 1.0, 0.5])
+    sim.winch_to(sim.wire_length_m + 1.0, 0.5)
+    assert not sim.winch_idle
+    sim.set_mode("free")
+    assert sim.mode == "free"
+    sim.set_grip(False)
+    assert sim.gripping is False
+    sim.set_heave_force(50.0)
+    assert sim.C.heave_n == 50.0
+    sim.set_allocation("pinv")
+    assert sim.C.alloc_kind == loop.ALLOC_PINV
+    rows = sim.run_for(2.0)
+    assert rows["wire_rest_length"][-1] > rows["wire_rest_length"][0] + 0.9
+    assert np.all(rows["mode"] == loop.MODE_FREE)
+
+
+def test_held_sensor_values_are_the_rows_y():
+    sim = open_loop(seed=2)
+    rows = sim.run_for(1.0)
+    np.testing.assert_array_equal(rows["y"][-1], sim.held_y)
+    # the gyro's values are the present truth plus its noise
+    truth = sensors.true_outputs(sim.plant_state)
+    assert np.abs(rows["y"][-1, 8:11] - truth[8:11]).max() < 5 * MODEL.spec.sensors.gyro.noise_std
