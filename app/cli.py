@@ -119,7 +119,7 @@ def simulation_summary(sim, rows, wall_s: float) -> dict:
         "horizontal_offset_m": round(float(np.hypot(x[0] - sim.crane_tip_n[0],
                                                     x[1] - sim.crane_tip_n[1])), 6),
         "heading_deg": round(math.degrees(ssa(float(x[5]))), 4),
-        "wire_tension_n": round(sim.wire_tension_newton(), 2),
+        "wire_tension_newton": round(sim.wire_tension_newton(), 2),
         "tree_speed_mps": float(speeds[-1]) if len(speeds) else 0.0,
         "settled": settled,
         "steps": len(t_s),

@@ -109,12 +109,12 @@ class ThrusterConfig:
 class AllocationResult:
     """Outcome of one allocation (all arrays read-only)."""
 
-    force_n: FloatArray
+    force_newton: FloatArray
     """(m,) thruster forces [N], inside [-f_max_neg, f_max_pos]."""
     speed_rps: FloatArray
     """(m,) propeller speed commands [rev/s], inside [-n_max, n_max]."""
     tau_achieved: FloatArray
-    """(6,) generalised force T @ force_n on the body [N, N m]."""
+    """(6,) generalised force T @ force_newton on the body [N, N m]."""
     tau_unmet: FloatArray
     """(6,) demanded minus achieved on the allocated DOFs, 0 on the others [N, N m]."""
     utilisation: FloatArray
@@ -191,13 +191,13 @@ def thrust_from_speed(config: ThrusterConfig, speed_rps: ArrayLike) -> FloatArra
     return thrusters.thrust_from_speed(n, config.k_pos, config.k_neg, config.n_max_rps)
 
 
-def speed_from_thrust(config: ThrusterConfig, force_n: ArrayLike) -> FloatArray:
+def speed_from_thrust(config: ThrusterConfig, force_newton: ArrayLike) -> FloatArray:
     """Propeller speeds [rev/s] (m,) giving thruster forces [N] (m,): the inverse of
     ``thrust_from_speed`` (signed square root with the coefficient of the force's sign,
     eq. 3.22), clipped to +-n_max. ``thrust_from_speed(c, speed_from_thrust(c, f)) == f``
     for f inside the force box.
     """
-    f = _checked_vector("force_n", force_n, config.n_thrusters)
+    f = _checked_vector("force_newton", force_newton, config.n_thrusters)
     return thrusters.speed_from_thrust(f, config.k_pos, config.k_neg, config.n_max_rps)
 
 
@@ -242,7 +242,7 @@ def _result(layout: _Layout, force: FloatArray, tau_b: FloatArray) -> Allocation
     achieved = layout.T @ force
     limit = np.where(force >= 0.0, layout.f_hi, -layout.f_lo)
     return AllocationResult(
-        force_n=_frozen(force),
+        force_newton=_frozen(force),
         speed_rps=_frozen(thrusters.speed_from_thrust(force, layout.k_pos, layout.k_neg,
                                                      layout.n_max)),
         tau_achieved=_frozen(achieved),

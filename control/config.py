@@ -81,7 +81,7 @@ class ControlSettings:
     allocation: Allocation = "priority"
     reference: Reference = "third"
     feedforward: bool = False
-    heave_force_n: float = 0.0
+    heave_force_newton: float = 0.0
     """Constant heave force of the ROV while on the tree (sea trial: small, downwards) [N]."""
     gains: Gains | None = None
     """None: the parameter set's gains."""
@@ -94,8 +94,9 @@ class ControlSettings:
             if getattr(self, name) not in allowed:
                 raise ValueError(f"{name} must be one of {', '.join(allowed)}, "
                                  f"got {getattr(self, name)!r}")
-        if not math.isfinite(self.heave_force_n) or abs(self.heave_force_n) > 1e5:
-            raise ValueError(f"heave_force_n must be in [-1e5, 1e5] N, got {self.heave_force_n}")
+        if not math.isfinite(self.heave_force_newton) or abs(self.heave_force_newton) > 1e5:
+            raise ValueError(f"heave_force_newton must be in [-1e5, 1e5] N, "
+                             f"got {self.heave_force_newton}")
 
 
 def _ref_params(ps: ParameterSet, kind: Reference) -> FloatArray:
@@ -168,7 +169,7 @@ def control_arrays(ps: ParameterSet, sysm: model.SystemModel, settings: ControlS
         k_h=float(sysm.k_h), p_eq=np.asarray(p_eq, float).copy(), A=A.copy(),
         A_inv=np.linalg.inv(A), i_limit=0.9 * model.dof_capacity(cfg.T, cfg.f_max_neg,
                                                                       cfg.f_max_pos),
-        heave_n=float(settings.heave_force_n), r_mount=sysm.r_rov_from_tree_tree_m.copy(),
+        heave_newton=float(settings.heave_force_newton), r_mount=sysm.r_rov_from_tree_tree_m.copy(),
         psi_rel=float(sysm.psi_rov_from_tree_rad), alloc_kind=kinds[settings.allocation],
         pinv_T=np.ascontiguousarray(pinv_plan.T_pinv),
         pinv_rows=np.asarray(pinv_plan.layout.dofs, np.int64),

@@ -92,7 +92,7 @@ class ControlArrays(NamedTuple):
     A: np.ndarray
     A_inv: np.ndarray
     i_limit: np.ndarray
-    heave_n: float
+    heave_newton: float
     r_mount: np.ndarray
     psi_rel: float
     alloc_kind: int
@@ -278,10 +278,10 @@ def control_step(t: float, x: np.ndarray, y: np.ndarray, fresh: np.ndarray,
         # allocation works on the tree's origin (see closed_loop.system_thruster_config)
         tau6[0] = tau_tree[0]
         tau6[1] = tau_tree[1]
-        tau6[2] = C.heave_n
+        tau6[2] = C.heave_newton
         tau6[5] = tau_tree[2]
         tau3 = C.A @ tau_tree
-        log_row[L_TAU_ROV:L_TAU_ROV + 6] = np.array([tau3[0], tau3[1], C.heave_n, 0.0, 0.0,
+        log_row[L_TAU_ROV:L_TAU_ROV + 6] = np.array([tau3[0], tau3[1], C.heave_newton, 0.0, 0.0,
                                                      tau3[2]])
         log_row[L_TAU_TREE:L_TAU_TREE + 3] = tau_tree
         for j in range(4):

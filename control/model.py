@@ -75,7 +75,7 @@ def system_model(ps: ParameterSet, wire_length_m: float,
         M=m6[np.ix_(DOF3, DOF3)],
         D_l=ps.tree.D_l[DOF3] + np.diag(d_l_rov)[DOF3],
         D_nl=ps.tree.D_nl[DOF3] + np.diag(d_nl_rov)[DOF3],
-        k_h=wm.horizontal_stiffness(w, ps.tree.submerged_weight_n, wire_length_m),
+        k_h=wm.horizontal_stiffness(w, ps.tree.submerged_weight_newton, wire_length_m),
         rov_to_tree=rov_to_tree,
         tree_to_rov=np.asarray(np.linalg.inv(rov_to_tree), dtype=np.float64),
         r_rov_from_tree_tree_m=r.copy(), psi_rov_from_tree_rad=psi)

@@ -355,8 +355,8 @@ class Simulation:
         """Constant heave force of the ROV while on the tree (positive = down) [N]."""
         f = _in_range("heave force", force_newton, -HEAVE_FORCE_MAX_NEWTON,
                       HEAVE_FORCE_MAX_NEWTON, "N")
-        self.C = self.C._replace(heave_n=f)
-        self.settings = replace(self.settings, heave_force_n=f)
+        self.C = self.C._replace(heave_newton=f)
+        self.settings = replace(self.settings, heave_force_newton=f)
 
     def set_free_setpoint(self, north_m: float, east_m: float, down_m: float,
                           psi_rad: float) -> None:
@@ -436,7 +436,7 @@ class Simulation:
         """The vessel's position and the wire length are known on board: keep the control
         plant model's wire spring (equilibrium point and stiffness) up to date."""
         k_h = wm.horizontal_stiffness(self.plant_ps.wire.submerged_weight_per_length(),
-                                      self.ps.tree.submerged_weight_n, self.wire_length_m)
+                                      self.ps.tree.submerged_weight_newton, self.wire_length_m)
         if (k_h != self.C.k_h) or np.any(self.C.p_eq != self.crane_tip_n[0:2]):
             self.C = self.C._replace(k_h=float(k_h), p_eq=self.crane_tip_n[0:2].copy())
 
@@ -487,7 +487,7 @@ class Simulation:
             tau6, xhat, pc, cs = loop.control_step(k * self.dt_s, x, held, noise.fresh[j],
                                                    xhat, pc, cs, self.target, self.C, self.Q,
                                                    self.dt_s, log[j])
-            f = np.asarray(alloc.allocate_qp(self.thruster_config, tau6).force_n)
+            f = np.asarray(alloc.allocate_qp(self.thruster_config, tau6).force_newton)
             x, xhat, pc = loop.finish_step(x, f, env[j], xhat, pc, self.C, self.arrays,
                                            self.dt_s, (k + 1) * self.dt_s, held, log[j])
             if not np.all(np.isfinite(x)):

@@ -46,7 +46,7 @@ def hang_tolerance_m(ps: ParameterSet, wire_length_m: float, fix_noise_m: float,
     of the position fix and 0.3 m for the vessel's own position keeping."""
     speed = 1.5 * abs(current_speed_mps)
     w = ps.wire.submerged_weight_per_length()
-    w0 = ps.tree.submerged_weight_n
+    w0 = ps.tree.submerged_weight_newton
     q = ps.wire.drag_per_length(speed)
     offset = wm.horizontal_offset(q, w, w0, wire_length_m, site.tree_drag_force(ps, speed))
     return abs(offset) + 3.0 * fix_noise_m + 0.3

@@ -195,8 +195,8 @@ def _vessel(ctx: MissionContext, leg: schema.VesselLeg, deadline: float) -> LegR
 
 
 def _heave(ctx: MissionContext, leg: schema.HeaveLeg, deadline: float) -> LegRun:
-    ctx.sim.set_heave_force(leg.force_n)
-    ctx.event("heave", f"heave force {leg.force_n:g} N")
+    ctx.sim.set_heave_force(leg.force_newton)
+    ctx.event("heave", f"heave force {leg.force_newton:g} N")
     return True
     yield  # a generator that runs no time
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import tomli_w
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import AliasChoices, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from control.config import Allocation, Feedback, Mode, Reference
 from sim.params import KdVector, KiVector, KpVector
@@ -84,7 +84,9 @@ class Setup(_Model):
     allocation: Allocation = "priority"
     reference: Reference = "third"
     feedforward: bool = False
-    heave_force_n: float = Field(default=0.0, ge=-1.0e5, le=1.0e5)
+    heave_force_newton: float = Field(
+        default=0.0, ge=-1.0e5, le=1.0e5, description="ROV heave force while on the tree [N]",
+        validation_alias=AliasChoices("heave_force_newton", "heave_force_n"))
     r_mount_config_m: Annotated[list[Finite], Field(min_length=3, max_length=3)] | None = Field(
         default=None, description="mount vector the controller is configured with "
                                   "(default: the parameter set's)")
@@ -222,7 +224,8 @@ class HeaveLeg(_Leg):
     """Set the ROV's constant heave force while on the tree (appendix C step 4.iii)."""
 
     type: Literal["heave"]
-    force_n: float = Field(ge=-1.0e5, le=1.0e5, description="positive = downwards [N]")
+    force_newton: float = Field(ge=-1.0e5, le=1.0e5, description="positive = downwards [N]",
+                                validation_alias=AliasChoices("force_newton", "force_n"))
 
 
 Leg = Annotated[HoldLeg | RotateLeg | MoveLeg | StepLeg | SquareLeg | WaypointsLeg | GainsLeg |

@@ -41,7 +41,7 @@ def build_simulation(mission: schema.Mission, seed: int | None = None,
     settings = ControlSettings(
         feedback=feedback or s.feedback, allocation=allocation or s.allocation,
         reference=s.reference, feedforward=s.feedforward if feedforward is None else feedforward,
-        heave_force_n=s.heave_force_n,
+        heave_force_newton=s.heave_force_newton,
         r_mount_config_m=None if s.r_mount_config_m is None else (
             float(s.r_mount_config_m[0]), float(s.r_mount_config_m[1]),
             float(s.r_mount_config_m[2])))
@@ -72,9 +72,9 @@ def vary_tree(ps: params_mod.ParameterSet, mass_scale: float,
     """The same parameter set with the tree's mass (rigid-body mass and inertia) and submerged
     weight scaled: the plant of the robustness study (thesis 4.2.3)."""
     tree = ps.spec.tree
-    w0 = tree.submerged_weight_n or ps.tree.submerged_weight_n
+    w0 = tree.submerged_weight_newton or ps.tree.submerged_weight_newton
     new_tree = tree.model_copy(update=dict(
         mass_kg=tree.mass_kg * mass_scale,
         rigid_body_inertia=[v * mass_scale for v in tree.rigid_body_inertia],
-        submerged_weight_n=w0 * weight_scale))
+        submerged_weight_newton=w0 * weight_scale))
     return params_mod.build(ps.spec.model_copy(update=dict(tree=new_tree)))

@@ -22,7 +22,15 @@ from typing import Annotated
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (
+    AliasChoices,
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from sim import wire as wire_mod
 
@@ -67,8 +75,9 @@ class TreeSpec(_Strict):
     width_m: PositiveFloat = Field(le=20.0, description="box width along body y [m]")
     height_m: PositiveFloat = Field(le=20.0, description="box height along body z [m]")
     mass_kg: PositiveFloat = Field(le=5.0e5, description="mass in air [kg]")
-    submerged_weight_n: float | None = Field(
-        default=None, gt=0.0, description="W0 [N]; default m g (1 - rho_w/rho_steel)")
+    submerged_weight_newton: float | None = Field(
+        default=None, gt=0.0, description="W0 [N]; default m g (1 - rho_w/rho_steel)",
+        validation_alias=AliasChoices("submerged_weight_newton", "submerged_weight_n"))
     attachment_height_m: PositiveFloat = Field(
         le=20.0, description="z_a: wire attachment above the centre of gravity [m] (eq. 2.22)")
     rigid_body_inertia: PositiveVec6 = Field(description="diagonal of M_RB [kg, kg m^2] (B.1/B.5)")
@@ -124,7 +133,9 @@ class WireSpec(_Strict):
 
     mass_per_length_kg_m: PositiveFloat = Field(le=500.0)
     diameter_m: PositiveFloat = Field(le=0.5)
-    axial_stiffness_n: PositiveFloat = Field(ge=1.0e4, le=1.0e11)
+    axial_stiffness_newton: PositiveFloat = Field(
+        ge=1.0e4, le=1.0e11, description="EA [N]",
+        validation_alias=AliasChoices("axial_stiffness_newton", "axial_stiffness_n"))
     drag_coefficient: PositiveFloat = Field(le=3.0)
 
     @model_validator(mode="after")
@@ -136,7 +147,7 @@ class WireSpec(_Strict):
 
     def to_numeric(self) -> wire_mod.WireProperties:
         return wire_mod.WireProperties(self.mass_per_length_kg_m, self.diameter_m,
-                                       self.axial_stiffness_n, self.drag_coefficient)
+                                       self.axial_stiffness_newton, self.drag_coefficient)
 
 
 class MountSpec(_Strict):
@@ -280,7 +291,7 @@ class TreeParams:
     """[length, width, height] of the box [m] (table B.1 / B.2)."""
     mass_kg: float
     """Mass in air [kg]."""
-    submerged_weight_n: float
+    submerged_weight_newton: float
     """W0 [N] (MODEL_NOTES: 307.0 kN at full scale)."""
     attachment_height_m: float
     """z_a [m], wire attachment above the centre of gravity (eq. 2.22)."""
@@ -336,9 +347,9 @@ class RovParams:
     """Centre of gravity, body axes [m]."""
     r_cb_m: FloatArray
     """Centre of buoyancy, body axes [m]."""
-    weight_n: float
+    weight_newton: float
     """W = m g [N]."""
-    buoyancy_n: float
+    buoyancy_newton: float
     """B [N], slightly more than W (section 2.2.1)."""
     thrusters: ThrusterParams
     """Thruster model."""
@@ -417,12 +428,12 @@ def tree_drag_coefficients(length_m: float, width_m: float, height_m: float,
 
 
 def _tree_params(spec: TreeSpec, wire: wire_mod.WireProperties) -> TreeParams:
-    w0 = spec.submerged_weight_n or wire_mod.submerged_weight(spec.mass_kg)
+    w0 = spec.submerged_weight_newton or wire_mod.submerged_weight(spec.mass_kg)
     m_rb = np.diag(np.asarray(spec.rigid_body_inertia, dtype=float))
     m_a = np.diag(np.asarray(spec.added_mass, dtype=float))
     # Heave linear damping: 1 % of critical with the wire's elastic stiffness at 400 m
     # (section 2.3.4): c = 2 * 0.01 * sqrt(k (m + m_a)).
-    k_400 = wire.axial_stiffness_n / 400.0
+    k_400 = wire.axial_stiffness_newton / 400.0
     c_heave = 2.0 * 0.01 * math.sqrt(k_400 * (m_rb[2, 2] + m_a[2, 2]))
     d_l, d_nl = tree_drag_coefficients(spec.length_m, spec.width_m, spec.height_m, c_heave)
     if spec.linear_damping is not None:
@@ -431,7 +442,7 @@ def _tree_params(spec: TreeSpec, wire: wire_mod.WireProperties) -> TreeParams:
         d_nl = np.asarray(spec.quadratic_damping, dtype=float)
     return TreeParams(
         dimensions_m=np.array([spec.length_m, spec.width_m, spec.height_m]),
-        mass_kg=spec.mass_kg, submerged_weight_n=float(w0),
+        mass_kg=spec.mass_kg, submerged_weight_newton=float(w0),
         attachment_height_m=spec.attachment_height_m,
         M_rb=m_rb, M_a=m_a, D_l=d_l, D_nl=d_nl)
 
@@ -445,7 +456,7 @@ def _rov_params(spec: RovSpec) -> RovParams:
         D_l=np.asarray(spec.linear_damping, dtype=float),
         D_nl=np.asarray(spec.quadratic_damping, dtype=float),
         r_cg_m=np.asarray(spec.r_cg_m, dtype=float), r_cb_m=np.asarray(spec.r_cb_m, dtype=float),
-        weight_n=weight, buoyancy_n=weight * spec.buoyancy_ratio,
+        weight_newton=weight, buoyancy_newton=weight * spec.buoyancy_ratio,
         thrusters=ThrusterParams(
             T=np.asarray(thr.configuration, dtype=float).T,
             k_pos=np.asarray(thr.k_pos, dtype=float), k_neg=np.asarray(thr.k_neg, dtype=float),
@@ -544,7 +555,8 @@ def froude_scale(spec: ParameterSetSpec, scale: float) -> ParameterSetSpec:
     tree = t.model_copy(update=dict(
         length_m=t.length_m * lam, width_m=t.width_m * lam, height_m=t.height_m * lam,
         mass_kg=t.mass_kg * lam**3,
-        submerged_weight_n=None if t.submerged_weight_n is None else t.submerged_weight_n * lam**3,
+        submerged_weight_newton=(None if t.submerged_weight_newton is None
+                                 else t.submerged_weight_newton * lam**3),
         attachment_height_m=t.attachment_height_m * lam,
         rigid_body_inertia=inertia, added_mass=added,
         linear_damping=_damp(t.linear_damping, lam**2.5, lam**4.5),

@@ -111,11 +111,11 @@ def plant_arrays(ps: ParameterSet, has_rov: bool = True,
     r_mount = ps.mount.r_rov_from_tree_tree_m if r_mount_tree_m is None else r_mount_tree_m
     return PlantArrays(
         tree_M_rb=t.M_rb.copy(), tree_M_a=t.M_a.copy(), tree_M_inv=np.linalg.inv(m_t),
-        tree_D_l=t.D_l.copy(), tree_D_nl=t.D_nl.copy(), tree_W0=float(t.submerged_weight_n),
+        tree_D_l=t.D_l.copy(), tree_D_nl=t.D_nl.copy(), tree_W0=float(t.submerged_weight_newton),
         tree_r_att=np.array([0.0, 0.0, -t.attachment_height_m]),
         rov_M_rb=r.M_rb.copy(), rov_M_a=r.M_a.copy(), rov_M_inv=np.linalg.inv(m_r),
-        rov_D_l=r.D_l.copy(), rov_D_nl=r.D_nl.copy(), rov_W=float(r.weight_n),
-        rov_B=float(r.buoyancy_n), rov_r_cg=r.r_cg_m.copy(), rov_r_cb=r.r_cb_m.copy(),
+        rov_D_l=r.D_l.copy(), rov_D_nl=r.D_nl.copy(), rov_W=float(r.weight_newton),
+        rov_B=float(r.buoyancy_newton), rov_r_cg=r.r_cg_m.copy(), rov_r_cb=r.r_cb_m.copy(),
         thr_T=np.ascontiguousarray(r.thrusters.T), thr_k_pos=r.thrusters.k_pos.copy(),
         thr_k_neg=r.thrusters.k_neg.copy(), thr_n_max=r.thrusters.n_max_rps.copy(),
         mount_r=np.asarray(r_mount, dtype=float).copy(),
@@ -133,10 +133,10 @@ def _contact_params(ps: ParameterSet) -> dict:
     layout = ps.spec.docking.to_numeric()
     m_heave = ps.tree.M_rb[2, 2] + ps.tree.M_a[2, 2]
     height = float(ps.tree.dimensions_m[2])
-    k = ps.tree.submerged_weight_n / (0.02 * height)
+    k = ps.tree.submerged_weight_newton / (0.02 * height)
     omega = (k / m_heave) ** 0.5
     # a post in its funnel: the same stiffness sideways, damped like the support
-    k_guide = ps.tree.submerged_weight_n / (0.05 * height)
+    k_guide = ps.tree.submerged_weight_newton / (0.05 * height)
     m_surge = ps.tree.M_rb[0, 0] + ps.tree.M_a[0, 0]
     n_posts = layout.post_xy_m.shape[0]
     return dict(

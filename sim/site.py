@@ -24,14 +24,14 @@ def tree_drag_force(ps: ParameterSet, current_speed_mps: float) -> float:
 
 def vertical_stiffness(ps: ParameterSet, length_m: float, current_speed_mps: float) -> float:
     """Elastic and geometric stiffness in series for this set's wire and tree (eq. 2.25)."""
-    return wire_mod.vertical_stiffness(ps.wire, ps.tree.submerged_weight_n, length_m,
+    return wire_mod.vertical_stiffness(ps.wire, ps.tree.submerged_weight_newton, length_m,
                                        current_speed_mps, tree_drag_force(ps, current_speed_mps))
 
 
 def self_weight_stretch(ps: ParameterSet, length_m: float) -> float:
     """Stretch of the wire under its own weight alone, w L^2 / (2 EA) [m]."""
     w = ps.wire.submerged_weight_per_length()
-    return 0.5 * w * length_m**2 / ps.wire.axial_stiffness_n
+    return 0.5 * w * length_m**2 / ps.wire.axial_stiffness_newton
 
 
 def wire_length_for_depth(ps: ParameterSet, tree_depth_m: float, crane_tip_depth_m: float = 0.0,
@@ -46,7 +46,7 @@ def wire_length_for_depth(ps: ParameterSet, tree_depth_m: float, crane_tip_depth
     length = drop
     for _ in range(50):
         k_z = vertical_stiffness(ps, length, current_speed_mps)
-        new = drop - self_weight_stretch(ps, length) - ps.tree.submerged_weight_n / k_z
+        new = drop - self_weight_stretch(ps, length) - ps.tree.submerged_weight_newton / k_z
         if abs(new - length) < 1e-9:
             break
         length = new
@@ -59,7 +59,7 @@ def wire_environment(ps: ParameterSet, length_m: float, crane_tip_n: np.ndarray,
     horizontal and vertical stiffness, and the drag offset of the equilibrium point (eq. 2.29
     with F0 = 0, along the current)."""
     w = ps.wire.submerged_weight_per_length()
-    w0 = ps.tree.submerged_weight_n
+    w0 = ps.tree.submerged_weight_newton
     q = ps.wire.drag_per_length(abs(current_speed_mps))
     env = np.zeros(plant.N_ENV)
     env[plant.E_CT:plant.E_CT + 3] = crane_tip_n

@@ -30,7 +30,7 @@ class WireProperties:
     """Mass in air per metre [kg/m] (MODEL_NOTES: 25 kg/m for the 76 mm full-scale wire)."""
     diameter_m: float
     """Hydrodynamic diameter [m], used for buoyancy and drag (eq. 2.26)."""
-    axial_stiffness_n: float
+    axial_stiffness_newton: float
     """EA [N] (eq. 2.23)."""
     drag_coefficient: float
     """Normal drag coefficient C_D [-] (eq. 2.26)."""
@@ -84,9 +84,9 @@ def geometric_compliance(q: float, w: float, W0: float, L: float, F0: float) -> 
     return 0.5 * L * float(np.dot(_GL_WEIGHTS, integrand))
 
 
-def elastic_compliance(axial_stiffness_n: float, L: float) -> float:
+def elastic_compliance(axial_stiffness_newton: float, L: float) -> float:
     """1/k_E = L / EA [m/N] (eq. 2.23)."""
-    return L / axial_stiffness_n
+    return L / axial_stiffness_newton
 
 
 def vertical_stiffness(wire: WireProperties, W0: float, L: float, current_speed_mps: float,
@@ -94,6 +94,6 @@ def vertical_stiffness(wire: WireProperties, W0: float, L: float, current_speed_
     """Total vertical stiffness, elastic and geometric in series (eq. 2.25) [N/m]."""
     w = wire.submerged_weight_per_length()
     q = abs(wire.drag_per_length(current_speed_mps))
-    compliance = elastic_compliance(wire.axial_stiffness_n, L)
+    compliance = elastic_compliance(wire.axial_stiffness_newton, L)
     compliance += geometric_compliance(q, w, W0, L, abs(F0))
     return 1.0 / compliance

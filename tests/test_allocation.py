@@ -172,7 +172,7 @@ def test_priority_without_saturation_is_the_pseudo_inverse(
     priority = allocate_priority(config, tau)
     pinv = allocate_pinv(config, tau)
     scale = float(np.max(config.f_max_pos))
-    np.testing.assert_allclose(priority.force_n, pinv.force_n, rtol=0, atol=1e-9 * scale)
+    np.testing.assert_allclose(priority.force_newton, pinv.force_newton, rtol=0, atol=1e-9 * scale)
 
 
 # --- any demand: limits and consistency -------------------------------------------------------
@@ -191,7 +191,7 @@ def test_any_demand_respects_limits(
     config = ROVS[name]
     demand = tau * magnitude
     result = ALLOCATORS[allocator](config, demand)
-    force = result.force_n
+    force = result.force_newton
     assert np.all(force <= config.f_max_pos) and np.all(force >= -config.f_max_neg)
     assert np.all(np.abs(result.speed_rps) <= config.n_max_rps)
     assert np.all((result.utilisation >= 0.0) & (result.utilisation <= 1.0))
@@ -350,4 +350,4 @@ def test_allocators_do_not_modify_arguments(allocator: str) -> None:
     result = ALLOCATORS[allocator](config, tau)
     np.testing.assert_array_equal(tau, [800.0, 600.0, 10.0, 1.0, 2.0, 60.0])
     with pytest.raises(ValueError):
-        result.force_n[0] = 0.0  # results are read-only
+        result.force_newton[0] = 0.0  # results are read-only

@@ -1,6 +1,7 @@
 """The numeric core never imports the server or the browser view."""
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -76,3 +77,23 @@ def test_one_simulation_owner():
             text = path.read_text()
             for kernel in ("run_chunk(", "run_open_chunk(", "rk4_step(", "plant.advance("):
                 assert kernel not in text, f"{path.relative_to(ROOT)} steps the plant itself"
+
+
+NEWTON_AS_N = re.compile(r"\b\w*(weight|tension|force|thrust|heave|drag|load|buoyancy|stiffness)"
+                         r"_(n|nm|n_per_m)\b")
+"""Names that would read newtons as '_n' (which means NED): force_n, tension_n, ..."""
+NED_FORCES = {"wire_force_n", "contact_force_n", "_force_n"}
+"""Force vectors that really are in NED."""
+
+
+def test_newtons_are_never_spelt_n():
+    """`_n` means NED in our names; newtons are `_newton` (newton metres `_newton_m`). The old
+    spellings live on only as accepted aliases of user files and in the reader of old logs."""
+    for folder in ("sim", "control", "missions", "app", "web"):
+        for path in sorted((ROOT / folder).rglob("*.py")) + sorted((ROOT / folder).rglob("*.toml")):
+            for lineno, line in enumerate(path.read_text().splitlines(), start=1):
+                if "AliasChoices" in line or "validation_alias" in line:
+                    continue
+                for match in NEWTON_AS_N.finditer(line):
+                    assert match.group(0) in NED_FORCES, \
+                        f"{path.relative_to(ROOT)}:{lineno}: {match.group(0)} spells newtons _n"

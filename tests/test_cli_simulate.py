@@ -24,7 +24,7 @@ def test_simulate_prints_the_documented_json():
                              "--duration", "90", "--push", "20@90", "--current", "0@0",
                              "--seed", "4").stdout)
     for key in ("tree_eta_n", "rov_eta_n", "crane_tip_n", "horizontal_offset_m", "heading_deg",
-                "wire_tension_n", "settled", "real_time_factor"):
+                "wire_tension_newton", "settled", "real_time_factor"):
         assert key in out
     assert len(out["tree_eta_n"]) == 6 and len(out["rov_eta_n"]) == 6
     assert out["crane_tip_n"] == [1.0, 1.0, 0.0]
@@ -38,7 +38,7 @@ def test_simulate_prints_the_documented_json():
 def test_simulate_tree_alone_has_no_rov():
     out = json.loads(run_cli("simulate", "--no-rov", "--duration", "10").stdout)
     assert out["rov_eta_n"] is None
-    assert out["wire_tension_n"] == pytest.approx(307047, rel=0.01)
+    assert out["wire_tension_newton"] == pytest.approx(307047, rel=0.01)
 
 
 @pytest.mark.parametrize("args, message", [

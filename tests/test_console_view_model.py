@@ -157,7 +157,7 @@ def rows(t: np.ndarray, util: float = 0.0, err_m: float = 0.0) -> LogRows:
 
 def monitor(uses_sensors: bool = False) -> AlarmMonitor:
     limits = AlarmLimits(position_error_m=0.25, sample_period_s=(1.0, 0.1, 0.1, 0.2, 0.02))
-    return AlarmMonitor(limits, n_thrusters=4, weight_n=300e3, uses_sensors=uses_sensors)
+    return AlarmMonitor(limits, n_thrusters=4, weight_newton=300e3, uses_sensors=uses_sensors)
 
 
 def active(m: AlarmMonitor) -> set[str]:

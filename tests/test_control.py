@@ -206,7 +206,7 @@ def test_log_rows_carry_the_site_vessel_wire_and_tension():
     # hanging still, the wire carries the tree's submerged weight less the ROV's net
     # buoyancy (1 % of its weight): within 1 %
     tension = rows["wire_tension"]
-    assert tension[0] == pytest.approx(MODEL.tree.submerged_weight_n, rel=0.01)
+    assert tension[0] == pytest.approx(MODEL.tree.submerged_weight_newton, rel=0.01)
     payout = rows["wire_rest_length"][-1]
     sim.winch_to(sim.wire_length_m - 2.0, 0.5)  # haul in 2 m
     hauled = sim.run_for(5.0)["wire_rest_length"]

@@ -206,3 +206,14 @@ def test_killed_run_leaves_a_readable_log(tmp_path):
     # chunks at least twice a second, so the file then ended on a chunk boundary)
     assert session.intact_bytes >= size_one_second_before > 0
     assert np.all(np.diff(session.t_s) > 0)
+
+
+def test_missions_with_the_old_newton_spelling_still_load():
+    """`heave_force_n` / `force_n` (before newtons were spelt `_newton`) mean the same."""
+    data = {"format_version": 1, "name": "old spelling",
+            "setup": {"params": "model-scale", "depth_m": 100.0, "heave_force_n": 12.5},
+            "legs": [{"type": "heave", "force_n": -7.0}]}
+    mission = schema.parse_mission(data)
+    assert mission.setup.heave_force_newton == 12.5
+    assert mission.legs[0].force_newton == -7.0
+    assert "force_newton = -7.0" in schema.dump_mission(mission)

@@ -36,7 +36,7 @@ def test_drag_rules_reproduce_the_thesis_model_scale_surge_values():
 
 def test_full_scale_heave_damping_is_one_percent_of_critical_at_400_m():
     full = params.load("full-scale")
-    k = full.wire.axial_stiffness_n / 400.0
+    k = full.wire.axial_stiffness_newton / 400.0
     critical = 2 * math.sqrt(k * (full.tree.M_rb[2, 2] + full.tree.M_a[2, 2]))
     assert full.tree.D_l[2] == pytest.approx(0.01 * critical)
 
@@ -122,3 +122,21 @@ def test_froude_scaled_damping_keeps_the_dimensionless_drag():
     u_big = u * math.sqrt(lam)
     f_big = big.tree.linear_damping[0] * u_big + big.tree.quadratic_damping[0] * u_big**2
     assert f_big == pytest.approx(f_small * lam**3)
+
+
+def test_files_with_the_old_newton_spelling_still_load(tmp_path):
+    """Parameter files written before newtons were spelt `_newton` keep working, with the same
+    numbers; giving both spellings is refused as an extra field."""
+    data = _preset_dict("model-scale")
+    data["tree"]["submerged_weight_n"] = data["tree"].pop("submerged_weight_newton")
+    data["wire"]["axial_stiffness_n"] = data["wire"].pop("axial_stiffness_newton")
+    path = tmp_path / "old.json"
+    path.write_text(json.dumps(data))
+    old = params.load(path)
+    new = params.load("model-scale")
+    assert old.tree.submerged_weight_newton == new.tree.submerged_weight_newton == 7848.0
+    assert old.spec.wire.axial_stiffness_newton == new.spec.wire.axial_stiffness_newton
+    data["tree"]["submerged_weight_newton"] = 1.0
+    path.write_text(json.dumps(data))
+    with pytest.raises(params.ParameterError, match="submerged_weight_n"):
+        params.load(path)

@@ -32,7 +32,7 @@ def test_pushed_tree_shows_the_closed_form_horizontal_stiffness():
     offset = np.hypot(tail[:, 0] - 1.0, tail[:, 1] - 1.0).mean()
     k_measured = force / offset
     w = FULL.wire.submerged_weight_per_length()
-    k_closed = wm.horizontal_stiffness(w, FULL.tree.submerged_weight_n, sim.wire_length_m)
+    k_closed = wm.horizontal_stiffness(w, FULL.tree.submerged_weight_newton, sim.wire_length_m)
     assert k_measured == pytest.approx(k_closed, rel=0.05)
     # and it moved the way it was pushed
     assert math.atan2(tail[-1, 1] - 1.0, tail[-1, 0] - 1.0) == pytest.approx(direction, abs=0.01)
@@ -67,14 +67,14 @@ def test_undamped_pendulum_keeps_its_energy_over_100_periods():
     x0 = sim.plant_state
     env = site.wire_environment(ps, sim.wire_length_m, sim.crane_tip_n, 0.0, 0.0)
     k = wm.horizontal_stiffness(ps.wire.submerged_weight_per_length(),
-                                ps.tree.submerged_weight_n, sim.wire_length_m)
+                                ps.tree.submerged_weight_newton, sim.wire_length_m)
     period = 2 * math.pi * math.sqrt((ps.tree.M_rb[0, 0] + ps.tree.M_a[0, 0]) / k)
     rows = sim.step(round(100 * period / sim.dt_s))
     # energy above the still hang: the reference that the 1 % is taken of
     x_rest = np.zeros(plant.N_STATE)
     x_rest[0:2] = sim.crane_tip_n[0:2]
-    pivot, rest = plant.wire_pivot(env, ps.tree.submerged_weight_n)
-    x_rest[2] = pivot[2] + rest + ps.tree.submerged_weight_n / env[plant.E_KZ] + \
+    pivot, rest = plant.wire_pivot(env, ps.tree.submerged_weight_newton)
+    x_rest[2] = pivot[2] + rest + ps.tree.submerged_weight_newton / env[plant.E_KZ] + \
         ps.tree.attachment_height_m
     e_rest = _mechanical_energy(x_rest, sim.arrays, env)
     e0 = _mechanical_energy(x0, sim.arrays, env) - e_rest

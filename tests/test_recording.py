@@ -143,15 +143,15 @@ def test_plot_fields_read_their_block_by_name():
     plots = {ch.topic: messages.plot_message(ch, row) for ch in recording.plot_channels(5)}
     assert plots["/tree/state"]["yaw_deg"] == math.degrees(value["tree_yaw_rad"])
     assert plots["/rov/state"]["down_m"] == value["rov_down_m"]
-    assert plots["/tree/estimate"]["bias_yaw_nm"] == value["bias_yaw_newton_m"]
+    assert plots["/tree/estimate"]["bias_yaw_newton_m"] == value["bias_yaw_newton_m"]
     assert plots["/reference"]["error_yaw_deg"] == pytest.approx(
         math.degrees(value["tree_yaw_rad"] - value["ref_yaw_rad"]), rel=1e-12)
     assert plots["/measurements"]["heading_deg"] == math.degrees(value["y_heading_rad"])
     assert plots["/measurements"]["accepted_gyro"] == value["accepted_gyro"]
-    assert plots["/control/forces"]["rov_ach_pitch_nm"] == value["tau_rov_ach_pitch_newton_m"]
+    assert plots["/control/forces"]["rov_ach_pitch_newton_m"] == value["tau_rov_ach_pitch_newton_m"]
     assert plots["/control/forces"]["mode"] == value["mode"]
     assert plots["/thrusters"]["thruster2_speed_rpm"] == 60.0 * value["thruster2_speed_rps"]
-    assert plots["/control/terms"]["ff_sway_n"] == value["term_ff_sway_newton"]
+    assert plots["/control/terms"]["ff_sway_newton"] == value["term_ff_sway_newton"]
     assert all(p["t_s"] == value["t_s"] for p in plots.values())
     with pytest.raises(ValueError, match="tree_eta_n"):
         channels.PlotField("beyond", "tree_eta_n", 6)
@@ -199,7 +199,7 @@ def test_mcap_reader_sees_every_channel_at_its_rate(session):
     assert set(item) == {"timestamp", "parent_frame_id", "child_frame_id", "translation",
                          "rotation"}
     thr = msgs["/thrusters"][0][1]
-    assert "thruster5_utilisation" in thr and "thruster6_force_n" not in thr  # Minerva: 5
+    assert "thruster5_utilisation" in thr and "thruster6_force_newton" not in thr  # Minerva: 5
 
 
 def test_messages_carry_the_rows_in_foxglove_frames(session):

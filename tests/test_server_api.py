@@ -205,7 +205,7 @@ def test_current_and_vessel(client: TestClient) -> None:
              < 1e-9, what="the current")
     env = client.get("/api/environment").json()
     assert env["current"]["direction_deg"] == pytest.approx(90.0)
-    assert env["wire_tension_n"] > 1e5
+    assert env["wire_tension_newton"] > 1e5
     tip = env["crane_tip_n"]
     r = client.put("/api/environment/vessel",
                    json={"north_m": tip[0] + 1.0, "east_m": tip[1], "speed_mps": 1.0},

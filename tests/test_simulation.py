@@ -261,7 +261,7 @@ def test_good_commands_do_change_the_state():
     sim.set_grip(False)
     assert sim.gripping is False
     sim.set_heave_force(50.0)
-    assert sim.C.heave_n == 50.0
+    assert sim.C.heave_newton == 50.0
     sim.set_allocation("pinv")
     assert sim.C.alloc_kind == loop.ALLOC_PINV
     rows = sim.run_for(2.0)

@@ -11,7 +11,7 @@ from sim import wire as wm
 
 FULL = params.load("full-scale")
 W = FULL.wire.submerged_weight_per_length()
-W0 = FULL.tree.submerged_weight_n
+W0 = FULL.tree.submerged_weight_newton
 
 
 def test_submerged_weights_match_model_notes():
@@ -72,7 +72,7 @@ def test_geometric_part_takes_over_with_current_on_a_1200_m_wire():
     def geometric_share(speed):
         q = FULL.wire.drag_per_length(speed)
         geo = wm.geometric_compliance(q, W, W0, 1200.0, site.tree_drag_force(FULL, speed))
-        ela = wm.elastic_compliance(FULL.wire.axial_stiffness_n, 1200.0)
+        ela = wm.elastic_compliance(FULL.wire.axial_stiffness_newton, 1200.0)
         return geo / (geo + ela)
     assert geometric_share(0.1) < 0.5
     assert geometric_share(1.0) > 0.5

@@ -22,7 +22,8 @@ FloatArray = NDArray[np.float64]
 
 
 def loaded_wire_points_n(top_n: FloatArray, bottom_n: FloatArray, length_m: float,
-                         weight_n_per_m: float, load_n: float, drag_n_per_m: FloatArray,
+                         weight_newton_per_m: float, load_newton: float,
+                         drag_newton_per_m: FloatArray,
                          n_points: int = 40) -> FloatArray:
     """(n_points, 3) points of the loaded line from the load (first) to the crane tip (last).
 
@@ -35,10 +36,10 @@ def loaded_wire_points_n(top_n: FloatArray, bottom_n: FloatArray, length_m: floa
     linearly with s between the two ends. Reduces to a straight line without drag."""
     top = np.asarray(top_n, float)
     bottom = np.asarray(bottom_n, float)
-    q = np.asarray(drag_n_per_m, float)[:2]
+    q = np.asarray(drag_newton_per_m, float)[:2]
     length = max(float(length_m), 1e-6)
-    w = max(float(weight_n_per_m), 1e-9)
-    w0 = max(float(load_n), 1e-9)
+    w = max(float(weight_newton_per_m), 1e-9)
+    w0 = max(float(load_newton), 1e-9)
     s = np.linspace(0.0, length, n_points)
     i1 = np.log1p(w * s / w0) / w
     i2 = s / w - w0 / w**2 * np.log1p(w * s / w0)

@@ -150,15 +150,15 @@ class SceneView:
         self._update_track(snap, tree_eta[2])
         ref = snap.eta_ref
         pose = np.concatenate([tree_eta, snap.rov_eta_n, ref, snap.crane_tip_n,
-                               [snap.wire_length_m, snap.wire_drag_n_per_m]])
+                               [snap.wire_length_m, snap.wire_drag_newton_per_m]])
         if self._last_pose is not None and np.all(np.abs(pose - self._last_pose) < POSE_EPS):
             return
         self._last_pose = pose
         wire = geo.loaded_wire_points_n(
             np.array(snap.crane_tip_n), geo.attachment_point_n(tree_eta,
                                                                info.attachment_height_m),
-            snap.wire_length_m, info.wire_weight_n_per_m, info.tree_weight_n,
-            snap.wire_drag_n_per_m * np.array([math.cos(snap.current_direction_rad),
+            snap.wire_length_m, info.wire_weight_newton_per_m, info.tree_weight_newton,
+            snap.wire_drag_newton_per_m * np.array([math.cos(snap.current_direction_rad),
                                                math.sin(snap.current_direction_rad)]))
         with self.server.atomic():
             self._tree.position = tree_eta[0:3]

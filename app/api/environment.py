@@ -19,7 +19,7 @@ def get_environment(snapshot: SnapshotDep) -> EnvironmentOut:
         current=CurrentOut(speed_mps=snapshot.current_speed_mps,
                            direction_deg=math.degrees(snapshot.current_direction_rad)),
         crane_tip_n=list(snapshot.crane_tip_n), wire_length_m=snapshot.wire_length_m,
-        wire_tension_n=snapshot.wire_tension_n)
+        wire_tension_newton=snapshot.wire_tension_newton)
 
 
 @router.put("/current", response_model=CommandOut)

@@ -84,7 +84,7 @@ class AlarmOut(BaseModel):
 class ThrusterOut(BaseModel):
     index: int
     utilisation: float
-    force_n: float
+    force_newton: float
     saturated: bool
 
 
@@ -135,7 +135,7 @@ class StateOut(BaseModel):
     alarms: list[AlarmOut]
     crane_tip_n: list[float]
     wire_length_m: float
-    wire_tension_n: float | None
+    wire_tension_newton: float | None
     current: CurrentOut
     recording: str | None
     replay: ReplayOut | None
@@ -152,12 +152,12 @@ class StateOut(BaseModel):
             tree_eta_n=EtaOut.of(s.tree_eta_n), rov_eta_n=EtaOut.of(s.rov_eta_n),
             reference=PoseOut.of(s.eta_ref), estimate=PoseOut.of(s.eta_hat), mode=s.mode,
             allocation=s.allocation, grip=s.grip, mission=MissionStatusOut.of(s.mission),
-            thrusters=[ThrusterOut(index=i + 1, utilisation=u, force_n=f,
+            thrusters=[ThrusterOut(index=i + 1, utilisation=u, force_newton=f,
                                    saturated=u >= SATURATED)
                        for i, (u, f) in enumerate(zip(s.thruster_utilisation,
-                                                      s.thruster_force_n, strict=True))],
+                                                      s.thruster_force_newton, strict=True))],
             alarms=[AlarmOut.of(a) for a in s.alarms], crane_tip_n=list(s.crane_tip_n),
-            wire_length_m=s.wire_length_m, wire_tension_n=s.wire_tension_n,
+            wire_length_m=s.wire_length_m, wire_tension_newton=s.wire_tension_newton,
             current=CurrentOut(speed_mps=s.current_speed_mps,
                                direction_deg=math.degrees(s.current_direction_rad)),
             recording=s.recording, replay=ReplayOut.of(s.replay) if s.replay else None,
@@ -241,7 +241,7 @@ class EnvironmentOut(BaseModel):
     current: CurrentOut
     crane_tip_n: list[float]
     wire_length_m: float
-    wire_tension_n: float | None
+    wire_tension_newton: float | None
 
 
 class CurrentIn(_In):

@@ -85,7 +85,7 @@ class AlarmMonitor:
 
     limits: AlarmLimits
     n_thrusters: int
-    weight_n: float
+    weight_newton: float
     """Tree submerged weight W0 [N]."""
     uses_sensors: bool
     """True with EKF feedback: innovation and dropout alarms are armed."""
@@ -101,12 +101,12 @@ class AlarmMonitor:
         self._nis = (deque(maxlen=self.limits.nis_window), deque(maxlen=self.limits.nis_window))
         self.state = tuple(Alarm(name, False, "") for name in ALARM_NAMES)
 
-    def update(self, rows: LogRows, tension_n: float | None) -> tuple[Alarm, ...]:
+    def update(self, rows: LogRows, tension_newton: float | None) -> tuple[Alarm, ...]:
         """Advance with log rows and the present wire tension (None: unknown)."""
         if len(rows) == 0:
             return self.state
         self._t_s = float(rows.t_s[-1])
-        self.state = (self._saturation(rows), self._position(rows), self._slack(tension_n),
+        self.state = (self._saturation(rows), self._position(rows), self._slack(tension_newton),
                       self._innovation(rows), self._dropout(rows))
         return self.state
 
@@ -139,9 +139,10 @@ class AlarmMonitor:
                          f"tree {err_m:.2f} m / {err_deg:.1f} deg off the reference")
         return Alarm("position_error", False, "")
 
-    def _slack(self, tension_n: float | None) -> Alarm:
-        if tension_n is not None and tension_n < self.limits.slack_fraction * self.weight_n:
-            return Alarm("wire_slack", True, f"wire tension {tension_n / 1e3:.1f} kN")
+    def _slack(self, tension_newton: float | None) -> Alarm:
+        slack = self.limits.slack_fraction * self.weight_newton
+        if tension_newton is not None and tension_newton < slack:
+            return Alarm("wire_slack", True, f"wire tension {tension_newton / 1e3:.1f} kN")
         return Alarm("wire_slack", False, "")
 
     def _innovation(self, rows: LogRows) -> Alarm:

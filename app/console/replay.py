@@ -103,7 +103,7 @@ class Replay:
     def _new_monitor(self) -> AlarmMonitor:
         limits = AlarmLimits(position_error_m=self.scene.layout.tolerance_m,
                              sample_period_s=(1.0,) * 5)
-        return AlarmMonitor(limits, self.scene.n_thrusters, self.scene.tree_weight_n,
+        return AlarmMonitor(limits, self.scene.n_thrusters, self.scene.tree_weight_newton,
                             uses_sensors=self.log.layout.has("accepted") and
                             bool(np.any(self.log["accepted"] > 0.5)))
 

@@ -112,11 +112,11 @@ class Session:
         self._scene_version += 1
         self.scene = scene_info(sim.ps, frame, self._scene_version)
         self.monitor = AlarmMonitor(AlarmLimits.for_params(sim.ps), self.scene.n_thrusters,
-                                    self.scene.tree_weight_n,
+                                    self.scene.tree_weight_newton,
                                     uses_sensors=sim.settings.feedback == "ekf")
         self.trend = TrendBuffer(sim.dt_s)
         self.last_row = sim.present_row()
-        self.tension_n: float | None = sim.wire_tension_newton()
+        self.tension_newton: float | None = sim.wire_tension_newton()
         self.error: str | None = None
         self.notices: tuple[str, ...] = ()
 
@@ -210,9 +210,9 @@ class Session:
         self._follow_docking_frame()
         self.last_row = rows.last()
         self.trend.extend(rows)
-        self.tension_n = self.sim.wire_tension_newton()
+        self.tension_newton = self.sim.wire_tension_newton()
         before = {a.name: a.active for a in self.monitor.state}
-        for alarm in self.monitor.update(rows, self.tension_n):
+        for alarm in self.monitor.update(rows, self.tension_newton):
             if alarm.active != before.get(alarm.name):
                 self.note("alarm", f"{alarm.name} {'on' if alarm.active else 'off'}"
                           f"{': ' + alarm.message if alarm.message else ''}",
@@ -377,13 +377,14 @@ class Session:
         return Snapshot(
             seq=seq, source="live", t_s=v.t_s, paused=paused, speed=speed,
             tree_eta_n=v.tree_eta_n, rov_eta_n=v.rov_eta_n, eta_ref=v.eta_ref,
-            eta_hat=v.eta_hat, thruster_utilisation=v.utilisation, thruster_force_n=v.force_n,
+            eta_hat=v.eta_hat, thruster_utilisation=v.utilisation,
+            thruster_force_newton=v.force_newton,
             mode=v.mode, allocation=sim.settings.allocation, grip=bool(sim.gripping),
             gains=sim.gains, crane_tip_n=tuple(float(c) for c in sim.crane_tip_n),  # type: ignore[arg-type]
-            wire_length_m=float(sim.wire_length_m), wire_tension_n=self.tension_n,
+            wire_length_m=float(sim.wire_length_m), wire_tension_newton=self.tension_newton,
             current_speed_mps=sim.current_speed_mps,
             current_direction_rad=sim.current_direction_rad,
-            wire_drag_n_per_m=float(sim.ps.wire.drag_per_length(sim.current_speed_mps)),
+            wire_drag_newton_per_m=float(sim.ps.wire.drag_per_length(sim.current_speed_mps)),
             mission=self._mission_result(), alarms=self.monitor.state,
             recording=self.recording_name, replay=None, scene=self.scene, stats=stats,
             warnings=(*sim.startup.warnings, *self.notices), error=self.error,
@@ -394,15 +395,16 @@ class Session:
         rp = self.replay
         assert rp is not None
         v = row_view(rp.row(), rp.scene.n_thrusters)
-        crane_tip_n, wire_length_m, tension_n = rp.site()
+        crane_tip_n, wire_length_m, tension_newton = rp.site()
         return Snapshot(
             seq=seq, source="replay", t_s=v.t_s, paused=not rp.playing, speed=speed,
             tree_eta_n=v.tree_eta_n, rov_eta_n=v.rov_eta_n, eta_ref=v.eta_ref,
-            eta_hat=v.eta_hat, thruster_utilisation=v.utilisation, thruster_force_n=v.force_n,
+            eta_hat=v.eta_hat, thruster_utilisation=v.utilisation,
+            thruster_force_newton=v.force_newton,
             mode=v.mode, allocation=None, grip=None, gains=None,
             crane_tip_n=crane_tip_n,
-            wire_length_m=wire_length_m, wire_tension_n=tension_n,
-            current_speed_mps=0.0, current_direction_rad=0.0, wire_drag_n_per_m=0.0,
+            wire_length_m=wire_length_m, wire_tension_newton=tension_newton,
+            current_speed_mps=0.0, current_direction_rad=0.0, wire_drag_newton_per_m=0.0,
             mission=MissionStatus(name=rp.mission, state="replay"),
             alarms=rp.monitor.state, recording=self.recording_name, replay=rp.status(),
             scene=rp.scene, stats=stats, trend=rp.trend())

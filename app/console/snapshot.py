@@ -46,9 +46,9 @@ class SceneInfo:
     layout: DockingLayout
     frame: DockingFrame
     n_thrusters: int
-    wire_weight_n_per_m: float
+    wire_weight_newton_per_m: float
     """Submerged weight of the wire per metre, w [N/m]."""
-    tree_weight_n: float
+    tree_weight_newton: float
     """Tree submerged weight W0 [N]."""
     preset_gains: Gains
     """The parameter set's controller gains (the gain sliders' reference)."""
@@ -115,17 +115,17 @@ class Snapshot:
     eta_hat: Vec3
     """Estimate [north, east, psi] of the tree."""
     thruster_utilisation: tuple[float, ...]
-    thruster_force_n: tuple[float, ...]
+    thruster_force_newton: tuple[float, ...]
     mode: str
     allocation: str | None
     grip: bool | None
     gains: Gains | None
     crane_tip_n: Vec3
     wire_length_m: float
-    wire_tension_n: float | None
+    wire_tension_newton: float | None
     current_speed_mps: float
     current_direction_rad: float
-    wire_drag_n_per_m: float
+    wire_drag_newton_per_m: float
     mission: MissionStatus
     alarms: tuple[Alarm, ...]
     recording: str | None
@@ -172,8 +172,8 @@ def scene_info(ps: ParameterSet, frame: DockingFrame, version: int) -> SceneInfo
         rov_dimensions_m=tuple(float(v) for v in rov_drawing_box_m(ps)),  # type: ignore[arg-type]
         layout=ps.spec.docking.to_numeric(),
         frame=frame, n_thrusters=int(ps.rov.thrusters.T.shape[1]),
-        wire_weight_n_per_m=float(ps.wire.submerged_weight_per_length()),
-        tree_weight_n=float(ps.tree.submerged_weight_n),
+        wire_weight_newton_per_m=float(ps.wire.submerged_weight_per_length()),
+        tree_weight_newton=float(ps.tree.submerged_weight_newton),
         preset_gains=Gains.of(ps.gains.kp, ps.gains.ki, ps.gains.kd))
 
 
@@ -187,7 +187,7 @@ class RowView:
     eta_ref: Vec3
     eta_hat: Vec3
     utilisation: tuple[float, ...]
-    force_n: tuple[float, ...]
+    force_newton: tuple[float, ...]
     mode: str
 
 
@@ -204,7 +204,7 @@ def row_view(row: FloatArray, n_thrusters: int) -> RowView:
         t_s=float(v.t_s[0]), tree_eta_n=seq("tree_eta_n"),  # type: ignore[arg-type]
         rov_eta_n=seq("rov_eta_n"),  # type: ignore[arg-type]
         eta_ref=seq("eta_ref_n"), eta_hat=seq("eta_hat_n"),  # type: ignore[arg-type]
-        utilisation=seq("thruster_utilisation"), force_n=seq("thruster_force"),
+        utilisation=seq("thruster_utilisation"), force_newton=seq("thruster_force"),
         mode=MODES[mode_code] if 0 <= mode_code < len(MODES) else "tree")
 
 

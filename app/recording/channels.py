@@ -2,9 +2,9 @@
 
 The log row is declared in ``control.columns``; a plot channel picks named numbers out of it by
 block name and element index (``PlotField("yaw_deg", "tree_eta_n", 5, DEG)``), converting the
-core's SI units and radians to the interface's degrees and rpm. Plot field names keep the
-spelling of the first files (``_n`` newtons, ``_nm`` newton metres) so saved Foxglove layouts
-and CSV readers go on working; the log row's own columns spell them ``_newton``/``_newton_m``.
+core's SI units and radians to the interface's degrees and rpm. Newtons are spelt ``_newton``
+and newton metres ``_newton_m`` (``_n`` means NED in our names); files written before this
+spelling are read by ``control.columns.Layout.from_names``.
 """
 
 from __future__ import annotations
@@ -106,8 +106,9 @@ class PlotChannel:
         return (v * scale).tolist()
 
 
-_AXES3 = ("surge_n", "sway_n", "yaw_nm")
-_AXES6 = ("surge_n", "sway_n", "heave_n", "roll_nm", "pitch_nm", "yaw_nm")
+_AXES3 = ("surge_newton", "sway_newton", "yaw_newton_m")
+_AXES6 = ("surge_newton", "sway_newton", "heave_newton", "roll_newton_m", "pitch_newton_m",
+          "yaw_newton_m")
 _POSE = ("north_m", "east_m", "down_m", "roll_deg", "pitch_deg", "yaw_deg")
 _TERMS = tuple(f"{p}_{a}" for p in ("p", "i", "d", "ff") for a in _AXES3)
 
@@ -158,7 +159,7 @@ def _measurement_fields() -> tuple[PlotField, ...]:
 def _thruster_fields(n_thrusters: int) -> tuple[PlotField, ...]:
     out: list[PlotField] = []
     for i in range(n_thrusters):
-        out += [PlotField(f"thruster{i + 1}_force_n", "thruster_force", i),
+        out += [PlotField(f"thruster{i + 1}_force_newton", "thruster_force", i),
                 PlotField(f"thruster{i + 1}_speed_rpm", "thruster_speed", i, RPM),
                 PlotField(f"thruster{i + 1}_utilisation", "thruster_utilisation", i)]
     return tuple(out)
