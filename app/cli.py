@@ -14,9 +14,11 @@ import typer
 
 from app.log_cli import log_app
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Simulator, control system and console for ROV-assisted tree-on-wire "
-                       "installation.")
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    help="Simulator, control system and console for ROV-assisted tree-on-wire installation.",
+)
 
 
 @app.callback()
@@ -30,8 +32,10 @@ def parse_polar(text: str, what: str, unit: str) -> tuple[float, float]:
         value_s, dir_s = text.split("@")
         value, direction = float(value_s), float(dir_s)
     except ValueError:
-        raise typer.BadParameter(f"{what} must look like VALUE@DIR_DEG, e.g. 0.1@225 "
-                                 f"({unit} towards 225 deg), got {text!r}") from None
+        raise typer.BadParameter(
+            f"{what} must look like VALUE@DIR_DEG, e.g. 0.1@225 "
+            f"({unit} towards 225 deg), got {text!r}"
+        ) from None
     if not (math.isfinite(value) and math.isfinite(direction)):
         raise typer.BadParameter(f"{what} must be finite, got {text!r}")
     return value, math.radians(direction)
@@ -44,15 +48,17 @@ def _fail(message: str) -> None:
 
 @app.command()
 def simulate(
-    params: Annotated[str, typer.Option(help="parameter set name (full-scale, model-scale) "
-                                             "or a .toml/.json file")] = "full-scale",
+    params: Annotated[
+        str, typer.Option(help="parameter set name (full-scale, model-scale) or a .toml/.json file")
+    ] = "full-scale",
     depth: Annotated[float, typer.Option(help="tree depth [m]; the wire length follows")] = 400.0,
-    duration: Annotated[float, typer.Option(help="simulated time [s]", min=0.0,
-                                            max=1.0e6)] = 600.0,
+    duration: Annotated[float, typer.Option(help="simulated time [s]", min=0.0, max=1.0e6)] = 600.0,
     current: Annotated[str, typer.Option(help="SPEED@DIR_DEG, m/s towards DIR")] = "0.1@225",
     no_rov: Annotated[bool, typer.Option("--no-rov", help="the tree alone")] = False,
-    push: Annotated[str | None, typer.Option(help="NEWTONS@DIR_DEG steady horizontal force on "
-                                                  "the tree's centre")] = None,
+    push: Annotated[
+        str | None,
+        typer.Option(help="NEWTONS@DIR_DEG steady horizontal force on the tree's centre"),
+    ] = None,
     waves: Annotated[str | None, typer.Option(help="HS_M@TP_S@DIR_DEG ITTC sea")] = None,
     crane_tip: Annotated[str, typer.Option(help="N,E of the wire's surface point [m]")] = "1,1",
     seed: Annotated[int, typer.Option(help="random seed")] = 0,
@@ -74,15 +80,23 @@ def simulate(
     if waves is not None:
         try:
             hs, tp, wdir = (float(v) for v in waves.split("@"))
-            wave_params = envmod.WaveParams(significant_height_m=hs, peak_period_s=tp,
-                                            direction_rad=math.radians(wdir))
+            wave_params = envmod.WaveParams(
+                significant_height_m=hs, peak_period_s=tp, direction_rad=math.radians(wdir)
+            )
         except ValueError as err:
             raise typer.BadParameter(f"--waves must be HS_M@TP_S@DIR_DEG: {err}") from None
     try:
         ps = params_mod.load(params)
-        sim = Simulation(ps, tree_depth_m=depth, crane_tip_n=np.array([ct[0], ct[1], 0.0]),
-                         current=steady_current(speed, direction), waves=wave_params,
-                         has_rov=not no_rov, seed=seed, control=False)
+        sim = Simulation(
+            ps,
+            tree_depth_m=depth,
+            crane_tip_n=np.array([ct[0], ct[1], 0.0]),
+            current=steady_current(speed, direction),
+            waves=wave_params,
+            has_rov=not no_rov,
+            seed=seed,
+            control=False,
+        )
         if push is not None:
             force, pdir = parse_polar(push, "--push", "N")
             sim.set_push(np.array([force * math.cos(pdir), force * math.sin(pdir), 0.0]))
@@ -116,8 +130,9 @@ def simulation_summary(sim, rows, wall_s: float) -> dict:
         "rov_eta_n": eta_deg(x[12:18]) if sim.has_rov else None,
         "crane_tip_n": [float(v) for v in sim.crane_tip_n],
         "wire_length_m": round(sim.wire_length_m, 4),
-        "horizontal_offset_m": round(float(np.hypot(x[0] - sim.crane_tip_n[0],
-                                                    x[1] - sim.crane_tip_n[1])), 6),
+        "horizontal_offset_m": round(
+            float(np.hypot(x[0] - sim.crane_tip_n[0], x[1] - sim.crane_tip_n[1])), 6
+        ),
         "heading_deg": round(math.degrees(ssa(float(x[5]))), 4),
         "wire_tension_newton": round(sim.wire_tension_newton(), 2),
         "tree_speed_mps": float(speeds[-1]) if len(speeds) else 0.0,
@@ -142,20 +157,27 @@ def _list_library() -> None:
 
 @app.command()
 def run(
-    mission: Annotated[str | None, typer.Argument(
-        help="mission file (TOML) or a library name (see --list)")] = None,
+    mission: Annotated[
+        str | None, typer.Argument(help="mission file (TOML) or a library name (see --list)")
+    ] = None,
     list_: Annotated[bool, typer.Option("--list", help=LIST_HELP)] = False,
     json_out: Annotated[bool, typer.Option("--json", help="one JSON object")] = False,
     log: Annotated[str | None, typer.Option(help="write the session to this MCAP file")] = None,
     plots: Annotated[str | None, typer.Option(help="write PNG figures into this folder")] = None,
     seed: Annotated[int | None, typer.Option(help="random seed (default: the file's)")] = None,
-    allocation: Annotated[str | None, typer.Option(
-        help="pinv | priority | qp (default: the mission file's)")] = None,
-    feedback: Annotated[str | None, typer.Option(
-        help="perfect | ekf (default: the mission file's)")] = None,
-    law: Annotated[str | None, typer.Option(
-        help="thesis (eq. 3.9 alone) | feedforward (with reference feedforward); default: "
-             "the mission file's")] = None,
+    allocation: Annotated[
+        str | None, typer.Option(help="pinv | priority | qp (default: the mission file's)")
+    ] = None,
+    feedback: Annotated[
+        str | None, typer.Option(help="perfect | ekf (default: the mission file's)")
+    ] = None,
+    law: Annotated[
+        str | None,
+        typer.Option(
+            help="thesis (eq. 3.9 alone) | feedforward (with reference feedforward); default: "
+            "the mission file's"
+        ),
+    ] = None,
     progress: Annotated[bool, typer.Option(help="show a progress bar")] = True,
 ) -> None:
     """Run a mission headless, faster than real time; exit 1 if it failed."""
@@ -172,9 +194,13 @@ def run(
     _validate_choice("--law", law, LAWS)
     try:
         spec = schema.load_mission(mission)
-        sim = build_simulation(spec, seed=seed, allocation=allocation,  # type: ignore[arg-type]
-                               feedback=feedback,  # type: ignore[arg-type]
-                               feedforward=None if law is None else law == "feedforward")
+        sim = build_simulation(
+            spec,
+            seed=seed,
+            allocation=allocation,  # type: ignore[arg-type]
+            feedback=feedback,  # type: ignore[arg-type]
+            feedforward=None if law is None else law == "feedforward",
+        )
     except ValueError as err:
         _fail(str(err))
         return
@@ -198,8 +224,7 @@ def run(
     if plots:
         from app.plots import mission_figures
 
-        summary["plots"] = [str(p) for p in mission_figures(result, Path(plots),
-                                                               sim.crane_tip_n)]
+        summary["plots"] = [str(p) for p in mission_figures(result, Path(plots), sim.crane_tip_n)]
     if json_out:
         typer.echo(json.dumps(summary, indent=2, default=_json_default))
     else:
@@ -221,34 +246,69 @@ def scenario(
 ) -> None:
     """Former name of ``run`` (kept so old scripts work)."""
     typer.echo("note: 'scenario' is now 'run'", err=True)
-    run(mission=name, list_=list_, json_out=json_out, log=None, plots=None, seed=seed,
-        allocation=allocation, feedback=feedback, law=law, progress=False)
+    run(
+        mission=name,
+        list_=list_,
+        json_out=json_out,
+        log=None,
+        plots=None,
+        seed=seed,
+        allocation=allocation,
+        feedback=feedback,
+        law=law,
+        progress=False,
+    )
 
 
 def _print_result_table(summary: dict) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    table = Table(title=f"{summary['name']}  (simulated {summary['simulated_s']:.0f} s, "
-                        f"{summary['real_time_factor']}x real time)")
-    for col in ("leg", "type", "duration s", "RMS N m", "RMS E m", "RMS psi deg", "max util",
-                "saturated s"):
+    table = Table(
+        title=f"{summary['name']}  (simulated {summary['simulated_s']:.0f} s, "
+        f"{summary['real_time_factor']}x real time)"
+    )
+    for col in (
+        "leg",
+        "type",
+        "duration s",
+        "RMS N m",
+        "RMS E m",
+        "RMS psi deg",
+        "max util",
+        "saturated s",
+    ):
         table.add_column(col, justify="right")
     for leg in summary["legs"]:
-        table.add_row(f"{leg['index']} {leg['name']}", leg["type"], f"{leg['duration_s']:.0f}",
-                      f"{leg['rms_north_m']:.4f}", f"{leg['rms_east_m']:.4f}",
-                      f"{leg['rms_heading_deg']:.3f}", f"{leg['max_utilisation']:.2f}",
-                      f"{leg['saturated_s']:.1f}" + (" TIMEOUT" if leg["timed_out"] else ""))
-    table.add_row("scored", "", "", f"{summary['rms_north_m']:.4f}",
-                  f"{summary['rms_east_m']:.4f}", f"{summary['rms_heading_deg']:.3f}",
-                  f"{summary['max_thruster_utilisation']:.2f}",
-                  f"{summary['saturated_time_s']:.1f}", style="bold")
+        table.add_row(
+            f"{leg['index']} {leg['name']}",
+            leg["type"],
+            f"{leg['duration_s']:.0f}",
+            f"{leg['rms_north_m']:.4f}",
+            f"{leg['rms_east_m']:.4f}",
+            f"{leg['rms_heading_deg']:.3f}",
+            f"{leg['max_utilisation']:.2f}",
+            f"{leg['saturated_s']:.1f}" + (" TIMEOUT" if leg["timed_out"] else ""),
+        )
+    table.add_row(
+        "scored",
+        "",
+        "",
+        f"{summary['rms_north_m']:.4f}",
+        f"{summary['rms_east_m']:.4f}",
+        f"{summary['rms_heading_deg']:.3f}",
+        f"{summary['max_thruster_utilisation']:.2f}",
+        f"{summary['saturated_time_s']:.1f}",
+        style="bold",
+    )
     console = Console(width=120)
     console.print(table)
     final = summary["final_eta_n"]
-    console.print(f"final tree pose: N {final[0]:.3f} m, E {final[1]:.3f} m, D {final[2]:.2f} m, "
-                  f"heading {final[5]:.2f} deg; settling time "
-                  f"{summary['settling_time_s']} s; diverged: {summary['diverged']}")
+    console.print(
+        f"final tree pose: N {final[0]:.3f} m, E {final[1]:.3f} m, D {final[2]:.2f} m, "
+        f"heading {final[5]:.2f} deg; settling time "
+        f"{summary['settling_time_s']} s; diverged: {summary['diverged']}"
+    )
     for w in summary["warnings"]:
         console.print(f"[bold red]WARNING[/]: {w}")
 
@@ -273,9 +333,13 @@ def _drive(driver, recorder, show: bool) -> None:
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     sim = driver.sim
-    columns = (TextColumn("{task.description}"), BarColumn(),
-               TextColumn("leg {task.completed:.0f}/{task.total:.0f}"),
-               TextColumn("sim {task.fields[sim]:7.0f} s"), TimeElapsedColumn())
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("leg {task.completed:.0f}/{task.total:.0f}"),
+        TextColumn("sim {task.fields[sim]:7.0f} s"),
+        TimeElapsedColumn(),
+    )
     with Progress(*columns, disable=not show, transient=True) as bar:
         task = bar.add_task(driver.mission.name, total=len(driver.mission.legs), sim=0.0)
         while not driver.done:
@@ -283,11 +347,16 @@ def _drive(driver, recorder, show: bool) -> None:
             if recorder is not None:
                 _write_new_events(driver, recorder)
                 if len(rows):
-                    recorder.write_log(rows.data, crane_tip_n=sim.crane_tip_n,
-                                       wire_length_m=sim.wire_length_m)
+                    recorder.write_log(
+                        rows.data, crane_tip_n=sim.crane_tip_n, wire_length_m=sim.wire_length_m
+                    )
             leg = driver.current_leg
-            bar.update(task, completed=max(driver.leg_index, 0), sim=sim.t_s,
-                       description=f"{driver.mission.name}: {leg.type if leg else 'done'}")
+            bar.update(
+                task,
+                completed=max(driver.leg_index, 0),
+                sim=sim.t_s,
+                description=f"{driver.mission.name}: {leg.type if leg else 'done'}",
+            )
 
 
 def _write_new_events(driver, recorder) -> None:
@@ -303,16 +372,23 @@ def _open_recorder(path: str, spec, sim, seed):
     from app.recording import SessionRecorder, session_metadata
 
     metadata = session_metadata(sim, spec, seed=seed)  # seed None: the mission's
-    return SessionRecorder(path, metadata=metadata, params=sim.ps,
-                           n_thrusters=sim.n_thrusters, docking=sim.docking_frame)
+    return SessionRecorder(
+        path,
+        metadata=metadata,
+        params=sim.ps,
+        n_thrusters=sim.n_thrusters,
+        docking=sim.docking_frame,
+    )
 
 
 def _print_landings(summary: dict) -> None:
     for i, landing in enumerate(summary.get("landings", []), start=1):
         verdict = "LANDED" if landing["success"] else "FAILED"
-        typer.echo(f"landing {i}: {verdict} - miss {landing['miss_m']:.3f} m, heading error "
-                   f"{landing['heading_error_deg']:.2f} deg, contact speed "
-                   f"{landing['contact_speed_mps']:.3f} m/s, rests on the {landing['rests_on']}")
+        typer.echo(
+            f"landing {i}: {verdict} - miss {landing['miss_m']:.3f} m, heading error "
+            f"{landing['heading_error_deg']:.2f} deg, contact speed "
+            f"{landing['contact_speed_mps']:.3f} m/s, rests on the {landing['rests_on']}"
+        )
     if summary.get("failed"):
         typer.echo("mission FAILED", err=True)
 
@@ -328,12 +404,14 @@ def study(
     from missions import studies
 
     if name not in studies.STUDIES:
-        raise typer.BadParameter(f"study must be one of {', '.join(studies.STUDIES)}, "
-                                 f"got {name!r}")
+        raise typer.BadParameter(f"study must be one of {', '.join(studies.STUDIES)}, got {name!r}")
     rows = studies.table_4_1(duration, seed) if name == "table-4.1" else studies.table_4_2(seed)
     if json_out:
-        typer.echo(json.dumps([{"case": r.label, "ours": r.ours, "thesis": r.thesis}
-                               for r in rows], indent=2))
+        typer.echo(
+            json.dumps(
+                [{"case": r.label, "ours": r.ours, "thesis": r.thesis} for r in rows], indent=2
+            )
+        )
         return
     from rich.console import Console
     from rich.table import Table
@@ -342,8 +420,15 @@ def study(
     for col in ("case", "N ours", "N thesis", "E ours", "E thesis", "psi ours", "psi thesis"):
         table.add_column(col, justify="right")
     for r in rows:
-        table.add_row(r.label, f"{r.ours[0]:.4f}", f"{r.thesis[0]:.4f}", f"{r.ours[1]:.4f}",
-                      f"{r.thesis[1]:.4f}", f"{r.ours[2]:.4f}", f"{r.thesis[2]:.4f}")
+        table.add_row(
+            r.label,
+            f"{r.ours[0]:.4f}",
+            f"{r.thesis[0]:.4f}",
+            f"{r.ours[1]:.4f}",
+            f"{r.thesis[1]:.4f}",
+            f"{r.ours[2]:.4f}",
+            f"{r.thesis[2]:.4f}",
+        )
     Console(width=130).print(table)
 
 
@@ -352,17 +437,25 @@ def serve(
     host: Annotated[str, typer.Option(help="address the API and 3D view bind to")] = "127.0.0.1",
     port: Annotated[int, typer.Option(help="HTTP port (API, /docs, telemetry)")] = 8000,
     viser_port: Annotated[int, typer.Option("--viser-port", help="port of the 3D view")] = 8080,
-    token: Annotated[str | None, typer.Option(help="token for actions that change the run "
-                                                   "(generated and printed if not given)")] = None,
-    params: Annotated[str, typer.Option(help="parameter set when no mission is given")] =
-        "full-scale",
-    mission: Annotated[str | None, typer.Option(help="library mission or .toml to load and "
-                                                     "start")] = None,
+    token: Annotated[
+        str | None,
+        typer.Option(
+            help="token for actions that change the run (generated and printed if not given)"
+        ),
+    ] = None,
+    params: Annotated[
+        str, typer.Option(help="parameter set when no mission is given")
+    ] = "full-scale",
+    mission: Annotated[
+        str | None, typer.Option(help="library mission or .toml to load and start")
+    ] = None,
     depth: Annotated[float, typer.Option(help="tree depth without a mission [m]")] = 400.0,
-    recordings: Annotated[Path, typer.Option(help="directory for session logs (MCAP)")] =
-        Path("recordings"),
-    allow_remote: Annotated[bool, typer.Option("--allow-remote",
-                                               help="allow a non-loopback --host")] = False,
+    recordings: Annotated[Path, typer.Option(help="directory for session logs (MCAP)")] = Path(
+        "recordings"
+    ),
+    allow_remote: Annotated[
+        bool, typer.Option("--allow-remote", help="allow a non-loopback --host")
+    ] = False,
     paused: Annotated[bool, typer.Option("--paused", help="start paused")] = False,
     speed: Annotated[float, typer.Option(help="simulated s per wall s, 0.25..50")] = 1.0,
 ) -> None:
@@ -371,10 +464,19 @@ def serve(
     from app.server import serve as run_console
 
     try:
-        settings = ConsoleSettings(host=host, port=port, viser_port=viser_port, token=token,
-                                   params=params, mission=mission, depth_m=depth,
-                                   recordings_dir=recordings, allow_remote=allow_remote,
-                                   paused=paused, speed=speed)
+        settings = ConsoleSettings(
+            host=host,
+            port=port,
+            viser_port=viser_port,
+            token=token,
+            params=params,
+            mission=mission,
+            depth_m=depth,
+            recordings_dir=recordings,
+            allow_remote=allow_remote,
+            paused=paused,
+            speed=speed,
+        )
     except ValueError as err:
         raise typer.BadParameter(str(err)) from None
     try:

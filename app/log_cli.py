@@ -16,8 +16,11 @@ from app.recording import check_session, export_csv
 
 EXIT_COMPLETE, EXIT_TRUNCATED, EXIT_UNREADABLE = 0, 1, 2
 
-log_app = typer.Typer(no_args_is_help=True, add_completion=False,
-                      help="Session logs (MCAP): check what a file holds, export it as CSV.")
+log_app = typer.Typer(
+    no_args_is_help=True,
+    add_completion=False,
+    help="Session logs (MCAP): check what a file holds, export it as CSV.",
+)
 
 FileArg = Annotated[Path, typer.Argument(help="session log (.mcap)", show_default=False)]
 
@@ -28,19 +31,30 @@ def _print_report(report: dict) -> None:
 
     console = Console(width=110, highlight=False)
     status = report["status"].upper()
-    console.print(f"[bold]{report['file']}[/]: {status} "
-                  f"({report['intact_bytes']} of {report['file_bytes']} bytes readable)")
+    console.print(
+        f"[bold]{report['file']}[/]: {status} "
+        f"({report['intact_bytes']} of {report['file_bytes']} bytes readable)"
+    )
     if report["problem"]:
         console.print(f"  {report['problem']}")
     span = report["time_range_s"]
     if span:
-        console.print(f"  simulation time {span[0]:.2f} .. {span[1]:.2f} s, "
-                      f"{report['rows']} log rows, {report['events']} events")
-    console.print(f"  written by: {report['writer'] or '?'}; setup keys: "
-                  f"{', '.join(report['metadata_keys']) or 'none'}")
+        console.print(
+            f"  simulation time {span[0]:.2f} .. {span[1]:.2f} s, "
+            f"{report['rows']} log rows, {report['events']} events"
+        )
+    console.print(
+        f"  written by: {report['writer'] or '?'}; setup keys: "
+        f"{', '.join(report['metadata_keys']) or 'none'}"
+    )
     table = Table()
-    for col, justify in (("topic", "left"), ("schema", "left"), ("messages", "right"),
-                         ("first s", "right"), ("last s", "right")):
+    for col, justify in (
+        ("topic", "left"),
+        ("schema", "left"),
+        ("messages", "right"),
+        ("first s", "right"),
+        ("last s", "right"),
+    ):
         table.add_column(col, justify=justify)  # type: ignore[arg-type]
     for ch in report["channels"]:
         first = "" if ch["first_s"] is None else f"{ch['first_s']:.2f}"
@@ -60,8 +74,7 @@ def check(
         report = check_session(file)
     except ValueError as err:
         if json_out:
-            typer.echo(json.dumps({"file": str(file), "status": "unreadable",
-                                   "problem": str(err)}))
+            typer.echo(json.dumps({"file": str(file), "status": "unreadable", "problem": str(err)}))
         else:
             typer.echo(f"error: {err}", err=True)
         raise typer.Exit(EXIT_UNREADABLE) from None
@@ -75,8 +88,9 @@ def check(
 @log_app.command()
 def export(
     file: FileArg,
-    csv: Annotated[Path, typer.Option("--csv", help="folder for the CSV files",
-                                      show_default=False)],
+    csv: Annotated[
+        Path, typer.Option("--csv", help="folder for the CSV files", show_default=False)
+    ],
     force: Annotated[bool, typer.Option("--force", help="replace existing CSV files")] = False,
 ) -> None:
     """Write the numeric channels as CSV: session_log.csv (every log column, exact), one file

@@ -46,8 +46,9 @@ def pose_figure(rows: LogRows, legs, path: Path, title: str) -> Path:
     return path
 
 
-def track_figure(rows: LogRows, path: Path, title: str,
-                 crane_tip_n: NDArray[np.float64] | None = None) -> Path:
+def track_figure(
+    rows: LogRows, path: Path, title: str, crane_tip_n: NDArray[np.float64] | None = None
+) -> Path:
     fig, ax = plt.subplots(figsize=(7, 7))
     ref, tree, rov = rows["eta_ref_n"], rows["tree_eta_n"], rows["rov_eta_n"]
     ax.plot(ref[:, 1], ref[:, 0], "k--", lw=1, label="reference")
@@ -68,8 +69,11 @@ def track_figure(rows: LogRows, path: Path, title: str,
 
 def forces_figure(rows: LogRows, legs, path: Path, title: str) -> Path:
     t = rows.t_s
-    tau_tree, tau_ach, util = rows["tau_tree_cmd"], rows["tau_rov_ach_b"], \
-        rows["thruster_utilisation"]
+    tau_tree, tau_ach, util = (
+        rows["tau_tree_cmd"],
+        rows["tau_rov_ach_b"],
+        rows["thruster_utilisation"],
+    )
     n_thrusters = rows.n_thrusters
     fig, axes = plt.subplots(3, 1, figsize=(10, 7.5), sharex=True)
     names = ("surge X [N]", "sway Y [N]", "yaw N [N m]")
@@ -104,8 +108,8 @@ def mission_figures(result, out_dir: Path, crane_tip_n=None) -> list[Path]:
     name = result.name
     return [
         pose_figure(data, result.legs, out_dir / f"{name}-pose.png", f"{name}: pose"),
-        track_figure(data, out_dir / f"{name}-track.png", f"{name}: north-east track",
-                     crane_tip_n),
-        forces_figure(data, result.legs, out_dir / f"{name}-forces.png",
-                      f"{name}: forces and thrusters"),
+        track_figure(data, out_dir / f"{name}-track.png", f"{name}: north-east track", crane_tip_n),
+        forces_figure(
+            data, result.legs, out_dir / f"{name}-forces.png", f"{name}: forces and thrusters"
+        ),
     ]

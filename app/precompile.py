@@ -21,8 +21,9 @@ def main() -> None:
     for feedback in ("perfect", "ekf"):
         for allocation in ("pinv", "priority"):
             for reference in ("first", "third"):
-                settings = ControlSettings(feedback=feedback, allocation=allocation,
-                                           reference=reference, feedforward=True)
+                settings = ControlSettings(
+                    feedback=feedback, allocation=allocation, reference=reference, feedforward=True
+                )
                 Simulation(ps, tree_depth_m=100.0, settings=settings).step(2)
     Simulation(ps, tree_depth_m=100.0, control=False).step(2)
     print(f"precompile: numeric core compiled in {time.perf_counter() - t0:.0f} s")

@@ -24,8 +24,17 @@ from app.api import control, environment, gains, health, missions, recordings, r
 from app.api.state import StateJsonCache
 from app.console import Console, ConsoleSettings
 
-ROUTERS = (health.router, state.router, run.router, missions.router, gains.router,
-           control.router, environment.router, recordings.router, replay.router)
+ROUTERS = (
+    health.router,
+    state.router,
+    run.router,
+    missions.router,
+    gains.router,
+    control.router,
+    environment.router,
+    recordings.router,
+    replay.router,
+)
 
 
 def create_app(settings: ConsoleSettings) -> FastAPI:
@@ -41,8 +50,7 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
                 view = await asyncio.to_thread(_start_view, console, settings)
             app.state.view = view
             if settings.announce:
-                print(addresses(settings, console.token, view.port if view else None),
-                      flush=True)
+                print(addresses(settings, console.token, view.port if view else None), flush=True)
             yield
         finally:
             console.loop.stop()
@@ -51,11 +59,15 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
             if view is not None:
                 await asyncio.to_thread(view.stop)
 
-    app = FastAPI(title="ROV console", version="0.1.0", lifespan=lifespan,
-                  description="Simulator, control system and operator console for an ROV "
-                              "that positions a subsea tree hanging from a vessel's wire. "
-                              "Watching needs no token; actions that change the run need "
-                              "'Authorization: Bearer <token>'.")
+    app = FastAPI(
+        title="ROV console",
+        version="0.1.0",
+        lifespan=lifespan,
+        description="Simulator, control system and operator console for an ROV "
+        "that positions a subsea tree hanging from a vessel's wire. "
+        "Watching needs no token; actions that change the run need "
+        "'Authorization: Bearer <token>'.",
+    )
     app.state.console = console
     app.state.state_cache = StateJsonCache()
     app.state.view = None
@@ -76,26 +88,33 @@ async def _validation_error(request: Request, exc: Exception) -> JSONResponse:
     assert isinstance(exc, RequestValidationError)
     errors = exc.errors()
     message = "; ".join(f"{'.'.join(str(p) for p in e['loc'])}: {e['msg']}" for e in errors)
-    return JSONResponse(status_code=422, content={
-        "detail": message, "errors": [{"loc": list(e["loc"]), "msg": e["msg"],
-                                       "type": e["type"]} for e in errors]})
+    return JSONResponse(
+        status_code=422,
+        content={
+            "detail": message,
+            "errors": [{"loc": list(e["loc"]), "msg": e["msg"], "type": e["type"]} for e in errors],
+        },
+    )
 
 
 def addresses(settings: ConsoleSettings, token: str, viser_port: int | None = None) -> str:
     """What ``serve`` prints: where to open the console and the token."""
     host = f"[{settings.host}]" if ":" in settings.host else settings.host
-    lines = [f"3D console:  http://{host}:{viser_port or settings.viser_port}/",
-             f"HTTP API:    http://{host}:{settings.port}/docs  "
-             f"(OpenAPI: /openapi.json, telemetry: ws://{host}:{settings.port}/api/telemetry)",
-             f"token:       {token}   (needed to change the run; watching needs none)"]
+    lines = [
+        f"3D console:  http://{host}:{viser_port or settings.viser_port}/",
+        f"HTTP API:    http://{host}:{settings.port}/docs  "
+        f"(OpenAPI: /openapi.json, telemetry: ws://{host}:{settings.port}/api/telemetry)",
+        f"token:       {token}   (needed to change the run; watching needs none)",
+    ]
     return "\n".join(lines)
 
 
 def serve(settings: ConsoleSettings) -> None:
     """Run until interrupted (the ``rov-console serve`` command); prints where to go."""
     app = create_app(replace(settings, announce=True))
-    uvicorn.Server(uvicorn.Config(app, host=settings.host, port=settings.port,
-                                  log_level="warning")).run()
+    uvicorn.Server(
+        uvicorn.Config(app, host=settings.host, port=settings.port, log_level="warning")
+    ).run()
 
 
 def free_port(host: str = "127.0.0.1") -> int:
@@ -139,8 +158,11 @@ def serve_in_thread(settings: ConsoleSettings, timeout_s: float = 300.0) -> Iter
     if settings.view and settings.viser_port == 0:
         settings = replace(settings, viser_port=free_port(settings.host))
     app = create_app(settings)
-    server = uvicorn.Server(uvicorn.Config(app, host=settings.host, port=settings.port,
-                                           log_level="warning", lifespan="on"))
+    server = uvicorn.Server(
+        uvicorn.Config(
+            app, host=settings.host, port=settings.port, log_level="warning", lifespan="on"
+        )
+    )
     thread = threading.Thread(target=server.run, name="console-http", daemon=True)
     thread.start()
     deadline = time.monotonic() + timeout_s

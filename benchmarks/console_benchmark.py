@@ -35,12 +35,20 @@ from app.console import ConsoleSettings
 from app.server import serve_in_thread
 
 CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-                 "--no-first-run", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync",
-                 # five pages at once: the ones not in front must not be throttled to 1 Hz
-                 "--disable-background-timer-throttling", "--disable-renderer-backgrounding",
-                 "--disable-backgrounding-occluded-windows"]
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    # five pages at once: the ones not in front must not be throttled to 1 Hz
+    "--disable-background-timer-throttling",
+    "--disable-renderer-backgrounding",
+    "--disable-backgrounding-occluded-windows",
+]
 TELEMETRY_HZ = 20
 COUNTING_SCRIPT = """
 (() => {
@@ -87,13 +95,21 @@ def renice_browsers(profile_dir: str, niceness: int) -> int:
 def run(clients: int, seconds: float, mission: str, browser_nice: int) -> dict:
     from playwright.sync_api import sync_playwright
 
-    settings = ConsoleSettings(port=0, viser_port=0, mission=mission,
-                               recordings_dir=Path(tempfile.mkdtemp(prefix="bench-rec-")))
+    settings = ConsoleSettings(
+        port=0,
+        viser_port=0,
+        mission=mission,
+        recordings_dir=Path(tempfile.mkdtemp(prefix="bench-rec-")),
+    )
     with serve_in_thread(settings) as srv, sync_playwright() as pw:
         profile = tempfile.mkdtemp(prefix="bench-chromium-")
         context = pw.chromium.launch_persistent_context(
-            profile, executable_path=CHROMIUM,
-            args=CHROMIUM_ARGS, headless=True, viewport={"width": 1280, "height": 800})
+            profile,
+            executable_path=CHROMIUM,
+            args=CHROMIUM_ARGS,
+            headless=True,
+            viewport={"width": 1280, "height": 800},
+        )
         try:
             context.add_init_script(COUNTING_SCRIPT)
             pages = []
@@ -106,8 +122,9 @@ def run(clients: int, seconds: float, mission: str, browser_nice: int) -> dict:
                 cdp.send("Page.setWebLifecycleState", {"state": "active"})
                 page.goto(srv.view_url)
                 page.get_by_text("Unlock controls").wait_for(timeout=120_000)
-                ws_url = srv.base_url.replace("http", "ws") + \
-                    f"/api/telemetry?rate_hz={TELEMETRY_HZ}"
+                ws_url = (
+                    srv.base_url.replace("http", "ws") + f"/api/telemetry?rate_hz={TELEMETRY_HZ}"
+                )
                 page.evaluate(f"window.__openTelemetry({json.dumps(ws_url)})")
                 pages.append(page)
             reniced = renice_browsers(profile, browser_nice) if browser_nice else 0
@@ -125,15 +142,21 @@ def run(clients: int, seconds: float, mission: str, browser_nice: int) -> dict:
             state = httpx.get(f"{srv.base_url}/api/state").json()
         finally:
             context.close()
+
     def rates(key: str) -> list[float]:
         """Per page, over that page's own clock (pages are read one after the other)."""
-        return [1e3 * (a[key] - b[key]) / (a["now"] - b["now"])
-                for a, b in zip(after, before, strict=True)]
+        return [
+            1e3 * (a[key] - b[key]) / (a["now"] - b["now"])
+            for a, b in zip(after, before, strict=True)
+        ]
 
     panel_rates, tele_rates = rates("panel"), rates("telemetry")
     return {
-        "clients": clients, "window_s": round(wall, 2), "mission": mission,
-        "browser_nice": browser_nice, "browser_processes_reniced": reniced,
+        "clients": clients,
+        "window_s": round(wall, 2),
+        "mission": mission,
+        "browser_nice": browser_nice,
+        "browser_processes_reniced": reniced,
         "loop_ticks_per_s": round(ticks / wall, 2),
         "simulated_s_per_wall_s": round(t_sim / wall, 4),
         "jitter_median_ms": round(float(np.median(lateness_ms)), 3),
@@ -143,7 +166,8 @@ def run(clients: int, seconds: float, mission: str, browser_nice: int) -> dict:
         "panel_status_updates_per_s_per_client": [round(r, 1) for r in panel_rates],
         "telemetry_states_per_s_per_client": [round(r, 1) for r in tele_rates],
         "telemetry_requested_hz": TELEMETRY_HZ,
-        "mission_state": state["mission"]["state"], "t_s": round(state["t_s"], 2),
+        "mission_state": state["mission"]["state"],
+        "t_s": round(state["t_s"], 2),
         "view_errors": view_errors,
     }
 
@@ -153,25 +177,39 @@ def main() -> None:
     parser.add_argument("--clients", type=int, default=5)
     parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--mission", default="full-square-400")
-    parser.add_argument("--browser-nice", type=int, default=0,
-                        help="niceness for the browsers (e.g. 10: as if on other machines)")
+    parser.add_argument(
+        "--browser-nice",
+        type=int,
+        default=0,
+        help="niceness for the browsers (e.g. 10: as if on other machines)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args()
     result = run(args.clients, args.seconds, args.mission, args.browser_nice)
     if args.json:
         print(json.dumps(result, indent=2))
         return
-    print(f"{result['clients']} browsers (nice {result['browser_nice']}), "
-          f"{result['window_s']} s window, mission {result['mission']} "
-          f"({result['mission_state']})")
-    print(f"loop: {result['loop_ticks_per_s']} ticks/s, {result['simulated_s_per_wall_s']} "
-          f"simulated s per wall s, overruns {result['overruns']}")
-    print(f"jitter: median {result['jitter_median_ms']} ms, p99 {result['jitter_p99_ms']} ms, "
-          f"max {result['jitter_max_ms']} ms")
-    print(f"3D view status refreshes/s per client (sent at 5 Hz): "
-          f"{result['panel_status_updates_per_s_per_client']}")
-    print(f"telemetry states/s per client (asked {TELEMETRY_HZ} Hz): "
-          f"{result['telemetry_states_per_s_per_client']}")
+    print(
+        f"{result['clients']} browsers (nice {result['browser_nice']}), "
+        f"{result['window_s']} s window, mission {result['mission']} "
+        f"({result['mission_state']})"
+    )
+    print(
+        f"loop: {result['loop_ticks_per_s']} ticks/s, {result['simulated_s_per_wall_s']} "
+        f"simulated s per wall s, overruns {result['overruns']}"
+    )
+    print(
+        f"jitter: median {result['jitter_median_ms']} ms, p99 {result['jitter_p99_ms']} ms, "
+        f"max {result['jitter_max_ms']} ms"
+    )
+    print(
+        f"3D view status refreshes/s per client (sent at 5 Hz): "
+        f"{result['panel_status_updates_per_s_per_client']}"
+    )
+    print(
+        f"telemetry states/s per client (asked {TELEMETRY_HZ} Hz): "
+        f"{result['telemetry_states_per_s_per_client']}"
+    )
 
 
 if __name__ == "__main__":

@@ -23,8 +23,14 @@ from sim import params, plant, sensors
 
 def thesis_current() -> envmod.CurrentParams:
     d = math.radians(225.0)
-    return envmod.CurrentParams(speed_mps=0.1, direction_rad=d, speed_min_mps=0.1,
-                                speed_max_mps=0.1, direction_min_rad=d, direction_max_rad=d)
+    return envmod.CurrentParams(
+        speed_mps=0.1,
+        direction_rad=d,
+        speed_min_mps=0.1,
+        speed_max_mps=0.1,
+        direction_min_rad=d,
+        direction_max_rad=d,
+    )
 
 
 @njit(cache=True)
@@ -45,8 +51,9 @@ def _time_sensors(x, held, noise, fresh, reps):
 def _time_ekf(xh, Pc, C, dt, reps):
     tau = np.zeros(3)
     for _ in range(reps):
-        xh, Pc = ekf.predict(xh, Pc, tau, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq,
-                             C.T_b, C.GQG)
+        xh, Pc = ekf.predict(
+            xh, Pc, tau, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, C.T_b, C.GQG
+        )
     return xh
 
 
@@ -73,9 +80,27 @@ def _time_controller(C, reps):
     i_n = np.zeros(3)
     z = np.zeros(3)
     for _ in range(reps):
-        _, i_n, _, _, _ = pid.tree_pid(eta, z, z, z, z, i_n, C.Kp, C.Ki, C.Kd, True,
-                                       C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, loop.EYE3,
-                                       loop.EYE3, C.i_limit, 0.01)
+        _, i_n, _, _, _ = pid.tree_pid(
+            eta,
+            z,
+            z,
+            z,
+            z,
+            i_n,
+            C.Kp,
+            C.Ki,
+            C.Kd,
+            True,
+            C.M,
+            C.D_l,
+            C.D_nl,
+            C.k_h,
+            C.p_eq,
+            loop.EYE3,
+            loop.EYE3,
+            C.i_limit,
+            0.01,
+        )
     return i_n
 
 
@@ -111,22 +136,26 @@ def main() -> None:
         t0 = time.perf_counter()
         steps = len(sim.run_for(args.duration))
         best = min(best, time.perf_counter() - t0)
-    print(f"closed loop (model scale, EKF, priority allocation, feedforward): "
-          f"{args.duration:.0f} s simulated in {best:.3f} s")
-    print(f"  {steps / best:,.0f} steps/s, real-time factor {args.duration / best:,.0f}x, "
-          f"{best / steps * 1e6:.1f} us per step")
+    print(
+        f"closed loop (model scale, EKF, priority allocation, feedforward): "
+        f"{args.duration:.0f} s simulated in {best:.3f} s"
+    )
+    print(
+        f"  {steps / best:,.0f} steps/s, real-time factor {args.duration / best:,.0f}x, "
+        f"{best / steps * 1e6:.1f} us per step"
+    )
     C = sim.C
     env = sim._environment_chunk(1)[0]
     n = np.zeros(ps.rov.thrusters.T.shape[1])
     x = sim.plant_state
     cost = {
         "plant RK4 step (4 rhs)": _per_call(_time_plant, x, n, env, sim.arrays, 0.01),
-        "sensor sampling": _per_call(_time_sensors, x, sim.held_y, np.zeros(11),
-                                     np.ones(5, dtype=np.bool_)),
+        "sensor sampling": _per_call(
+            _time_sensors, x, sim.held_y, np.zeros(11), np.ones(5, dtype=np.bool_)
+        ),
         "EKF predict": _per_call(_time_ekf, sim.xhat, sim.P_cov, C, 0.01),
         "EKF correct (position)": _per_call(_time_ekf_correct, sim.xhat, sim.P_cov),
-        "reference (3rd order)": _per_call(_time_reference, np.zeros(9), np.ones(3),
-                                           C.ref_params),
+        "reference (3rd order)": _per_call(_time_reference, np.zeros(9), np.ones(3), C.ref_params),
         "controller (PID + FF)": _per_call(_time_controller, C),
         "allocation (priority)": _per_call(_time_allocation, C),
     }

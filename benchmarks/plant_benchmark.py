@@ -21,10 +21,16 @@ def main() -> None:
     args = parser.parse_args()
     ps = params.load(args.params)
     d = math.radians(225.0)
-    cur = envmod.CurrentParams(speed_mps=0.1, direction_rad=d, speed_min_mps=0.05,
-                               speed_max_mps=0.15, direction_min_rad=d - 0.2,
-                               direction_max_rad=d + 0.2, speed_walk_mps_per_sqrt_s=0.002,
-                               direction_walk_rad_per_sqrt_s=0.002)
+    cur = envmod.CurrentParams(
+        speed_mps=0.1,
+        direction_rad=d,
+        speed_min_mps=0.05,
+        speed_max_mps=0.15,
+        direction_min_rad=d - 0.2,
+        direction_max_rad=d + 0.2,
+        speed_walk_mps_per_sqrt_s=0.002,
+        direction_walk_rad_per_sqrt_s=0.002,
+    )
     t0 = time.perf_counter()
     Simulation(ps, tree_depth_m=400.0, current=cur, control=False).run_for(1.0)
     print(f"first run (includes compilation or cache load): {time.perf_counter() - t0:.1f} s")
@@ -37,8 +43,10 @@ def main() -> None:
         best = min(best, time.perf_counter() - t0)
         steps = len(rows)
     print(f"{args.params}: {args.duration:.0f} s simulated, {steps} steps at 100 Hz")
-    print(f"  wall time {best:.3f} s, {steps / best:,.0f} steps/s, "
-          f"real-time factor {args.duration / best:,.0f}x")
+    print(
+        f"  wall time {best:.3f} s, {steps / best:,.0f} steps/s, "
+        f"real-time factor {args.duration / best:,.0f}x"
+    )
 
 
 if __name__ == "__main__":

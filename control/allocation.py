@@ -243,8 +243,9 @@ def _result(layout: _Layout, force: FloatArray, tau_b: FloatArray) -> Allocation
     limit = np.where(force >= 0.0, layout.f_hi, -layout.f_lo)
     return AllocationResult(
         force_newton=_frozen(force),
-        speed_rps=_frozen(thrusters.speed_from_thrust(force, layout.k_pos, layout.k_neg,
-                                                     layout.n_max)),
+        speed_rps=_frozen(
+            thrusters.speed_from_thrust(force, layout.k_pos, layout.k_neg, layout.n_max)
+        ),
         tau_achieved=_frozen(achieved),
         tau_unmet=_frozen(np.where(layout.dof_mask, tau_b - achieved, 0.0)),
         utilisation=_frozen(np.minimum(np.abs(force) / limit, 1.0)),

@@ -28,10 +28,27 @@ M_MAX = 8
 _POSE6 = ("north_m", "east_m", "down_m", "roll_rad", "pitch_rad", "yaw_rad")
 _VEL6 = ("u_mps", "v_mps", "w_mps", "p_rad_s", "q_rad_s", "r_rad_s")
 _AXES3 = ("surge_newton", "sway_newton", "yaw_newton_m")
-_AXES6 = ("surge_newton", "sway_newton", "heave_newton", "roll_newton_m", "pitch_newton_m",
-          "yaw_newton_m")
-_Y_NAMES = ("pos_north_m", "pos_east_m", "pos_down_m", "depth_m", "heading_rad", "dvl_u_mps",
-            "dvl_v_mps", "dvl_w_mps", "gyro_p_rad_s", "gyro_q_rad_s", "gyro_r_rad_s")
+_AXES6 = (
+    "surge_newton",
+    "sway_newton",
+    "heave_newton",
+    "roll_newton_m",
+    "pitch_newton_m",
+    "yaw_newton_m",
+)
+_Y_NAMES = (
+    "pos_north_m",
+    "pos_east_m",
+    "pos_down_m",
+    "depth_m",
+    "heading_rad",
+    "dvl_u_mps",
+    "dvl_v_mps",
+    "dvl_w_mps",
+    "gyro_p_rad_s",
+    "gyro_q_rad_s",
+    "gyro_r_rad_s",
+)
 
 
 @dataclass(frozen=True)
@@ -52,8 +69,9 @@ class LogColumn:
         return len(self.elements)
 
 
-def _block(name: str, unit: str, frame: str, description: str,
-           elements: Sequence[str]) -> LogColumn:
+def _block(
+    name: str, unit: str, frame: str, description: str, elements: Sequence[str]
+) -> LogColumn:
     return LogColumn(name, unit, frame, description, tuple(elements))
 
 
@@ -63,46 +81,122 @@ def _thr(kind: str) -> tuple[str, ...]:
 
 LOG_COLUMNS: tuple[LogColumn, ...] = (
     _block("t_s", "s", "-", "simulation time at the end of the step", ["t_s"]),
-    _block("tree_eta_n", "m, rad", "NED", "true tree pose [north, east, down, roll, pitch, yaw]",
-           [f"tree_{n}" for n in _POSE6]),
+    _block(
+        "tree_eta_n",
+        "m, rad",
+        "NED",
+        "true tree pose [north, east, down, roll, pitch, yaw]",
+        [f"tree_{n}" for n in _POSE6],
+    ),
     _block("rov_eta_n", "m, rad", "NED", "true ROV pose", [f"rov_{n}" for n in _POSE6]),
-    _block("tree_nu_b", "m/s, rad/s", "tree axes", "true tree velocity [u, v, w, p, q, r]",
-           [f"tree_{n}" for n in _VEL6]),
+    _block(
+        "tree_nu_b",
+        "m/s, rad/s",
+        "tree axes",
+        "true tree velocity [u, v, w, p, q, r]",
+        [f"tree_{n}" for n in _VEL6],
+    ),
     _block("rov_nu_b", "m/s, rad/s", "ROV axes", "true ROV velocity", [f"rov_{n}" for n in _VEL6]),
-    _block("eta_hat_n", "m, rad", "NED", "estimated tree [north, east, yaw]",
-           ["est_tree_north_m", "est_tree_east_m", "est_tree_yaw_rad"]),
-    _block("nu_hat_tree", "m/s, rad/s", "tree axes", "estimated tree [u, v, r]",
-           ["est_tree_u_mps", "est_tree_v_mps", "est_tree_r_rad_s"]),
-    _block("bias_tree", "N, N m", "tree axes", "estimated bias force",
-           [f"bias_{n}" for n in _AXES3]),
-    _block("eta_ref_n", "m, rad", "NED", "reference pose [north, east, yaw]",
-           ["ref_north_m", "ref_east_m", "ref_yaw_rad"]),
-    _block("eta_ref_rate_n", "m/s, rad/s", "NED", "reference rate",
-           ["ref_north_rate_mps", "ref_east_rate_mps", "ref_yaw_rate_rad_s"]),
-    _block("tau_tree_cmd", "N, N m", "tree axes", "commanded force on the tree",
-           [f"tau_tree_{n}" for n in _AXES3]),
-    _block("tau_rov_cmd_b", "N, N m", "ROV axes", "commanded ROV wrench",
-           [f"tau_rov_cmd_{n}" for n in _AXES6]),
-    _block("tau_rov_ach_b", "N, N m", "ROV axes", "achieved ROV wrench",
-           [f"tau_rov_ach_{n}" for n in _AXES6]),
+    _block(
+        "eta_hat_n",
+        "m, rad",
+        "NED",
+        "estimated tree [north, east, yaw]",
+        ["est_tree_north_m", "est_tree_east_m", "est_tree_yaw_rad"],
+    ),
+    _block(
+        "nu_hat_tree",
+        "m/s, rad/s",
+        "tree axes",
+        "estimated tree [u, v, r]",
+        ["est_tree_u_mps", "est_tree_v_mps", "est_tree_r_rad_s"],
+    ),
+    _block(
+        "bias_tree", "N, N m", "tree axes", "estimated bias force", [f"bias_{n}" for n in _AXES3]
+    ),
+    _block(
+        "eta_ref_n",
+        "m, rad",
+        "NED",
+        "reference pose [north, east, yaw]",
+        ["ref_north_m", "ref_east_m", "ref_yaw_rad"],
+    ),
+    _block(
+        "eta_ref_rate_n",
+        "m/s, rad/s",
+        "NED",
+        "reference rate",
+        ["ref_north_rate_mps", "ref_east_rate_mps", "ref_yaw_rate_rad_s"],
+    ),
+    _block(
+        "tau_tree_cmd",
+        "N, N m",
+        "tree axes",
+        "commanded force on the tree",
+        [f"tau_tree_{n}" for n in _AXES3],
+    ),
+    _block(
+        "tau_rov_cmd_b",
+        "N, N m",
+        "ROV axes",
+        "commanded ROV wrench",
+        [f"tau_rov_cmd_{n}" for n in _AXES6],
+    ),
+    _block(
+        "tau_rov_ach_b",
+        "N, N m",
+        "ROV axes",
+        "achieved ROV wrench",
+        [f"tau_rov_ach_{n}" for n in _AXES6],
+    ),
     _block("thruster_force", "N", "-", "thruster forces (unused slots 0)", _thr("force_newton")),
     _block("thruster_speed", "rev/s", "-", "propeller speeds", _thr("speed_rps")),
-    _block("thruster_utilisation", "-", "-", "force over the thruster's limit, 0..1",
-           _thr("utilisation")),
-    _block("control_terms", "N, N m", "tree axes", "P, I, D and feedforward parts of the tree "
-           "force", [f"term_{p}_{a}" for p in ("p", "i", "d", "ff") for a in _AXES3]),
-    _block("y", "mixed", "sensor", "held sensor values (sim.sensors)",
-           [f"y_{n}" for n in _Y_NAMES]),
+    _block(
+        "thruster_utilisation",
+        "-",
+        "-",
+        "force over the thruster's limit, 0..1",
+        _thr("utilisation"),
+    ),
+    _block(
+        "control_terms",
+        "N, N m",
+        "tree axes",
+        "P, I, D and feedforward parts of the tree force",
+        [f"term_{p}_{a}" for p in ("p", "i", "d", "ff") for a in _AXES3],
+    ),
+    _block(
+        "y", "mixed", "sensor", "held sensor values (sim.sensors)", [f"y_{n}" for n in _Y_NAMES]
+    ),
     _block("mode", "-", "-", "supervisor mode: 0 tree controller, 1 free ROV", ["mode"]),
-    _block("nis", "-", "-", "normalised innovation squared of north, east and heading fixes",
-           ["nis_north", "nis_east", "nis_heading"]),
-    _block("accepted", "-", "-", "1 where a fresh sample was accepted this step",
-           [f"accepted_{s}" for s in SENSOR_NAMES]),
-    _block("crane_tip_ne", "m", "NED", "crane tip north and east",
-           ["crane_tip_north_m", "crane_tip_east_m"]),
-    _block("wire_rest_length", "m", "-", "wire payout below the crane tip, unloaded length plus "
-           "its stretch under its own weight",
-           ["wire_rest_length_m"]),
+    _block(
+        "nis",
+        "-",
+        "-",
+        "normalised innovation squared of north, east and heading fixes",
+        ["nis_north", "nis_east", "nis_heading"],
+    ),
+    _block(
+        "accepted",
+        "-",
+        "-",
+        "1 where a fresh sample was accepted this step",
+        [f"accepted_{s}" for s in SENSOR_NAMES],
+    ),
+    _block(
+        "crane_tip_ne",
+        "m",
+        "NED",
+        "crane tip north and east",
+        ["crane_tip_north_m", "crane_tip_east_m"],
+    ),
+    _block(
+        "wire_rest_length",
+        "m",
+        "-",
+        "wire payout below the crane tip, unloaded length plus its stretch under its own weight",
+        ["wire_rest_length_m"],
+    ),
     _block("wire_tension", "N", "-", "wire tension at the tree", ["wire_tension_newton"]),
 )
 
@@ -146,7 +240,7 @@ class Layout:
             first = index.get(col.elements[0])
             if first is None:
                 continue
-            if tuple(names[first:first + col.width]) == col.elements:
+            if tuple(names[first : first + col.width]) == col.elements:
                 starts[col.name] = first
                 widths[col.name] = col.width
         return Layout(tuple(names), starts, widths)
@@ -159,8 +253,10 @@ class Layout:
         try:
             start = self.starts[name]
         except KeyError:
-            raise KeyError(f"log column block {name!r} is not in this row layout "
-                           f"(known: {', '.join(self.starts)})") from None
+            raise KeyError(
+                f"log column block {name!r} is not in this row layout "
+                f"(known: {', '.join(self.starts)})"
+            ) from None
         return slice(start, start + self.widths[name])
 
     def take(self, rows: FloatArray, name: str) -> FloatArray:
@@ -216,8 +312,7 @@ class LogRows:
 
     data: FloatArray
     n_thrusters: int = M_MAX
-    quality_counters: NDArray[np.int64] = field(
-        default_factory=lambda: np.zeros((5, 4), np.int64))
+    quality_counters: NDArray[np.int64] = field(default_factory=lambda: np.zeros((5, 4), np.int64))
     layout: Layout = LAYOUT
 
     def __len__(self) -> int:
@@ -226,7 +321,7 @@ class LogRows:
     def __getitem__(self, name: str) -> FloatArray:
         block = self.layout.take(self.data, name)
         if name.startswith("thruster_"):
-            return block[:, :self.n_thrusters]
+            return block[:, : self.n_thrusters]
         return block
 
     @property
@@ -235,16 +330,21 @@ class LogRows:
 
     def plant_state(self) -> FloatArray:
         """(n, 24) plant state [tree eta, tree nu, ROV eta, ROV nu] (see sim.plant)."""
-        return np.hstack([self["tree_eta_n"], self["tree_nu_b"], self["rov_eta_n"],
-                          self["rov_nu_b"]])
+        return np.hstack(
+            [self["tree_eta_n"], self["tree_nu_b"], self["rov_eta_n"], self["rov_nu_b"]]
+        )
 
     def last(self) -> FloatArray:
         """The last row (a copy)."""
         return self.data[-1].copy()
 
     def concat(self, other: LogRows) -> LogRows:
-        return LogRows(np.vstack([self.data, other.data]), self.n_thrusters,
-                       other.quality_counters, self.layout)
+        return LogRows(
+            np.vstack([self.data, other.data]),
+            self.n_thrusters,
+            other.quality_counters,
+            self.layout,
+        )
 
     @staticmethod
     def empty(n_thrusters: int = M_MAX) -> LogRows:
@@ -254,5 +354,6 @@ class LogRows:
     def join(parts: Sequence[LogRows], n_thrusters: int) -> LogRows:
         if not parts:
             return LogRows.empty(n_thrusters)
-        return LogRows(np.vstack([p.data for p in parts]), n_thrusters,
-                       parts[-1].quality_counters.copy())
+        return LogRows(
+            np.vstack([p.data for p in parts]), n_thrusters, parts[-1].quality_counters.copy()
+        )

@@ -38,7 +38,6 @@ MODES: tuple[Mode, ...] = ("tree", "free")
 """Supervisor modes, by their code in the log (0 tree controller, 1 free-ROV station keeping)."""
 
 
-
 @dataclass(frozen=True)
 class Gains:
     """Tree-controller gains [surge, sway, yaw] (appendix B)."""
@@ -54,19 +53,23 @@ class Gains:
                 raise ValueError(f"gains.{name} must have 3 entries [surge, sway, yaw]")
             for i, v in enumerate(values):
                 if not (math.isfinite(v) and 0.0 <= v <= GAIN_LIMITS[name]):
-                    raise ValueError(f"gains.{name}[{i}] must be in [0, {GAIN_LIMITS[name]:g}],"
-                                     f" got {v}")
+                    raise ValueError(
+                        f"gains.{name}[{i}] must be in [0, {GAIN_LIMITS[name]:g}], got {v}"
+                    )
 
     @staticmethod
     def of(kp: Sequence[float], ki: Sequence[float], kd: Sequence[float]) -> Gains:
         """Gains from three [surge, sway, yaw] sequences (checked like the constructor)."""
         for name, v in (("kp", kp), ("ki", ki), ("kd", kd)):
             if len(v) != 3:
-                raise ValueError(f"gains.{name} must have 3 entries [surge, sway, yaw], "
-                                 f"got {len(v)}")
-        return Gains((float(kp[0]), float(kp[1]), float(kp[2])),
-                     (float(ki[0]), float(ki[1]), float(ki[2])),
-                     (float(kd[0]), float(kd[1]), float(kd[2])))
+                raise ValueError(
+                    f"gains.{name} must have 3 entries [surge, sway, yaw], got {len(v)}"
+                )
+        return Gains(
+            (float(kp[0]), float(kp[1]), float(kp[2])),
+            (float(ki[0]), float(ki[1]), float(ki[2])),
+            (float(kd[0]), float(kd[1]), float(kd[2])),
+        )
 
     def heading_only(self) -> Gains:
         """Surge and sway gains at zero: the sea trial's heading-only mode."""
@@ -92,11 +95,13 @@ class ControlSettings:
         choices = {"feedback": FEEDBACKS, "allocation": ALLOCATIONS, "reference": REFERENCES}
         for name, allowed in choices.items():
             if getattr(self, name) not in allowed:
-                raise ValueError(f"{name} must be one of {', '.join(allowed)}, "
-                                 f"got {getattr(self, name)!r}")
+                raise ValueError(
+                    f"{name} must be one of {', '.join(allowed)}, got {getattr(self, name)!r}"
+                )
         if not math.isfinite(self.heave_force_newton) or abs(self.heave_force_newton) > 1e5:
-            raise ValueError(f"heave_force_newton must be in [-1e5, 1e5] N, "
-                             f"got {self.heave_force_newton}")
+            raise ValueError(
+                f"heave_force_newton must be in [-1e5, 1e5] N, got {self.heave_force_newton}"
+            )
 
 
 def _ref_params(ps: ParameterSet, kind: Reference) -> FloatArray:
@@ -105,13 +110,21 @@ def _ref_params(ps: ParameterSet, kind: Reference) -> FloatArray:
     speed = np.array([r.max_speed_mps, r.max_speed_mps, math.radians(r.max_yaw_rate_deg_s)])
     if kind == "first":
         # thesis fig. 3.5: first-order low pass (time constant 1 / omega) with saturated rate
-        return refkernel.pack_first_order(reference.FirstOrderParams(
-            time_constant_s=np.full(3, 1.0 / r.bandwidth_rad_s), max_rate=speed))
-    return refkernel.pack_third_order(reference.ThirdOrderParams(
-        natural_frequency_rad_s=np.full(3, r.bandwidth_rad_s),
-        damping_ratio=np.full(3, r.damping_ratio), max_speed=speed,
-        max_accel=np.array([r.max_accel_mps2, r.max_accel_mps2,
-                            math.radians(r.max_yaw_accel_deg_s2)])))
+        return refkernel.pack_first_order(
+            reference.FirstOrderParams(
+                time_constant_s=np.full(3, 1.0 / r.bandwidth_rad_s), max_rate=speed
+            )
+        )
+    return refkernel.pack_third_order(
+        reference.ThirdOrderParams(
+            natural_frequency_rad_s=np.full(3, r.bandwidth_rad_s),
+            damping_ratio=np.full(3, r.damping_ratio),
+            max_speed=speed,
+            max_accel=np.array(
+                [r.max_accel_mps2, r.max_accel_mps2, math.radians(r.max_yaw_accel_deg_s2)]
+            ),
+        )
+    )
 
 
 def _free_gains(ps: ParameterSet) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -134,12 +147,19 @@ def system_thruster_config(ps: ParameterSet, sysm: model.SystemModel) -> alloc.T
     tree. The pseudo-inverse allocation is the same in either frame (T_sys = W T with W
     invertible on the allocated rows, so T_sys^+ = T^+ W^-1)."""
     thr = ps.rov.thrusters
-    return alloc.ThrusterConfig(T=sysm.rov_to_tree @ thr.T, k_pos=thr.k_pos, k_neg=thr.k_neg,
-                                n_max_rps=thr.n_max_rps)
+    return alloc.ThrusterConfig(
+        T=sysm.rov_to_tree @ thr.T, k_pos=thr.k_pos, k_neg=thr.k_neg, n_max_rps=thr.n_max_rps
+    )
 
 
-def control_arrays(ps: ParameterSet, sysm: model.SystemModel, settings: ControlSettings,
-                   gains: Gains, p_eq: FloatArray, dt: float) -> loop.ControlArrays:
+def control_arrays(
+    ps: ParameterSet,
+    sysm: model.SystemModel,
+    settings: ControlSettings,
+    gains: Gains,
+    p_eq: FloatArray,
+    dt: float,
+) -> loop.ControlArrays:
     """Compile the control configuration."""
     thr = ps.rov.thrusters
     cfg = system_thruster_config(ps, sysm)
@@ -161,28 +181,53 @@ def control_arrays(ps: ParameterSet, sysm: model.SystemModel, settings: ControlS
     fkp, fki, fkd = _free_gains(ps)
     kinds = {"pinv": loop.ALLOC_PINV, "priority": loop.ALLOC_PRIORITY, "qp": loop.ALLOC_EXTERNAL}
     return loop.ControlArrays(
-        feedback_ekf=settings.feedback == "ekf", use_ff=settings.feedforward,
+        feedback_ekf=settings.feedback == "ekf",
+        use_ff=settings.feedforward,
         ref_kind=loop.REF_FIRST if settings.reference == "first" else loop.REF_THIRD,
         ref_params=_ref_params(ps, settings.reference),
-        Kp=np.array(gains.kp, float), Ki=np.array(gains.ki, float), Kd=np.array(gains.kd, float),
-        M=sysm.M.copy(), M_inv=m_inv, D_l=sysm.D_l.copy(), D_nl=sysm.D_nl.copy(),
-        k_h=float(sysm.k_h), p_eq=np.asarray(p_eq, float).copy(), A=A.copy(),
-        A_inv=np.linalg.inv(A), i_limit=0.9 * model.dof_capacity(cfg.T, cfg.f_max_neg,
-                                                                      cfg.f_max_pos),
-        heave_newton=float(settings.heave_force_newton), r_mount=sysm.r_rov_from_tree_tree_m.copy(),
-        psi_rel=float(sysm.psi_rov_from_tree_rad), alloc_kind=kinds[settings.allocation],
+        Kp=np.array(gains.kp, float),
+        Ki=np.array(gains.ki, float),
+        Kd=np.array(gains.kd, float),
+        M=sysm.M.copy(),
+        M_inv=m_inv,
+        D_l=sysm.D_l.copy(),
+        D_nl=sysm.D_nl.copy(),
+        k_h=float(sysm.k_h),
+        p_eq=np.asarray(p_eq, float).copy(),
+        A=A.copy(),
+        A_inv=np.linalg.inv(A),
+        i_limit=0.9 * model.dof_capacity(cfg.T, cfg.f_max_neg, cfg.f_max_pos),
+        heave_newton=float(settings.heave_force_newton),
+        r_mount=sysm.r_rov_from_tree_tree_m.copy(),
+        psi_rel=float(sysm.psi_rov_from_tree_rad),
+        alloc_kind=kinds[settings.allocation],
         pinv_T=np.ascontiguousarray(pinv_plan.T_pinv),
         pinv_rows=np.asarray(pinv_plan.layout.dofs, np.int64),
-        prio_A=prio_plan.A, prio_D=prio_plan.D, prio_R=prio_plan.R,
+        prio_A=prio_plan.A,
+        prio_D=prio_plan.D,
+        prio_R=prio_plan.R,
         prio_rows=np.asarray(prio_plan.layout.dofs, np.int64),
-        f_lo=prio_plan.layout.f_lo.copy(), f_hi=prio_plan.layout.f_hi.copy(),
-        alloc_tol=float(prio_plan.layout.tol), k_pos=thr.k_pos.copy(), k_neg=thr.k_neg.copy(),
-        n_max=thr.n_max_rps.copy(), T6=np.ascontiguousarray(thr.T),
+        f_lo=prio_plan.layout.f_lo.copy(),
+        f_hi=prio_plan.layout.f_hi.copy(),
+        alloc_tol=float(prio_plan.layout.tol),
+        k_pos=thr.k_pos.copy(),
+        k_neg=thr.k_neg.copy(),
+        n_max=thr.n_max_rps.copy(),
+        T6=np.ascontiguousarray(thr.T),
         rov_to_tree=np.ascontiguousarray(sysm.rov_to_tree),
-        GQG=gqg, T_b=np.asarray(obs.bias_time_constant_s, float),
-        r_pos=float(max(noise[0], 1e-3) ** 2), r_psi=float(max(noise[4], 1e-4) ** 2),
+        GQG=gqg,
+        T_b=np.asarray(obs.bias_time_constant_s, float),
+        r_pos=float(max(noise[0], 1e-3) ** 2),
+        r_psi=float(max(noise[4], 1e-4) ** 2),
         r_dvl=float(max(noise[5], 1e-3) ** 2 + (noise[10] * r_lever) ** 2),
         r_gyro=float(max(noise[10], 1e-4) ** 2),
-        q_lo=qcfg.lo, q_hi=qcfg.hi, q_wild=qcfg.wild_jump, q_rate=qcfg.max_rate,
-        q_frozen=qcfg.frozen_count, q_var=qcfg.variance_limit,
-        free_Kp=fkp, free_Ki=fki, free_Kd=fkd)
+        q_lo=qcfg.lo,
+        q_hi=qcfg.hi,
+        q_wild=qcfg.wild_jump,
+        q_rate=qcfg.max_rate,
+        q_frozen=qcfg.frozen_count,
+        q_var=qcfg.variance_limit,
+        free_Kp=fkp,
+        free_Ki=fki,
+        free_Kd=fkd,
+    )

@@ -39,9 +39,17 @@ def coriolis3(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
 
 
 @njit(**JIT)
-def model_rhs(x: np.ndarray, tau: np.ndarray, M_inv: np.ndarray, M: np.ndarray,
-              D_l: np.ndarray, D_nl: np.ndarray, k_h: float, p_eq: np.ndarray,
-              T_b: np.ndarray) -> np.ndarray:
+def model_rhs(
+    x: np.ndarray,
+    tau: np.ndarray,
+    M_inv: np.ndarray,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    T_b: np.ndarray,
+) -> np.ndarray:
     """f(x, tau) of the control plant model; tau in tree axes [N, N, N m]."""
     c, s = np.cos(x[2]), np.sin(x[2])
     nu = x[3:6]
@@ -69,9 +77,20 @@ def model_rhs(x: np.ndarray, tau: np.ndarray, M_inv: np.ndarray, M: np.ndarray,
 
 
 @njit(**JIT)
-def predict(x: np.ndarray, P: np.ndarray, tau: np.ndarray, dt: float, M_inv: np.ndarray,
-            M: np.ndarray, D_l: np.ndarray, D_nl: np.ndarray, k_h: float, p_eq: np.ndarray,
-            T_b: np.ndarray, GQG: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def predict(
+    x: np.ndarray,
+    P: np.ndarray,
+    tau: np.ndarray,
+    dt: float,
+    M_inv: np.ndarray,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    T_b: np.ndarray,
+    GQG: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
     """One prediction step (table 3.1): x+ = x + h f(x, u); P+ = Phi P Phi^T + Gamma Q Gamma^T
     with Phi = I + h df/dx (forward-difference Jacobian, step 1e-6 scaled to each state)."""
     f0 = model_rhs(x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
@@ -89,8 +108,9 @@ def predict(x: np.ndarray, P: np.ndarray, tau: np.ndarray, dt: float, M_inv: np.
 
 
 @njit(**JIT)
-def correct(x: np.ndarray, P: np.ndarray, z: np.ndarray, rows: np.ndarray, r_var: np.ndarray,
-            angle_row: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def correct(
+    x: np.ndarray, P: np.ndarray, z: np.ndarray, rows: np.ndarray, r_var: np.ndarray, angle_row: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Correct with a measurement of the states ``rows`` (a selection, so H is rows of I).
 
     ``angle_row`` is the index within ``rows`` whose innovation is an angle (wrapped with ssa),

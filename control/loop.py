@@ -71,8 +71,6 @@ CS_ALLOC_F = 34  # 34:34+M_MAX externally allocated thruster forces (ALLOC_EXTER
 N_CS = CS_ALLOC_F + M_MAX
 
 
-
-
 class ControlArrays(NamedTuple):
     """Compiled configuration of the control system."""
 
@@ -144,8 +142,7 @@ def allocate(tau6: np.ndarray, C: ControlArrays) -> np.ndarray:
         rows = np.empty(C.prio_rows.shape[0])
         for i in range(rows.shape[0]):
             rows[i] = tau6[C.prio_rows[i]]
-        return _priority_forces(C.prio_A, C.prio_D, C.prio_R, rows, C.f_lo, C.f_hi,
-                                C.alloc_tol)
+        return _priority_forces(C.prio_A, C.prio_D, C.prio_R, rows, C.f_lo, C.f_hi, C.alloc_tol)
     m = C.pinv_T.shape[0]
     f = np.zeros(m)
     for i in range(m):
@@ -210,42 +207,73 @@ def _rov_pose(x: np.ndarray, y: np.ndarray, use_truth: bool):
 
 
 @njit(**JIT)
-def _observe(t: float, y: np.ndarray, fresh: np.ndarray, xhat: np.ndarray,
-             P: np.ndarray, C: ControlArrays, Q: QualityState,
-             dt: float, log_row: np.ndarray):
+def _observe(
+    t: float,
+    y: np.ndarray,
+    fresh: np.ndarray,
+    xhat: np.ndarray,
+    P: np.ndarray,
+    C: ControlArrays,
+    Q: QualityState,
+    dt: float,
+    log_row: np.ndarray,
+):
     """Signal checks, then EKF correction with each accepted fresh sample, then prediction."""
     accepted = np.zeros(5, dtype=np.bool_)
     for k in range(5):
         if fresh[k]:
             accepted[k] = quality.check_sample(
-                k, y, t, Q.last, Q.last_t, Q.repeat, Q.hist, Q.counters, C.q_lo, C.q_hi,
-                C.q_wild, C.q_rate, C.q_frozen, C.q_var, sensors.Y_SENSOR)
+                k,
+                y,
+                t,
+                Q.last,
+                Q.last_t,
+                Q.repeat,
+                Q.hist,
+                Q.counters,
+                C.q_lo,
+                C.q_hi,
+                C.q_wild,
+                C.q_rate,
+                C.q_frozen,
+                C.q_var,
+                sensors.Y_SENSOR,
+            )
     ne, psi_m, uv, rate = tree_measurements(y, xhat[2], C)
     if accepted[sensors.COMPASS]:
-        xhat, P, nis = ekf.correct(xhat, P, np.array([psi_m]), np.array([2]),
-                                   np.array([C.r_psi]), 0)
+        xhat, P, nis = ekf.correct(
+            xhat, P, np.array([psi_m]), np.array([2]), np.array([C.r_psi]), 0
+        )
         log_row[L_NIS + 2] = nis[0]
     if accepted[sensors.POSITION]:
         ne, psi_m, uv, rate = tree_measurements(y, xhat[2], C)
-        xhat, P, nis = ekf.correct(xhat, P, ne, np.array([0, 1]),
-                                   np.array([C.r_pos, C.r_pos]), -1)
+        xhat, P, nis = ekf.correct(xhat, P, ne, np.array([0, 1]), np.array([C.r_pos, C.r_pos]), -1)
         log_row[L_NIS] = nis[0]
         log_row[L_NIS + 1] = nis[1]
     if accepted[sensors.GYRO]:
-        xhat, P, _ = ekf.correct(xhat, P, np.array([rate]), np.array([5]),
-                                 np.array([C.r_gyro]), -1)
+        xhat, P, _ = ekf.correct(xhat, P, np.array([rate]), np.array([5]), np.array([C.r_gyro]), -1)
     if accepted[sensors.DVL]:
-        xhat, P, _ = ekf.correct(xhat, P, uv, np.array([3, 4]),
-                                 np.array([C.r_dvl, C.r_dvl]), -1)
+        xhat, P, _ = ekf.correct(xhat, P, uv, np.array([3, 4]), np.array([C.r_dvl, C.r_dvl]), -1)
     for k in range(5):
         log_row[L_ACCEPT + k] = 1.0 if accepted[k] else 0.0
     return xhat, P
 
 
 @njit(**JIT)
-def control_step(t: float, x: np.ndarray, y: np.ndarray, fresh: np.ndarray,
-                 xhat: np.ndarray, Pc: np.ndarray, cs: np.ndarray, target: np.ndarray,
-                 C: ControlArrays, Q: QualityState, dt: float, log_row: np.ndarray):
+def control_step(
+    t: float,
+    x: np.ndarray,
+    y: np.ndarray,
+    fresh: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    cs: np.ndarray,
+    target: np.ndarray,
+    C: ControlArrays,
+    Q: QualityState,
+    dt: float,
+    log_row: np.ndarray,
+):
     """Observer, reference, supervisor and controller for one step. Returns
     (tau_rov6, xhat, Pc, cs). ``cs`` is a fresh copy, updated."""
     cs = cs.copy()
@@ -257,63 +285,114 @@ def control_step(t: float, x: np.ndarray, y: np.ndarray, fresh: np.ndarray,
     else:
         eta, deta = _truth_tree(x)
     mode = int(cs[CS_MODE])
-    ref = cs[CS_REF:CS_REF + 9].copy()
+    ref = cs[CS_REF : CS_REF + 9].copy()
     if mode == MODE_TREE and int(cs[CS_LAST_MODE]) != MODE_TREE:
         ref[:] = 0.0
         ref[0:3] = eta
-        cs[CS_I:CS_I + 3] = pid.bumpless_tree_integral(
-            np.array([cs[CS_TAU], cs[CS_TAU + 1], cs[CS_TAU + 5]]), eta, deta, eta,
-            np.zeros(3), np.zeros(3), C.Kp, C.Kd, C.use_ff, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq,
-            C.A_inv)
+        cs[CS_I : CS_I + 3] = pid.bumpless_tree_integral(
+            np.array([cs[CS_TAU], cs[CS_TAU + 1], cs[CS_TAU + 5]]),
+            eta,
+            deta,
+            eta,
+            np.zeros(3),
+            np.zeros(3),
+            C.Kp,
+            C.Kd,
+            C.use_ff,
+            C.M,
+            C.D_l,
+            C.D_nl,
+            C.k_h,
+            C.p_eq,
+            C.A_inv,
+        )
     ref = refkernel.reference_step(C.ref_kind, ref, target, dt, C.ref_params)
-    cs[CS_REF:CS_REF + 9] = ref
+    cs[CS_REF : CS_REF + 9] = ref
     tau6 = np.zeros(6)
     if mode == MODE_TREE:
         tau_tree, i_next, terms, e, de = pid.tree_pid(
-            eta, deta, ref[0:3], ref[3:6], ref[6:9], cs[CS_I:CS_I + 3].copy(), C.Kp, C.Ki,
-            C.Kd, C.use_ff, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, EYE3, EYE3, C.i_limit, dt)
-        cs[CS_I:CS_I + 3] = i_next
-        cs[CS_E:CS_E + 3] = e
-        cs[CS_DE:CS_DE + 3] = de
+            eta,
+            deta,
+            ref[0:3],
+            ref[3:6],
+            ref[6:9],
+            cs[CS_I : CS_I + 3].copy(),
+            C.Kp,
+            C.Ki,
+            C.Kd,
+            C.use_ff,
+            C.M,
+            C.D_l,
+            C.D_nl,
+            C.k_h,
+            C.p_eq,
+            EYE3,
+            EYE3,
+            C.i_limit,
+            dt,
+        )
+        cs[CS_I : CS_I + 3] = i_next
+        cs[CS_E : CS_E + 3] = e
+        cs[CS_DE : CS_DE + 3] = de
         # allocation works on the tree's origin (see closed_loop.system_thruster_config)
         tau6[0] = tau_tree[0]
         tau6[1] = tau_tree[1]
         tau6[2] = C.heave_newton
         tau6[5] = tau_tree[2]
         tau3 = C.A @ tau_tree
-        log_row[L_TAU_ROV:L_TAU_ROV + 6] = np.array([tau3[0], tau3[1], C.heave_newton, 0.0, 0.0,
-                                                     tau3[2]])
-        log_row[L_TAU_TREE:L_TAU_TREE + 3] = tau_tree
+        log_row[L_TAU_ROV : L_TAU_ROV + 6] = np.array(
+            [tau3[0], tau3[1], C.heave_newton, 0.0, 0.0, tau3[2]]
+        )
+        log_row[L_TAU_TREE : L_TAU_TREE + 3] = tau_tree
         for j in range(4):
-            log_row[L_TERMS + 3 * j:L_TERMS + 3 * j + 3] = terms[j]
+            log_row[L_TERMS + 3 * j : L_TERMS + 3 * j + 3] = terms[j]
     else:
         eta4, deta4 = _rov_pose(x, y, not C.feedback_ekf)
         if int(cs[CS_LAST_MODE]) != MODE_FREE:
-            cs[CS_FSP:CS_FSP + 4] = eta4
-            cs[CS_FI:CS_FI + 4] = pid.bumpless_free_integral(
-                cs[CS_TAU:CS_TAU + 6].copy(), eta4, deta4, eta4, C.free_Kp, C.free_Kd)
-        tau_rov6, fi, _ = pid.free_rov_pid(eta4, deta4, cs[CS_FSP:CS_FSP + 4].copy(),
-                                           cs[CS_FI:CS_FI + 4].copy(), C.free_Kp, C.free_Ki,
-                                           C.free_Kd, dt)
-        cs[CS_FI:CS_FI + 4] = fi
-        log_row[L_TAU_ROV:L_TAU_ROV + 6] = tau_rov6
+            cs[CS_FSP : CS_FSP + 4] = eta4
+            cs[CS_FI : CS_FI + 4] = pid.bumpless_free_integral(
+                cs[CS_TAU : CS_TAU + 6].copy(), eta4, deta4, eta4, C.free_Kp, C.free_Kd
+            )
+        tau_rov6, fi, _ = pid.free_rov_pid(
+            eta4,
+            deta4,
+            cs[CS_FSP : CS_FSP + 4].copy(),
+            cs[CS_FI : CS_FI + 4].copy(),
+            C.free_Kp,
+            C.free_Ki,
+            C.free_Kd,
+            dt,
+        )
+        cs[CS_FI : CS_FI + 4] = fi
+        log_row[L_TAU_ROV : L_TAU_ROV + 6] = tau_rov6
         tau6 = C.rov_to_tree @ tau_rov6
     cs[CS_LAST_MODE] = mode
-    cs[CS_TAU:CS_TAU + 6] = log_row[L_TAU_ROV:L_TAU_ROV + 6]
-    log_row[L_ETA_HAT:L_ETA_HAT + 3] = eta
-    log_row[L_NU_HAT:L_NU_HAT + 3] = xhat[3:6] if C.feedback_ekf else np.array(
-        [x[6], x[7], x[11]])
-    log_row[L_BIAS:L_BIAS + 3] = xhat[6:9]
-    log_row[L_ETA_D:L_ETA_D + 3] = ref[0:3]
-    log_row[L_DETA_D:L_DETA_D + 3] = ref[3:6]
+    cs[CS_TAU : CS_TAU + 6] = log_row[L_TAU_ROV : L_TAU_ROV + 6]
+    log_row[L_ETA_HAT : L_ETA_HAT + 3] = eta
+    log_row[L_NU_HAT : L_NU_HAT + 3] = (
+        xhat[3:6] if C.feedback_ekf else np.array([x[6], x[7], x[11]])
+    )
+    log_row[L_BIAS : L_BIAS + 3] = xhat[6:9]
+    log_row[L_ETA_D : L_ETA_D + 3] = ref[0:3]
+    log_row[L_DETA_D : L_DETA_D + 3] = ref[3:6]
     log_row[L_MODE] = mode
     return tau6, xhat, Pc, cs
 
 
 @njit(**JIT)
-def finish_step(x: np.ndarray, f: np.ndarray, env_k: np.ndarray, xhat: np.ndarray,
-                Pc: np.ndarray, C: ControlArrays, P: plant.PlantArrays, dt: float,
-                t_next: float, held_y: np.ndarray, log_row: np.ndarray):
+def finish_step(
+    x: np.ndarray,
+    f: np.ndarray,
+    env_k: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    C: ControlArrays,
+    P: plant.PlantArrays,
+    dt: float,
+    t_next: float,
+    held_y: np.ndarray,
+    log_row: np.ndarray,
+):
     """Thrusters, plant step and observer prediction, given the allocated forces f, and the
     row's plant columns. Returns (x_next, xhat, Pc). The one step body after allocation: the
     compiled chunk and the Python chunk (QP allocation) both end every step here."""
@@ -325,29 +404,31 @@ def finish_step(x: np.ndarray, f: np.ndarray, env_k: np.ndarray, xhat: np.ndarra
         log_row[L_F + i] = f[i]
         log_row[L_N + i] = n[i]
         log_row[L_UTIL + i] = min(abs(f[i]) / lim, 1.0)
-    log_row[L_TAU_ACH:L_TAU_ACH + 6] = ach
+    log_row[L_TAU_ACH : L_TAU_ACH + 6] = ach
     x_next = plant.rk4_step(x, n, env_k, P, dt)
     if C.feedback_ekf:
         # the observer's input: the achieved wrench moved to the tree (eq. 3.6)
         tau_tree = C.A_inv @ np.array([ach[0], ach[1], ach[5]])
         if int(log_row[L_MODE]) != MODE_TREE:
             tau_tree[:] = 0.0
-        xhat, Pc = ekf.predict(xhat, Pc, tau_tree, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h,
-                               C.p_eq, C.T_b, C.GQG)
+        xhat, Pc = ekf.predict(
+            xhat, Pc, tau_tree, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, C.T_b, C.GQG
+        )
     write_plant_row(log_row, t_next, x_next, held_y, env_k, P)
     return x_next, xhat, Pc
 
 
 @njit(**JIT)
-def write_plant_row(row: np.ndarray, t: float, x: np.ndarray, y: np.ndarray, env_k: np.ndarray,
-                    P: plant.PlantArrays) -> None:
+def write_plant_row(
+    row: np.ndarray, t: float, x: np.ndarray, y: np.ndarray, env_k: np.ndarray, P: plant.PlantArrays
+) -> None:
     """Time, plant state, held sensor values and the site into a log row."""
     row[L_T] = t
-    row[L_TREE:L_TREE + 6] = x[0:6]
-    row[L_TREE_NU:L_TREE_NU + 6] = x[6:12]
-    row[L_ROV:L_ROV + 6] = x[12:18]
-    row[L_ROV_NU:L_ROV_NU + 6] = x[18:24]
-    row[L_Y:L_Y + 11] = y
+    row[L_TREE : L_TREE + 6] = x[0:6]
+    row[L_TREE_NU : L_TREE_NU + 6] = x[6:12]
+    row[L_ROV : L_ROV + 6] = x[12:18]
+    row[L_ROV_NU : L_ROV_NU + 6] = x[18:24]
+    row[L_Y : L_Y + 11] = y
     log_site(row, x, env_k, P)
 
 
@@ -364,10 +445,22 @@ def log_site(row: np.ndarray, x: np.ndarray, env_k: np.ndarray, P: plant.PlantAr
 
 
 @njit(**JIT)
-def run_chunk(k0: int, x: np.ndarray, held_y: np.ndarray, xhat: np.ndarray, Pc: np.ndarray,
-              cs: np.ndarray, target: np.ndarray, env: np.ndarray, noise: np.ndarray,
-              fresh: np.ndarray, P: plant.PlantArrays, C: ControlArrays, Q: QualityState,
-              dt: float):
+def run_chunk(
+    k0: int,
+    x: np.ndarray,
+    held_y: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    cs: np.ndarray,
+    target: np.ndarray,
+    env: np.ndarray,
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    P: plant.PlantArrays,
+    C: ControlArrays,
+    Q: QualityState,
+    dt: float,
+):
     """Advance len(env) steps with the target held. Returns
     (x, held_y, xhat, Pc, cs, log (n, N_LOG), n_done); n_done < n when the plant diverged."""
     n = env.shape[0]
@@ -377,8 +470,9 @@ def run_chunk(k0: int, x: np.ndarray, held_y: np.ndarray, xhat: np.ndarray, Pc: 
         t = k * dt
         row = log[j]
         held_y = sensors.sample(x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
-        tau6, xhat, Pc, cs = control_step(t, x, held_y, fresh[j], xhat, Pc, cs, target, C,
-                                          Q, dt, row)
+        tau6, xhat, Pc, cs = control_step(
+            t, x, held_y, fresh[j], xhat, Pc, cs, target, C, Q, dt, row
+        )
         f = allocate(tau6, C)
         x, xhat, Pc = finish_step(x, f, env[j], xhat, Pc, C, P, dt, t + dt, held_y, row)
         if not np.all(np.isfinite(x)):
@@ -387,9 +481,17 @@ def run_chunk(k0: int, x: np.ndarray, held_y: np.ndarray, xhat: np.ndarray, Pc: 
 
 
 @njit(**JIT)
-def run_open_chunk(k0: int, x: np.ndarray, held_y: np.ndarray, n_rps: np.ndarray,
-                   env: np.ndarray, noise: np.ndarray, fresh: np.ndarray, P: plant.PlantArrays,
-                   dt: float):
+def run_open_chunk(
+    k0: int,
+    x: np.ndarray,
+    held_y: np.ndarray,
+    n_rps: np.ndarray,
+    env: np.ndarray,
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    P: plant.PlantArrays,
+    dt: float,
+):
     """The plant with control off: len(env) steps at fixed propeller speeds ``n_rps``, sensors
     sampled at the end of each step. Returns (x, held_y, log (n, N_LOG), n_done); n_done < n
     when the plant diverged."""

@@ -55,11 +55,15 @@ def _rotation6(psi: float) -> FloatArray:
     return J
 
 
-def system_model(ps: ParameterSet, wire_length_m: float,
-                 r_rov_from_tree_tree_m: FloatArray | None = None) -> SystemModel:
+def system_model(
+    ps: ParameterSet, wire_length_m: float, r_rov_from_tree_tree_m: FloatArray | None = None
+) -> SystemModel:
     """Build the control plant model for this parameter set at this wire length."""
-    r = ps.mount.r_rov_from_tree_tree_m if r_rov_from_tree_tree_m is None else \
-        np.asarray(r_rov_from_tree_tree_m, dtype=float)
+    r = (
+        ps.mount.r_rov_from_tree_tree_m
+        if r_rov_from_tree_tree_m is None
+        else np.asarray(r_rov_from_tree_tree_m, dtype=float)
+    )
     psi = ps.mount.psi_rov_from_tree_rad
     J = _rotation6(psi)
     H = Hmtrx(r)
@@ -78,7 +82,9 @@ def system_model(ps: ParameterSet, wire_length_m: float,
         k_h=wm.horizontal_stiffness(w, ps.tree.submerged_weight_newton, wire_length_m),
         rov_to_tree=rov_to_tree,
         tree_to_rov=np.asarray(np.linalg.inv(rov_to_tree), dtype=np.float64),
-        r_rov_from_tree_tree_m=r.copy(), psi_rov_from_tree_rad=psi)
+        r_rov_from_tree_tree_m=r.copy(),
+        psi_rov_from_tree_rad=psi,
+    )
 
 
 def dof_capacity(T: FloatArray, f_max_neg: FloatArray, f_max_pos: FloatArray) -> FloatArray:
@@ -92,9 +98,13 @@ def dof_capacity(T: FloatArray, f_max_neg: FloatArray, f_max_pos: FloatArray) ->
         others = [i for i in range(4) if i != row]
         best = math.inf
         for sign in (1.0, -1.0):
-            res = linprog(-sign * rows[row], A_eq=rows[others], b_eq=np.zeros(3), bounds=bounds,
-                          method="highs")
+            res = linprog(
+                -sign * rows[row],
+                A_eq=rows[others],
+                b_eq=np.zeros(3),
+                bounds=bounds,
+                method="highs",
+            )
             best = min(best, sign * float(rows[row] @ res.x)) if res.success else 0.0
         out[k] = best
     return out
-

@@ -64,9 +64,17 @@ def pose_error(eta: np.ndarray, eta_d: np.ndarray) -> np.ndarray:
 
 
 @njit(**JIT)
-def feedforward(psi: float, eta_d: np.ndarray, deta_d: np.ndarray, ddeta_d: np.ndarray,
-                M: np.ndarray, D_l: np.ndarray, D_nl: np.ndarray, k_h: float,
-                p_eq: np.ndarray) -> np.ndarray:
+def feedforward(
+    psi: float,
+    eta_d: np.ndarray,
+    deta_d: np.ndarray,
+    ddeta_d: np.ndarray,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+) -> np.ndarray:
     """Control plant model driven by the reference, tree axes [N, N, N m]."""
     nu_d = ned_to_body(deta_d, eta_d[2])
     r_d = deta_d[2]
@@ -82,11 +90,27 @@ def feedforward(psi: float, eta_d: np.ndarray, deta_d: np.ndarray, ddeta_d: np.n
 
 
 @njit(**JIT)
-def tree_pid(eta: np.ndarray, deta: np.ndarray, eta_d: np.ndarray, deta_d: np.ndarray,
-             ddeta_d: np.ndarray, i_n: np.ndarray, Kp: np.ndarray, Ki: np.ndarray,
-             Kd: np.ndarray, use_ff: bool, M: np.ndarray, D_l: np.ndarray, D_nl: np.ndarray,
-             k_h: float, p_eq: np.ndarray, A: np.ndarray, A_inv: np.ndarray,
-             i_limit_rov: np.ndarray, dt: float):
+def tree_pid(
+    eta: np.ndarray,
+    deta: np.ndarray,
+    eta_d: np.ndarray,
+    deta_d: np.ndarray,
+    ddeta_d: np.ndarray,
+    i_n: np.ndarray,
+    Kp: np.ndarray,
+    Ki: np.ndarray,
+    Kd: np.ndarray,
+    use_ff: bool,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    A: np.ndarray,
+    A_inv: np.ndarray,
+    i_limit_rov: np.ndarray,
+    dt: float,
+):
     """One step of the tree controller.
 
     eta, deta: estimated pose and its NED rate; eta_d, deta_d, ddeta_d: reference (NED);
@@ -116,8 +140,16 @@ def tree_pid(eta: np.ndarray, deta: np.ndarray, eta_d: np.ndarray, deta_d: np.nd
 
 
 @njit(**JIT)
-def free_rov_pid(eta4: np.ndarray, deta4: np.ndarray, eta4_d: np.ndarray, i4: np.ndarray,
-                 Kp: np.ndarray, Ki: np.ndarray, Kd: np.ndarray, dt: float):
+def free_rov_pid(
+    eta4: np.ndarray,
+    deta4: np.ndarray,
+    eta4_d: np.ndarray,
+    i4: np.ndarray,
+    Kp: np.ndarray,
+    Ki: np.ndarray,
+    Kd: np.ndarray,
+    dt: float,
+):
     """Station keeping of the ROV alone in [north, east, down, psi] (section 3.4): PID in NED,
     rotated into the ROV's axes. Returns (tau_rov (6,), i4_next, e4)."""
     e = eta4 - eta4_d
@@ -133,11 +165,23 @@ def free_rov_pid(eta4: np.ndarray, deta4: np.ndarray, eta4_d: np.ndarray, i4: np
 
 
 @njit(**JIT)
-def bumpless_tree_integral(tau_rov3: np.ndarray, eta: np.ndarray, deta: np.ndarray,
-                           eta_d: np.ndarray, deta_d: np.ndarray, ddeta_d: np.ndarray,
-                           Kp: np.ndarray, Kd: np.ndarray, use_ff: bool, M: np.ndarray,
-                           D_l: np.ndarray, D_nl: np.ndarray, k_h: float, p_eq: np.ndarray,
-                           A_inv: np.ndarray) -> np.ndarray:
+def bumpless_tree_integral(
+    tau_rov3: np.ndarray,
+    eta: np.ndarray,
+    deta: np.ndarray,
+    eta_d: np.ndarray,
+    deta_d: np.ndarray,
+    ddeta_d: np.ndarray,
+    Kp: np.ndarray,
+    Kd: np.ndarray,
+    use_ff: bool,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    A_inv: np.ndarray,
+) -> np.ndarray:
     """The integral state that makes the tree controller output ``tau_rov3`` (ROV frame,
     [X, Y, N]) right now: used when the supervisor hands over, so thrust does not jump."""
     psi = eta[2]
@@ -150,8 +194,14 @@ def bumpless_tree_integral(tau_rov3: np.ndarray, eta: np.ndarray, deta: np.ndarr
 
 
 @njit(**JIT)
-def bumpless_free_integral(tau_rov6: np.ndarray, eta4: np.ndarray, deta4: np.ndarray,
-                           eta4_d: np.ndarray, Kp: np.ndarray, Kd: np.ndarray) -> np.ndarray:
+def bumpless_free_integral(
+    tau_rov6: np.ndarray,
+    eta4: np.ndarray,
+    deta4: np.ndarray,
+    eta4_d: np.ndarray,
+    Kp: np.ndarray,
+    Kd: np.ndarray,
+) -> np.ndarray:
     """The free-ROV integral state that reproduces ``tau_rov6`` right now."""
     e = eta4 - eta4_d
     e[3] = ssa(e[3])

@@ -65,10 +65,23 @@ def quality_config(noise_std: NDArray[np.float64], dt: float) -> QualityConfig:
 
 
 @njit(**JIT)
-def check_sample(k: int, y: np.ndarray, t: float, last: np.ndarray, last_t: np.ndarray,
-                 repeat: np.ndarray, hist: np.ndarray, counters: np.ndarray, lo: np.ndarray,
-                 hi: np.ndarray, wild: np.ndarray, max_rate: np.ndarray,
-                 frozen_count: np.ndarray, var_limit: np.ndarray, y_sensor: np.ndarray) -> bool:
+def check_sample(
+    k: int,
+    y: np.ndarray,
+    t: float,
+    last: np.ndarray,
+    last_t: np.ndarray,
+    repeat: np.ndarray,
+    hist: np.ndarray,
+    counters: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    wild: np.ndarray,
+    max_rate: np.ndarray,
+    frozen_count: np.ndarray,
+    var_limit: np.ndarray,
+    y_sensor: np.ndarray,
+) -> bool:
     """Check a fresh sample of sensor k (entries of y with y_sensor == k). Updates the check
     state in place (last accepted values, their time, repeat count, difference history,
     counters (5, 4)) and returns True when the sample may go to the observer."""

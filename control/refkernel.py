@@ -45,8 +45,9 @@ def pack_third_order(p: reference.ThirdOrderParams) -> np.ndarray:
 
 
 @njit(**JIT)
-def first_order_step(state: np.ndarray, target: np.ndarray, dt: float,
-                     params: np.ndarray) -> np.ndarray:
+def first_order_step(
+    state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
+) -> np.ndarray:
     """One exact step of the saturated first-order model (thesis section 3.3)."""
     error = target - state[0:3]
     new_error, rate, accel = _first_kernel(error, 1.0 / params[0], params[3], dt)
@@ -58,12 +59,23 @@ def first_order_step(state: np.ndarray, target: np.ndarray, dt: float,
 
 
 @njit(**JIT)
-def third_order_step(state: np.ndarray, target: np.ndarray, dt: float,
-                     params: np.ndarray) -> np.ndarray:
+def third_order_step(
+    state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
+) -> np.ndarray:
     """One step of the speed- and acceleration-limited third-order model."""
     error = target - state[0:3]
-    delta, vel, acc = _third_kernel(error, state[3:6].copy(), state[6:9].copy(), _ZERO3,
-                                    params[0], params[1], params[2], params[3], params[4], dt)
+    delta, vel, acc = _third_kernel(
+        error,
+        state[3:6].copy(),
+        state[6:9].copy(),
+        _ZERO3,
+        params[0],
+        params[1],
+        params[2],
+        params[3],
+        params[4],
+        dt,
+    )
     out = np.empty(9)
     out[0:3] = state[0:3] + delta
     out[3:6] = vel
@@ -72,8 +84,9 @@ def third_order_step(state: np.ndarray, target: np.ndarray, dt: float,
 
 
 @njit(**JIT)
-def reference_step(kind: int, state: np.ndarray, target: np.ndarray, dt: float,
-                   params: np.ndarray) -> np.ndarray:
+def reference_step(
+    kind: int, state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
+) -> np.ndarray:
     """Dispatch on the model kind (0 first order, 1 third order)."""
     if kind == 0:
         return first_order_step(state, target, dt, params)

@@ -65,8 +65,12 @@ class SimulationDiverged(RuntimeError):
     """The plant state stopped being finite."""
 
 
-def initial_state(ps: ParameterSet, tree_position_n: FloatArray, tree_heading_rad: float = 0.0,
-                  has_rov: bool = True) -> FloatArray:
+def initial_state(
+    ps: ParameterSet,
+    tree_position_n: FloatArray,
+    tree_heading_rad: float = 0.0,
+    has_rov: bool = True,
+) -> FloatArray:
     """Tree at rest at the given position and heading, ROV (if any) exactly on its mount."""
     x = np.zeros(plant.N_STATE)
     x[0:3] = tree_position_n
@@ -87,8 +91,9 @@ def finite_vector(name: str, value: object, length: int) -> FloatArray:
     return arr
 
 
-def _in_range(name: str, value: float, lo: float, hi: float, unit: str,
-              lo_open: bool = False) -> float:
+def _in_range(
+    name: str, value: float, lo: float, hi: float, unit: str, lo_open: bool = False
+) -> float:
     ok = math.isfinite(value) and (lo < value if lo_open else lo <= value) and value <= hi
     if not ok:
         bracket = "(" if lo_open else "["
@@ -98,9 +103,14 @@ def _in_range(name: str, value: float, lo: float, hi: float, unit: str,
 
 def steady_current(speed_mps: float, direction_rad: float) -> envmod.CurrentParams:
     """A current of fixed speed and direction (no random walk)."""
-    return envmod.CurrentParams(speed_mps=speed_mps, direction_rad=direction_rad,
-                                speed_min_mps=speed_mps, speed_max_mps=speed_mps,
-                                direction_min_rad=direction_rad, direction_max_rad=direction_rad)
+    return envmod.CurrentParams(
+        speed_mps=speed_mps,
+        direction_rad=direction_rad,
+        speed_min_mps=speed_mps,
+        speed_max_mps=speed_mps,
+        direction_min_rad=direction_rad,
+        direction_max_rad=direction_rad,
+    )
 
 
 class Simulation:
@@ -109,17 +119,28 @@ class Simulation:
     ``ps`` is what the control system is configured with; ``plant_ps`` (default: the same) is
     the physical truth the plant simulates, for robustness studies."""
 
-    def __init__(self, ps: ParameterSet, *, tree_depth_m: float,
-                 settings: ControlSettings | None = None, control: bool = True,
-                 has_rov: bool = True,
-                 crane_tip_n: FloatArray | tuple[float, ...] = (1.0, 1.0, 0.0),
-                 current: envmod.CurrentParams | None = None,
-                 waves: envmod.WaveParams | None = None, seed: int = 0, dt_s: float = 0.01,
-                 tree_heading_rad: float = 0.0, chunk_steps: int = 100,
-                 plant_ps: ParameterSet | None = None, start_gripping: bool = True) -> None:
+    def __init__(
+        self,
+        ps: ParameterSet,
+        *,
+        tree_depth_m: float,
+        settings: ControlSettings | None = None,
+        control: bool = True,
+        has_rov: bool = True,
+        crane_tip_n: FloatArray | tuple[float, ...] = (1.0, 1.0, 0.0),
+        current: envmod.CurrentParams | None = None,
+        waves: envmod.WaveParams | None = None,
+        seed: int = 0,
+        dt_s: float = 0.01,
+        tree_heading_rad: float = 0.0,
+        chunk_steps: int = 100,
+        plant_ps: ParameterSet | None = None,
+        start_gripping: bool = True,
+    ) -> None:
         if not (DT_RANGE_S[0] <= dt_s <= DT_RANGE_S[1]):
-            raise ValueError(f"dt_s must be in [{DT_RANGE_S[0]:g}, {DT_RANGE_S[1]:g}] s, "
-                             f"got {dt_s}")
+            raise ValueError(
+                f"dt_s must be in [{DT_RANGE_S[0]:g}, {DT_RANGE_S[1]:g}] s, got {dt_s}"
+            )
         if control and not has_rov:
             raise ValueError("control needs the ROV (has_rov=True)")
         if not (isinstance(chunk_steps, int) and chunk_steps >= 1):
@@ -130,16 +151,25 @@ class Simulation:
         self.chunk_steps = chunk_steps
         self.has_rov = has_rov
         self.control_on = control
-        self._init_plant(tree_depth_m, crane_tip_n, current, waves, seed, tree_heading_rad,
-                         has_rov and start_gripping)
+        self._init_plant(
+            tree_depth_m,
+            crane_tip_n,
+            current,
+            waves,
+            seed,
+            tree_heading_rad,
+            has_rov and start_gripping,
+        )
         self.settings = settings or ControlSettings()
         r_cfg = self.settings.r_mount_config_m
-        self.sysm = model.system_model(ps, self.wire_length_m,
-                                       None if r_cfg is None else np.asarray(r_cfg, float))
+        self.sysm = model.system_model(
+            ps, self.wire_length_m, None if r_cfg is None else np.asarray(r_cfg, float)
+        )
         self.gains = self.settings.gains or Gains.of(ps.gains.kp, ps.gains.ki, ps.gains.kd)
         self.thruster_config = system_thruster_config(ps, self.sysm)
-        self.C = control_arrays(ps, self.sysm, self.settings, self.gains,
-                                self.crane_tip_n[0:2], dt_s)
+        self.C = control_arrays(
+            ps, self.sysm, self.settings, self.gains, self.crane_tip_n[0:2], dt_s
+        )
         if has_rov and not start_gripping:
             # the ROV waits free, 3 m further back and 1 m above its mount (a hook-up to come)
             c, s = math.cos(self.x[5]), math.sin(self.x[5])
@@ -150,16 +180,29 @@ class Simulation:
         self.cs[loop.CS_LAST_MODE] = -1.0  # first step initialises the reference bumplessly
         self.xhat, self.P_cov = self._initial_estimate()
         w = quality.WINDOW
-        self.Q = loop.QualityState(np.zeros(sensors.N_Y), -np.ones(5), np.zeros(5, np.int64),
-                                   np.zeros((sensors.N_Y, w)), np.zeros((5, 4), np.int64))
+        self.Q = loop.QualityState(
+            np.zeros(sensors.N_Y),
+            -np.ones(5),
+            np.zeros(5, np.int64),
+            np.zeros((sensors.N_Y, w)),
+            np.zeros((5, 4), np.int64),
+        )
         eta0 = self.xhat[0:3] if self.settings.feedback == "ekf" else self.x[[0, 1, 5]]
         self.target = np.array(eta0, float)
-        self.startup = (self.check_mount() if control and start_gripping
-                        else StartupReport(False, 0.0, 0.0))
+        self.startup = (
+            self.check_mount() if control and start_gripping else StartupReport(False, 0.0, 0.0)
+        )
 
-    def _init_plant(self, tree_depth_m: float, crane_tip_n: FloatArray | tuple[float, ...],
-                    current: envmod.CurrentParams | None, waves: envmod.WaveParams | None,
-                    seed: int, tree_heading_rad: float, gripping: bool) -> None:
+    def _init_plant(
+        self,
+        tree_depth_m: float,
+        crane_tip_n: FloatArray | tuple[float, ...],
+        current: envmod.CurrentParams | None,
+        waves: envmod.WaveParams | None,
+        seed: int,
+        tree_heading_rad: float,
+        gripping: bool,
+    ) -> None:
         ps = self.plant_ps
         self.arrays = plant.plant_arrays(ps, has_rov=self.has_rov)
         self.rng = np.random.default_rng(seed)
@@ -168,7 +211,8 @@ class Simulation:
         self.wave_field = envmod.make_wave_field(waves, self.rng) if waves is not None else None
         self.crane_tip_n = finite_vector("crane_tip_n", crane_tip_n, 3)
         self.wire_length_m = site.wire_length_for_depth(
-            ps, tree_depth_m, self.crane_tip_n[2], self.current_state.speed_mps)
+            ps, tree_depth_m, self.crane_tip_n[2], self.current_state.speed_mps
+        )
         self.sensor_cfg = sensors.sensor_config(ps.sensors, self.dt_s)
         self.thruster_speeds_rps = np.zeros(ps.rov.thrusters.T.shape[1])
         self.push_newton = np.zeros(3)
@@ -190,8 +234,17 @@ class Simulation:
         x0 = np.zeros(9)
         x0[0:2] = ne
         x0[2] = psi
-        p0 = np.diag([1.0, 1.0, 0.01, 0.01, 0.01, 1e-4,
-                      *(np.asarray(self.ps.spec.observer.process_force_std) ** 2)])
+        p0 = np.diag(
+            [
+                1.0,
+                1.0,
+                0.01,
+                0.01,
+                0.01,
+                1e-4,
+                *(np.asarray(self.ps.spec.observer.process_force_std) ** 2),
+            ]
+        )
         return x0, p0
 
     # ------------------------------------------------------------------ what it is now
@@ -228,7 +281,7 @@ class Simulation:
     @property
     def reference(self) -> FloatArray:
         """The reference model's state: pose (3), rate (3), acceleration (3) [NED, m, rad]."""
-        return self.cs[loop.CS_REF:loop.CS_REF + 9].copy()
+        return self.cs[loop.CS_REF : loop.CS_REF + 9].copy()
 
     @property
     def mode(self) -> Mode:
@@ -258,14 +311,19 @@ class Simulation:
     def wire_length_for_depth(self, tree_depth_m: float) -> float:
         """Unstretched payout that hangs the tree's centre at ``tree_depth_m`` in the present
         current (the plant's wire and tree)."""
-        return site.wire_length_for_depth(self.plant_ps, tree_depth_m, self.crane_tip_n[2],
-                                          self.current_state.speed_mps)
+        return site.wire_length_for_depth(
+            self.plant_ps, tree_depth_m, self.crane_tip_n[2], self.current_state.speed_mps
+        )
 
     def wire_tension_newton(self) -> float:
         """Present wire tension at the tree [N]."""
-        env = site.wire_environment(self.plant_ps, self.wire_length_m, self.crane_tip_n,
-                                    self.current_state.speed_mps,
-                                    self.current_state.direction_rad)
+        env = site.wire_environment(
+            self.plant_ps,
+            self.wire_length_m,
+            self.crane_tip_n,
+            self.current_state.speed_mps,
+            self.current_state.direction_rad,
+        )
         R_t = Rzyx(*self.x[3:6])
         p_att = self.x[0:3] + R_t @ self.arrays.tree_r_att
         return float(np.linalg.norm(plant.wire_force_n(p_att, env, self.arrays.tree_W0)))
@@ -276,24 +334,40 @@ class Simulation:
         x = self.x
         c, s = math.cos(x[5]), math.sin(x[5])
         r = self.sysm.r_rov_from_tree_tree_m
-        return np.array([x[0] + c * r[0] - s * r[1], x[1] + s * r[0] + c * r[1], x[2] + r[2],
-                         x[5] + self.sysm.psi_rov_from_tree_rad])
+        return np.array(
+            [
+                x[0] + c * r[0] - s * r[1],
+                x[1] + s * r[0] + c * r[1],
+                x[2] + r[2],
+                x[5] + self.sysm.psi_rov_from_tree_rad,
+            ]
+        )
 
     def check_mount(self) -> StartupReport:
         """The start-up check of the mount vector against the measured geometry."""
-        return check_mount_vector(self.held_y, self.sysm.r_rov_from_tree_tree_m,
-                                  self.crane_tip_n, self.wire_length_m, self.ps,
-                                  self.current_state.speed_mps)
+        return check_mount_vector(
+            self.held_y,
+            self.sysm.r_rov_from_tree_tree_m,
+            self.crane_tip_n,
+            self.wire_length_m,
+            self.ps,
+            self.current_state.speed_mps,
+        )
 
     def present_row(self) -> FloatArray:
         """A log row for the present state (before the next step): time, plant, reference,
         estimate, mode and site."""
         row = np.zeros(N_LOG)
-        env = site.wire_environment(self.plant_ps, self.wire_length_m, self.crane_tip_n,
-                                    self.current_state.speed_mps,
-                                    self.current_state.direction_rad)
-        env[plant.E_LREST] = self.wire_length_m + site.self_weight_stretch(self.plant_ps,
-                                                                           self.wire_length_m)
+        env = site.wire_environment(
+            self.plant_ps,
+            self.wire_length_m,
+            self.crane_tip_n,
+            self.current_state.speed_mps,
+            self.current_state.direction_rad,
+        )
+        env[plant.E_LREST] = self.wire_length_m + site.self_weight_stretch(
+            self.plant_ps, self.wire_length_m
+        )
         loop.write_plant_row(row, self.t_s, self.x, self.held_y, env, self.arrays)
         rows = LogRows(row[None, :])
         rows["eta_ref_n"][0] = self.target
@@ -302,8 +376,9 @@ class Simulation:
         return row
 
     # ------------------------------------------------------------------ control commands
-    def set_target(self, north_m: float, east_m: float, psi_rad: float,
-                   heading_mode: HeadingMode = "shortest") -> None:
+    def set_target(
+        self, north_m: float, east_m: float, psi_rad: float, heading_mode: HeadingMode = "shortest"
+    ) -> None:
         """Where the tree should go. ``shortest``: the heading target is reached the short way
         round from the present reference; ``absolute``: ``psi_rad`` is taken as it stands,
         unwrapped, so +2 pi from 0 is a full turn."""
@@ -311,22 +386,24 @@ class Simulation:
             if not math.isfinite(v):
                 raise ValueError(f"target {name} must be finite, got {v}")
         if heading_mode not in HEADING_MODES:
-            raise ValueError(f"heading_mode must be one of {', '.join(HEADING_MODES)}, "
-                             f"got {heading_mode!r}")
-        psi_ref = self.cs[loop.CS_REF + 2] if self.cs[loop.CS_LAST_MODE] >= 0 else \
-            self.eta_estimate[2]
+            raise ValueError(
+                f"heading_mode must be one of {', '.join(HEADING_MODES)}, got {heading_mode!r}"
+            )
+        psi_ref = (
+            self.cs[loop.CS_REF + 2] if self.cs[loop.CS_LAST_MODE] >= 0 else self.eta_estimate[2]
+        )
         psi = psi_ref + ssa(psi_rad - psi_ref) if heading_mode == "shortest" else psi_rad
         self.target = np.array([north_m, east_m, psi])
 
     def set_gains(self, gains: Gains) -> None:
         """New tree-controller gains, bumpless: the jump of the P and D terms at this instant
         is moved into the integral, so the commanded force does not change."""
-        e = self.cs[loop.CS_E:loop.CS_E + 3]
-        de = self.cs[loop.CS_DE:loop.CS_DE + 3]
+        e = self.cs[loop.CS_E : loop.CS_E + 3]
+        de = self.cs[loop.CS_DE : loop.CS_DE + 3]
         old_pd = -self.C.Kp * e - self.C.Kd * de
         new_kp, new_kd = np.array(gains.kp), np.array(gains.kd)
         new_pd = -new_kp * e - new_kd * de
-        self.cs[loop.CS_I:loop.CS_I + 3] += old_pd - new_pd
+        self.cs[loop.CS_I : loop.CS_I + 3] += old_pd - new_pd
         self.gains = gains
         self.C = self.C._replace(Kp=new_kp, Ki=np.array(gains.ki), Kd=new_kd)
 
@@ -344,8 +421,11 @@ class Simulation:
         self.gripping = bool(gripping)
 
     def set_allocation(self, kind: Allocation) -> None:
-        kinds = {"pinv": loop.ALLOC_PINV, "priority": loop.ALLOC_PRIORITY,
-                 "qp": loop.ALLOC_EXTERNAL}
+        kinds = {
+            "pinv": loop.ALLOC_PINV,
+            "priority": loop.ALLOC_PRIORITY,
+            "qp": loop.ALLOC_EXTERNAL,
+        }
         if kind not in kinds:
             raise ValueError(f"allocation must be one of {', '.join(ALLOCATIONS)}, got {kind!r}")
         self.settings = replace(self.settings, allocation=kind)
@@ -353,16 +433,18 @@ class Simulation:
 
     def set_heave_force(self, force_newton: float) -> None:
         """Constant heave force of the ROV while on the tree (positive = down) [N]."""
-        f = _in_range("heave force", force_newton, -HEAVE_FORCE_MAX_NEWTON,
-                      HEAVE_FORCE_MAX_NEWTON, "N")
+        f = _in_range(
+            "heave force", force_newton, -HEAVE_FORCE_MAX_NEWTON, HEAVE_FORCE_MAX_NEWTON, "N"
+        )
         self.C = self.C._replace(heave_newton=f)
         self.settings = replace(self.settings, heave_force_newton=f)
 
-    def set_free_setpoint(self, north_m: float, east_m: float, down_m: float,
-                          psi_rad: float) -> None:
+    def set_free_setpoint(
+        self, north_m: float, east_m: float, down_m: float, psi_rad: float
+    ) -> None:
         """Where the free-flying ROV should hold station (supervisor's free mode)."""
         values = finite_vector("free-ROV set point", [north_m, east_m, down_m, psi_rad], 4)
-        self.cs[loop.CS_FSP:loop.CS_FSP + 4] = values
+        self.cs[loop.CS_FSP : loop.CS_FSP + 4] = values
 
     def reset_observer(self) -> None:
         """Restart the EKF from the present measurements (after hook-up)."""
@@ -372,7 +454,8 @@ class Simulation:
     def set_thruster_speeds(self, n_rps: FloatArray) -> None:
         """Propeller speeds while control is off [rev/s]."""
         self.thruster_speeds_rps = finite_vector(
-            "thruster speed command [rev/s]", n_rps, self.thruster_speeds_rps.shape[0])
+            "thruster speed command [rev/s]", n_rps, self.thruster_speeds_rps.shape[0]
+        )
 
     def set_push(self, force_newton: FloatArray) -> None:
         """A steady external force on the tree's centre, NED [N]."""
@@ -388,8 +471,7 @@ class Simulation:
     def move_vessel(self, target_n: FloatArray, speed_mps: float) -> None:
         """Move the vessel (the crane tip) smoothly to ``target_n`` at ``speed_mps``."""
         target = finite_vector("crane tip target", target_n, 3)
-        speed = _in_range("vessel speed", speed_mps, 0.0, VESSEL_SPEED_MAX_MPS, "m/s",
-                          lo_open=True)
+        speed = _in_range("vessel speed", speed_mps, 0.0, VESSEL_SPEED_MAX_MPS, "m/s", lo_open=True)
         self.crane_target_n = target
         self.crane_speed_mps = speed
 
@@ -412,8 +494,10 @@ class Simulation:
         steps = duration_s / self.dt_s
         n = round(steps)
         if abs(steps - n) > 1e-9 * max(1.0, steps):
-            raise ValueError(f"duration {duration_s:g} s is not a whole number of "
-                             f"{self.dt_s:g} s steps ({steps:.6g} steps)")
+            raise ValueError(
+                f"duration {duration_s:g} s is not a whole number of "
+                f"{self.dt_s:g} s steps ({steps:.6g} steps)"
+            )
         return int(n)
 
     def run_for(self, duration_s: float) -> LogRows:
@@ -428,15 +512,18 @@ class Simulation:
         done = 0
         while done < n:
             k = min(self.chunk_steps, int(n) - done)
-            out[done:done + k] = self._chunk(k)
+            out[done : done + k] = self._chunk(k)
             done += k
         return LogRows(out, self.n_thrusters, self.Q.counters.copy())
 
     def _sync_site(self) -> None:
         """The vessel's position and the wire length are known on board: keep the control
         plant model's wire spring (equilibrium point and stiffness) up to date."""
-        k_h = wm.horizontal_stiffness(self.plant_ps.wire.submerged_weight_per_length(),
-                                      self.ps.tree.submerged_weight_newton, self.wire_length_m)
+        k_h = wm.horizontal_stiffness(
+            self.plant_ps.wire.submerged_weight_per_length(),
+            self.ps.tree.submerged_weight_newton,
+            self.wire_length_m,
+        )
         if (k_h != self.C.k_h) or np.any(self.C.p_eq != self.crane_tip_n[0:2]):
             self.C = self.C._replace(k_h=float(k_h), p_eq=self.crane_tip_n[0:2].copy())
 
@@ -453,15 +540,35 @@ class Simulation:
         env, noise = self._chunk_inputs(n)
         if not self.control_on:
             x, held, log, ok = loop.run_open_chunk(
-                self.step_index, self.x, self.held_y, self.thruster_speeds_rps, env,
-                noise.noise, noise.fresh, self.arrays, self.dt_s)
+                self.step_index,
+                self.x,
+                self.held_y,
+                self.thruster_speeds_rps,
+                env,
+                noise.noise,
+                noise.fresh,
+                self.arrays,
+                self.dt_s,
+            )
         elif self.C.alloc_kind == loop.ALLOC_EXTERNAL:
             x, held, self.xhat, self.P_cov, self.cs, log, ok = self._chunk_qp(env, noise)
         else:
             x, held, self.xhat, self.P_cov, self.cs, log, ok = loop.run_chunk(
-                self.step_index, self.x, self.held_y, self.xhat, self.P_cov, self.cs,
-                self.target, env, noise.noise, noise.fresh, self.arrays, self.C, self.Q,
-                self.dt_s)
+                self.step_index,
+                self.x,
+                self.held_y,
+                self.xhat,
+                self.P_cov,
+                self.cs,
+                self.target,
+                env,
+                noise.noise,
+                noise.fresh,
+                self.arrays,
+                self.C,
+                self.Q,
+                self.dt_s,
+            )
         if ok < n:
             self._diverged(x, ok)
         self.x, self.held_y = x, held
@@ -469,12 +576,18 @@ class Simulation:
         return log
 
     def _diverged(self, x: FloatArray, ok: int) -> None:
-        parts = {"tree pose": x[0:6], "tree velocity": x[6:12], "ROV pose": x[12:18],
-                 "ROV velocity": x[18:24]}
+        parts = {
+            "tree pose": x[0:6],
+            "tree velocity": x[6:12],
+            "ROV pose": x[12:18],
+            "ROV velocity": x[18:24],
+        }
         bad = [name for name, v in parts.items() if not np.all(np.isfinite(v))]
-        raise SimulationDiverged(f"plant state not finite at t = "
-                                 f"{(self.step_index + ok + 1) * self.dt_s:.2f} s "
-                                 f"({', '.join(bad) or 'state'})")
+        raise SimulationDiverged(
+            f"plant state not finite at t = "
+            f"{(self.step_index + ok + 1) * self.dt_s:.2f} s "
+            f"({', '.join(bad) or 'state'})"
+        )
 
     def _chunk_qp(self, env: FloatArray, noise: sensors.NoiseChunk):
         """The compiled step body with the QP allocation (not compiled) in the middle."""
@@ -484,12 +597,34 @@ class Simulation:
         for j in range(n):
             k = self.step_index + j
             held = sensors.sample(x, held, noise.noise[j], noise.fresh[j], sensors.Y_SENSOR)
-            tau6, xhat, pc, cs = loop.control_step(k * self.dt_s, x, held, noise.fresh[j],
-                                                   xhat, pc, cs, self.target, self.C, self.Q,
-                                                   self.dt_s, log[j])
+            tau6, xhat, pc, cs = loop.control_step(
+                k * self.dt_s,
+                x,
+                held,
+                noise.fresh[j],
+                xhat,
+                pc,
+                cs,
+                self.target,
+                self.C,
+                self.Q,
+                self.dt_s,
+                log[j],
+            )
             f = np.asarray(alloc.allocate_qp(self.thruster_config, tau6).force_newton)
-            x, xhat, pc = loop.finish_step(x, f, env[j], xhat, pc, self.C, self.arrays,
-                                           self.dt_s, (k + 1) * self.dt_s, held, log[j])
+            x, xhat, pc = loop.finish_step(
+                x,
+                f,
+                env[j],
+                xhat,
+                pc,
+                self.C,
+                self.arrays,
+                self.dt_s,
+                (k + 1) * self.dt_s,
+                held,
+                log[j],
+            )
             if not np.all(np.isfinite(x)):
                 return x, held, xhat, pc, cs, log, j
         return x, held, xhat, pc, cs, log, n
@@ -514,31 +649,34 @@ class Simulation:
         the vessel to the end of the chunk."""
         ps = self.plant_ps
         self.current_state, speeds, dirs = envmod.advance_current(
-            self.current_state, self.current_params, self.dt_s, n, self.rng)
+            self.current_state, self.current_params, self.dt_s, n, self.rng
+        )
         water_n = envmod.current_velocity_n(speeds, dirs)
         accel_n = np.zeros_like(water_n)
         if self.wave_field is not None:
             t = self.t_s + self.dt_s * np.arange(n)
-            v_w, a_w = envmod.wave_kinematics_n(self.wave_field, t, float(self.x[2]),
-                                                float(self.x[0]), float(self.x[1]))
+            v_w, a_w = envmod.wave_kinematics_n(
+                self.wave_field, t, float(self.x[2]), float(self.x[0]), float(self.x[1])
+            )
             water_n = water_n + v_w
             accel_n = accel_n + a_w
-        base = site.wire_environment(ps, self.wire_length_m, self.crane_tip_n,
-                                     float(np.mean(speeds)), float(np.mean(dirs)))
-        base[plant.E_PUSH:plant.E_PUSH + 3] = self.push_newton
+        base = site.wire_environment(
+            ps, self.wire_length_m, self.crane_tip_n, float(np.mean(speeds)), float(np.mean(dirs))
+        )
+        base[plant.E_PUSH : plant.E_PUSH + 3] = self.push_newton
         base[plant.E_GRIP] = 1.0 if self.gripping else 0.0
         if self.docking_frame is not None:
-            base[plant.E_FRAME:plant.E_FRAME + 2] = self.docking_frame.center_n
+            base[plant.E_FRAME : plant.E_FRAME + 2] = self.docking_frame.center_n
             base[plant.E_FRAME_PSI] = self.docking_frame.heading_rad
             base[plant.E_LAND] = self.docking_frame.landing_depth_m
         env = np.repeat(base[None, :], n, axis=0)
-        env[:, plant.E_VC:plant.E_VC + 3] = water_n
-        env[:, plant.E_AC:plant.E_AC + 3] = accel_n
+        env[:, plant.E_VC : plant.E_VC + 3] = water_n
+        env[:, plant.E_AC : plant.E_AC + 3] = accel_n
         # winch and vessel move smoothly within the chunk
         lengths = self._ramp(self.wire_length_m, self.wire_target_m, self.wire_rate_mps, n)
         env[:, plant.E_LREST] = lengths + site.self_weight_stretch(ps, self.wire_length_m)
         crane = self._crane_path(n)
-        env[:, plant.E_CT:plant.E_CT + 3] = crane
+        env[:, plant.E_CT : plant.E_CT + 3] = crane
         self.wire_length_m = float(lengths[-1])
         self.crane_tip_n = crane[-1].copy()
         return env

@@ -39,8 +39,9 @@ class StartupReport:
     warnings: list[str] = field(default_factory=list)
 
 
-def hang_tolerance_m(ps: ParameterSet, wire_length_m: float, fix_noise_m: float,
-                     current_speed_mps: float) -> float:
+def hang_tolerance_m(
+    ps: ParameterSet, wire_length_m: float, fix_noise_m: float, current_speed_mps: float
+) -> float:
     """How far from the crane tip the still tree may plausibly hang: the drag offset of the wire
     and tree (eq. 2.29) in the measured current with 50 % margin on its speed, plus three sigma
     of the position fix and 0.3 m for the vessel's own position keeping."""
@@ -52,9 +53,14 @@ def hang_tolerance_m(ps: ParameterSet, wire_length_m: float, fix_noise_m: float,
     return abs(offset) + 3.0 * fix_noise_m + 0.3
 
 
-def check_mount_vector(y: NDArray[np.float64], r_config: NDArray[np.float64],
-                       crane_tip_n: NDArray[np.float64], wire_length_m: float,
-                       ps: ParameterSet, current_speed_mps: float) -> StartupReport:
+def check_mount_vector(
+    y: NDArray[np.float64],
+    r_config: NDArray[np.float64],
+    crane_tip_n: NDArray[np.float64],
+    wire_length_m: float,
+    ps: ParameterSet,
+    current_speed_mps: float,
+) -> StartupReport:
     """Compare the configured r with the measured geometry (see the module docstring)."""
     psi_tree = float(y[4]) - ps.mount.psi_rov_from_tree_rad
     c, s = math.cos(psi_tree), math.sin(psi_tree)
@@ -73,9 +79,11 @@ def check_mount_vector(y: NDArray[np.float64], r_config: NDArray[np.float64],
             f"mount vector r_rov_from_tree_tree_m = [{r_txt}] looks like it has the wrong sign: "
             f"with it the ROV's position fix puts the tree {residual:.2f} m from where it hangs "
             f"under the crane tip, with the opposite sign {flipped:.2f} m "
-            f"(tolerance {tol:.2f} m). Check the direction FROM the tree's origin TO the ROV.")
+            f"(tolerance {tol:.2f} m). Check the direction FROM the tree's origin TO the ROV."
+        )
     elif checked and residual > tol:
         warnings.append(
             f"the ROV's position fix puts the tree {residual:.2f} m from where it should hang "
-            f"(tolerance {tol:.2f} m): check the mount vector and the crane-tip position")
+            f"(tolerance {tol:.2f} m): check the mount vector and the crane-tip position"
+        )
     return StartupReport(checked, residual, flipped, warnings)

@@ -66,9 +66,12 @@ class MissionDriver:
         self._leg_start = self.rows
         if self.leg_index < len(self.mission.legs):
             leg = self.mission.legs[self.leg_index]
-            self.ctx.event("leg", f"leg {self.leg_index + 1}/{len(self.mission.legs)}: "
-                                  f"{leg.type} {leg.name}".strip(), index=self.leg_index + 1,
-                           type=leg.type)
+            self.ctx.event(
+                "leg",
+                f"leg {self.leg_index + 1}/{len(self.mission.legs)}: {leg.type} {leg.name}".strip(),
+                index=self.leg_index + 1,
+                type=leg.type,
+            )
             deadline = self.sim.t_s + leg.timeout_s
             self._gen = LEG_EXECUTORS[leg.type](self.ctx, leg, deadline)
 
@@ -76,8 +79,17 @@ class MissionDriver:
         leg = self.current_leg
         if leg is None:
             return
-        self.spans.append(LegSpan(self.leg_index + 1, leg.type, leg.name, leg.score,
-                                  self._leg_start, self.rows, not ok))
+        self.spans.append(
+            LegSpan(
+                self.leg_index + 1,
+                leg.type,
+                leg.name,
+                leg.score,
+                self._leg_start,
+                self.rows,
+                not ok,
+            )
+        )
 
     def _next_request(self) -> bool:
         """Ask the running leg how long to run next (starting legs as they end); False when
@@ -160,11 +172,18 @@ class MissionDriver:
     def result(self) -> MissionResult:
         data = LogRows.join(self.parts, self.sim.n_thrusters)
         if not self.parts:
-            data = LogRows(np.zeros((0, data.data.shape[1])), self.sim.n_thrusters,
-                           self.sim.quality_counters)
-        result = score(self.mission.name, data, self.spans, self.sim.dt_s,
-                       float(self.sim.ps.tree.dimensions_m.max()), self.diverged,
-                       list(self.sim.startup.warnings))
+            data = LogRows(
+                np.zeros((0, data.data.shape[1])), self.sim.n_thrusters, self.sim.quality_counters
+            )
+        result = score(
+            self.mission.name,
+            data,
+            self.spans,
+            self.sim.dt_s,
+            float(self.sim.ps.tree.dimensions_m.max()),
+            self.diverged,
+            list(self.sim.startup.warnings),
+        )
         result.landings = list(self.ctx.landings)
         result.events = list(self.ctx.events)
         return result

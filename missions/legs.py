@@ -54,8 +54,9 @@ class MissionContext:
 
     def event(self, kind: str, text: str, **data: object) -> None:
         """Note something for the log (leg changes, landings, gain changes)."""
-        self.events.append({"t_s": round(self.sim.t_s, 3), "kind": kind, "text": text,
-                            "data": data})
+        self.events.append(
+            {"t_s": round(self.sim.t_s, 3), "kind": kind, "text": text, "data": data}
+        )
 
     def set_target(self, north: float, east: float, psi: float) -> None:
         self.target = np.array([north, east, psi])
@@ -63,10 +64,13 @@ class MissionContext:
 
     def reference_arrived(self) -> bool:
         ref = self.sim.reference
-        return bool(abs(ref[0] - self.target[0]) < ARRIVED_M and
-                    abs(ref[1] - self.target[1]) < ARRIVED_M and
-                    abs(ref[2] - self.target[2]) < ARRIVED_RAD and
-                    np.all(np.abs(ref[3:5]) < 1e-4) and abs(ref[5]) < 1e-5)
+        return bool(
+            abs(ref[0] - self.target[0]) < ARRIVED_M
+            and abs(ref[1] - self.target[1]) < ARRIVED_M
+            and abs(ref[2] - self.target[2]) < ARRIVED_RAD
+            and np.all(np.abs(ref[3:5]) < 1e-4)
+            and abs(ref[5]) < 1e-5
+        )
 
     def wait(self, seconds: float, deadline_s: float) -> Iterator[float]:
         """Run for ``seconds``, cut at the deadline."""
@@ -82,8 +86,9 @@ class MissionContext:
             yield CHUNK_S
         return True
 
-    def go_and_settle(self, north: float, east: float, psi: float, settle_s: float,
-                      deadline_s: float) -> LegRun:
+    def go_and_settle(
+        self, north: float, east: float, psi: float, settle_s: float, deadline_s: float
+    ) -> LegRun:
         """Set the target, run until the reference arrives, then settle. Returns False on
         timeout."""
         self.set_target(north, east, psi)
@@ -104,8 +109,11 @@ def _hold(ctx: MissionContext, leg: schema.HoldLeg, deadline: float) -> LegRun:
 
 def _rotate(ctx: MissionContext, leg: schema.RotateLeg, deadline: float) -> LegRun:
     t = ctx.target
-    return (yield from ctx.go_and_settle(t[0], t[1], t[2] + math.radians(leg.angle_deg),
-                                         leg.settle_s, deadline))
+    return (
+        yield from ctx.go_and_settle(
+            t[0], t[1], t[2] + math.radians(leg.angle_deg), leg.settle_s, deadline
+        )
+    )
 
 
 def _heading(ctx: MissionContext, heading_deg: float | None) -> float:
@@ -119,8 +127,9 @@ def _heading(ctx: MissionContext, heading_deg: float | None) -> float:
 def _move(ctx: MissionContext, leg: schema.MoveLeg, deadline: float) -> LegRun:
     t = ctx.target
     n, e = (t[0] + leg.north_m, t[1] + leg.east_m) if leg.relative else (leg.north_m, leg.east_m)
-    return (yield from ctx.go_and_settle(n, e, _heading(ctx, leg.heading_deg), leg.settle_s,
-                                         deadline))
+    return (
+        yield from ctx.go_and_settle(n, e, _heading(ctx, leg.heading_deg), leg.settle_s, deadline)
+    )
 
 
 def _step(ctx: MissionContext, leg: schema.StepLeg, deadline: float) -> LegRun:
@@ -142,8 +151,7 @@ def _square(ctx: MissionContext, leg: schema.SquareLeg, deadline: float) -> LegR
     start = ctx.target.copy()
     psi = _heading(ctx, leg.heading_deg)
     for dn, de in _corners(leg.side_m, leg.clockwise):
-        ok = yield from ctx.go_and_settle(start[0] + dn, start[1] + de, psi, leg.settle_s,
-                                          deadline)
+        ok = yield from ctx.go_and_settle(start[0] + dn, start[1] + de, psi, leg.settle_s, deadline)
         if not ok:
             return False
     return True
@@ -229,14 +237,17 @@ def _hookup(ctx: MissionContext, leg: schema.HookupLeg, deadline: float) -> LegR
     return True
 
 
-def _aligned(cl: Simulation, frame: DockingFrame, layout: DockingLayout,
-             leg: schema.DockLeg) -> bool:
+def _aligned(
+    cl: Simulation, frame: DockingFrame, layout: DockingLayout, leg: schema.DockLeg
+) -> bool:
     """Alignment as the operator sees it (the controller's estimate of the tree's pose)."""
     eta = cl.eta_estimate
     pose = np.array([eta[0], eta[1], 0.0, 0.0, 0.0, eta[2]])
     chk = docking.check_alignment(pose, frame, layout)
-    return chk.miss_m <= leg.align_tolerance_m and abs(chk.heading_error_deg) <= \
-        leg.align_tolerance_deg
+    return (
+        chk.miss_m <= leg.align_tolerance_m
+        and abs(chk.heading_error_deg) <= leg.align_tolerance_deg
+    )
 
 
 def _first_contact(rows: LogRows, post_top: float, half_h: float) -> int | None:
@@ -259,13 +270,13 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
     ok = yield from ctx.go_and_settle(frame.center_n[0], frame.center_n[1], psi, 0.0, deadline)
     if ok:
         ok = yield from ctx.run_until(
-            lambda: cl.winch_idle and _aligned(cl, frame, layout, leg), deadline)
+            lambda: cl.winch_idle and _aligned(cl, frame, layout, leg), deadline
+        )
     if not ok:
         ctx.event("landing", "landing abandoned: not aligned over the frame in time")
         return False
     ctx.event("dock", "aligned over the frame: lowering")
-    cl.winch_to(cl.wire_length_for_depth(frame.landing_depth_m - half_h) + 0.3,
-                leg.lower_rate_mps)
+    cl.winch_to(cl.wire_length_for_depth(frame.landing_depth_m - half_h) + 0.3, leg.lower_rate_mps)
     contact: tuple[int, FloatArray, FloatArray] | None = None
     while not cl.winch_idle:
         if cl.t_s >= deadline:
@@ -281,15 +292,22 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
     result = _landing_result(cl, real, layout, contact)
     ctx.landings.append(result)
     verdict = "landed" if result.success else "FAILED landing"
-    ctx.event("landing", f"{verdict}: miss {result.miss_m:.3f} m, heading error "
-                         f"{result.heading_error_deg:.2f} deg, contact speed "
-                         f"{result.contact_speed_mps:.3f} m/s, rests on the {result.rests_on}",
-              **vars(result))
+    ctx.event(
+        "landing",
+        f"{verdict}: miss {result.miss_m:.3f} m, heading error "
+        f"{result.heading_error_deg:.2f} deg, contact speed "
+        f"{result.contact_speed_mps:.3f} m/s, rests on the {result.rests_on}",
+        **vars(result),
+    )
     return True
 
 
-def _landing_result(cl: Simulation, frame: DockingFrame, layout: DockingLayout,
-                    contact: tuple[int, FloatArray, FloatArray] | None) -> LandingResult:
+def _landing_result(
+    cl: Simulation,
+    frame: DockingFrame,
+    layout: DockingLayout,
+    contact: tuple[int, FloatArray, FloatArray] | None,
+) -> LandingResult:
     if contact is None:
         return LandingResult(False, math.inf, math.nan, 0.0, "nothing", cl.t_s)
     _, row, prev = contact
@@ -299,8 +317,14 @@ def _landing_result(cl: Simulation, frame: DockingFrame, layout: DockingLayout,
     bottom = cl.tree_eta_n[2] + float(cl.plant_ps.tree.dimensions_m[2]) / 2.0
     on_frame = bottom > frame.landing_depth_m - 0.2 * layout.post_height_m
     success = chk.captured and speed <= layout.max_landing_speed_mps and on_frame
-    return LandingResult(bool(success), chk.miss_m, chk.heading_error_deg, speed,
-                         "frame" if on_frame else "posts", float(LAYOUT.take(row, "t_s")))
+    return LandingResult(
+        bool(success),
+        chk.miss_m,
+        chk.heading_error_deg,
+        speed,
+        "frame" if on_frame else "posts",
+        float(LAYOUT.take(row, "t_s")),
+    )
 
 
 def _lift(ctx: MissionContext, leg: schema.LiftLeg, deadline: float) -> LegRun:
@@ -320,8 +344,19 @@ def _lift(ctx: MissionContext, leg: schema.LiftLeg, deadline: float) -> LegRun:
 
 
 LEG_EXECUTORS: dict[str, Executor] = {
-    "hold": _hold, "wait": _hold, "rotate": _rotate, "move": _move, "step": _step,
-    "square": _square, "waypoints": _waypoints, "gains": _gains, "mode": _mode,
-    "wire": _wire, "vessel": _vessel, "heave": _heave, "hookup": _hookup, "dock": _dock,
+    "hold": _hold,
+    "wait": _hold,
+    "rotate": _rotate,
+    "move": _move,
+    "step": _step,
+    "square": _square,
+    "waypoints": _waypoints,
+    "gains": _gains,
+    "mode": _mode,
+    "wire": _wire,
+    "vessel": _vessel,
+    "heave": _heave,
+    "hookup": _hookup,
+    "dock": _dock,
     "lift": _lift,
 }

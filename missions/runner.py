@@ -18,17 +18,30 @@ from missions.driver import MissionDriver
 from missions.scoring import LandingResult, LegResult, MissionResult
 from missions.setup import build_simulation, charted_frame, vary_tree
 
-__all__ = ["LandingResult", "LegResult", "MissionDriver", "MissionResult", "build_simulation",
-           "charted_frame", "run_mission", "vary_tree"]
+__all__ = [
+    "LandingResult",
+    "LegResult",
+    "MissionDriver",
+    "MissionResult",
+    "build_simulation",
+    "charted_frame",
+    "run_mission",
+    "vary_tree",
+]
 
 
-def run_mission(mission: schema.Mission, seed: int | None = None,
-                allocation: Allocation | None = None, feedback: Feedback | None = None,
-                feedforward: bool | None = None,
-                progress: Callable[[MissionDriver], None] | None = None) -> MissionResult:
+def run_mission(
+    mission: schema.Mission,
+    seed: int | None = None,
+    allocation: Allocation | None = None,
+    feedback: Feedback | None = None,
+    feedforward: bool | None = None,
+    progress: Callable[[MissionDriver], None] | None = None,
+) -> MissionResult:
     """Execute all legs and score them; ``progress`` is called after each request."""
-    sim = build_simulation(mission, seed=seed, allocation=allocation, feedback=feedback,
-                           feedforward=feedforward)
+    sim = build_simulation(
+        mission, seed=seed, allocation=allocation, feedback=feedback, feedforward=feedforward
+    )
     driver = MissionDriver(mission, sim)
     while not driver.done:
         driver.advance()

@@ -35,12 +35,14 @@ class _Model(BaseModel):
 
 class CurrentSetup(_Model):
     speed_mps: float = Field(ge=0.0, le=3.0, description="current speed [m/s]")
-    direction_deg: float = Field(ge=-360.0, le=360.0,
-                                 description="direction the current flows towards [deg]")
+    direction_deg: float = Field(
+        ge=-360.0, le=360.0, description="direction the current flows towards [deg]"
+    )
     speed_walk_mps_per_sqrt_s: float = Field(default=0.0, ge=0.0, le=0.1)
     direction_walk_deg_per_sqrt_s: float = Field(default=0.0, ge=0.0, le=10.0)
-    speed_band_mps: float = Field(default=0.0, ge=0.0, le=1.0,
-                                  description="random walk stays within speed +- band")
+    speed_band_mps: float = Field(
+        default=0.0, ge=0.0, le=1.0, description="random walk stays within speed +- band"
+    )
     direction_band_deg: float = Field(default=0.0, ge=0.0, le=180.0)
 
 
@@ -54,23 +56,29 @@ class PlantVariation(_Model):
     """Differences between the real tree and what the controller is configured with
     (thesis section 4.2.3)."""
 
-    mass_scale: float = Field(default=1.0, ge=0.1, le=5.0,
-                              description="tree rigid-body mass and inertia factor")
-    weight_scale: float = Field(default=1.0, ge=0.1, le=5.0,
-                                description="tree submerged weight factor")
+    mass_scale: float = Field(
+        default=1.0, ge=0.1, le=5.0, description="tree rigid-body mass and inertia factor"
+    )
+    weight_scale: float = Field(
+        default=1.0, ge=0.1, le=5.0, description="tree submerged weight factor"
+    )
 
 
 class DockingFrameSetup(_Model):
     """Where the docking frame stands; its posts come from the parameter set."""
 
     center_ne_m: Annotated[list[Finite], Field(min_length=2, max_length=2)] = Field(
-        description="north, east of the frame's centre [m]")
+        description="north, east of the frame's centre [m]"
+    )
     heading_deg: float = Field(ge=-360.0, le=360.0, description="heading the tree must land at")
-    landing_depth_m: float = Field(gt=5.0, le=4000.0,
-                                   description="depth of the landing surface (seabed) [m]")
+    landing_depth_m: float = Field(
+        gt=5.0, le=4000.0, description="depth of the landing surface (seabed) [m]"
+    )
     survey_error_ne_m: Annotated[list[Finite], Field(min_length=2, max_length=2)] = Field(
-        default=[0.0, 0.0], description="where the frame really is, relative to the charted "
-                                        "center_ne_m the operator aligns to [m]")
+        default=[0.0, 0.0],
+        description="where the frame really is, relative to the charted "
+        "center_ne_m the operator aligns to [m]",
+    )
 
 
 class Setup(_Model):
@@ -85,15 +93,22 @@ class Setup(_Model):
     reference: Reference = "third"
     feedforward: bool = False
     heave_force_newton: float = Field(
-        default=0.0, ge=-1.0e5, le=1.0e5, description="ROV heave force while on the tree [N]",
-        validation_alias=AliasChoices("heave_force_newton", "heave_force_n"))
+        default=0.0,
+        ge=-1.0e5,
+        le=1.0e5,
+        description="ROV heave force while on the tree [N]",
+        validation_alias=AliasChoices("heave_force_newton", "heave_force_n"),
+    )
     r_mount_config_m: Annotated[list[Finite], Field(min_length=3, max_length=3)] | None = Field(
-        default=None, description="mount vector the controller is configured with "
-                                  "(default: the parameter set's)")
+        default=None,
+        description="mount vector the controller is configured with (default: the parameter set's)",
+    )
     plant: PlantVariation = PlantVariation()
     docking_frame: DockingFrameSetup | None = None
-    start_gripping: bool = Field(default=True, description="false: the ROV starts free, "
-                                 "beside the tree, and a hookup leg brings it on")
+    start_gripping: bool = Field(
+        default=True,
+        description="false: the ROV starts free, beside the tree, and a hookup leg brings it on",
+    )
     seed: int = Field(default=0, ge=0, le=2**31 - 1)
 
 
@@ -110,8 +125,9 @@ class HoldLeg(_Leg):
 
 class RotateLeg(_Leg):
     type: Literal["rotate"]
-    angle_deg: float = Field(ge=-1080.0, le=1080.0,
-                             description="positive = clockwise seen from above; 360 allowed")
+    angle_deg: float = Field(
+        ge=-1080.0, le=1080.0, description="positive = clockwise seen from above; 360 allowed"
+    )
     settle_s: float = Field(default=60.0, ge=0.0, le=3600.0)
 
 
@@ -136,8 +152,9 @@ class StepLeg(_Leg):
 class SquareLeg(_Leg):
     type: Literal["square"]
     side_m: float = Field(gt=0.0, le=100.0)
-    heading_deg: float | None = Field(default=None, ge=-360.0, le=360.0,
-                                      description="heading held along the square")
+    heading_deg: float | None = Field(
+        default=None, ge=-360.0, le=360.0, description="heading held along the square"
+    )
     clockwise: bool = True
     settle_s: float = Field(default=20.0, ge=0.0, le=3600.0)
 
@@ -145,7 +162,8 @@ class SquareLeg(_Leg):
 class WaypointsLeg(_Leg):
     type: Literal["waypoints"]
     points_ne_m: list[Annotated[list[Finite], Field(min_length=2, max_length=2)]] = Field(
-        min_length=1, max_length=200)
+        min_length=1, max_length=200
+    )
     relative: bool = True
     settle_s: float = Field(default=10.0, ge=0.0, le=3600.0)
 
@@ -193,11 +211,16 @@ class DockLeg(_Leg):
     the funnels over the posts at contact."""
 
     type: Literal["dock"]
-    hover_m: float = Field(default=1.0, gt=0.0, le=50.0,
-                           description="clearance of the tree's bottom over the post tops")
+    hover_m: float = Field(
+        default=1.0,
+        gt=0.0,
+        le=50.0,
+        description="clearance of the tree's bottom over the post tops",
+    )
     lower_rate_mps: float = Field(default=0.05, gt=0.0, le=0.5, description="winch speed down")
-    align_tolerance_m: float = Field(default=0.05, gt=0.0, le=1.0,
-                                     description="start lowering when aligned this well")
+    align_tolerance_m: float = Field(
+        default=0.05, gt=0.0, le=1.0, description="start lowering when aligned this well"
+    )
     align_tolerance_deg: float = Field(default=1.0, gt=0.0, le=30.0)
     settle_s: float = Field(default=30.0, ge=0.0, le=3600.0)
 
@@ -206,8 +229,9 @@ class LiftLeg(_Leg):
     """Lift the tree off the frame (haul in) back to a hover height."""
 
     type: Literal["lift"]
-    height_m: float = Field(default=1.0, gt=0.0, le=50.0,
-                            description="clearance of the bottom over the post tops")
+    height_m: float = Field(
+        default=1.0, gt=0.0, le=50.0, description="clearance of the bottom over the post tops"
+    )
     rate_mps: float = Field(default=0.05, gt=0.0, le=0.5)
     settle_s: float = Field(default=30.0, ge=0.0, le=3600.0)
 
@@ -224,15 +248,49 @@ class HeaveLeg(_Leg):
     """Set the ROV's constant heave force while on the tree (appendix C step 4.iii)."""
 
     type: Literal["heave"]
-    force_newton: float = Field(ge=-1.0e5, le=1.0e5, description="positive = downwards [N]",
-                                validation_alias=AliasChoices("force_newton", "force_n"))
+    force_newton: float = Field(
+        ge=-1.0e5,
+        le=1.0e5,
+        description="positive = downwards [N]",
+        validation_alias=AliasChoices("force_newton", "force_n"),
+    )
 
 
-Leg = Annotated[HoldLeg | RotateLeg | MoveLeg | StepLeg | SquareLeg | WaypointsLeg | GainsLeg |
-                ModeLeg | WaitLeg | WireLeg | VesselLeg | DockLeg | LiftLeg | HookupLeg |
-                HeaveLeg, Field(discriminator="type")]
-LEG_TYPES = ("hold", "rotate", "move", "step", "square", "waypoints", "gains", "mode", "wait",
-             "wire", "vessel", "dock", "lift", "hookup", "heave")
+Leg = Annotated[
+    HoldLeg
+    | RotateLeg
+    | MoveLeg
+    | StepLeg
+    | SquareLeg
+    | WaypointsLeg
+    | GainsLeg
+    | ModeLeg
+    | WaitLeg
+    | WireLeg
+    | VesselLeg
+    | DockLeg
+    | LiftLeg
+    | HookupLeg
+    | HeaveLeg,
+    Field(discriminator="type"),
+]
+LEG_TYPES = (
+    "hold",
+    "rotate",
+    "move",
+    "step",
+    "square",
+    "waypoints",
+    "gains",
+    "mode",
+    "wait",
+    "wire",
+    "vessel",
+    "dock",
+    "lift",
+    "hookup",
+    "heave",
+)
 
 
 class Mission(_Model):
@@ -248,10 +306,14 @@ class Mission(_Model):
             for i, leg in enumerate(self.legs):
                 if leg.type in ("dock", "lift"):
                     raise ValueError(f"legs[{i + 1}] ({leg.type}) needs setup.docking_frame")
-        if self.setup.docking_frame is not None and \
-                self.setup.docking_frame.landing_depth_m <= self.setup.depth_m:
-            raise ValueError("setup.docking_frame.landing_depth_m must be deeper than "
-                             "setup.depth_m (the tree starts above the frame)")
+        if (
+            self.setup.docking_frame is not None
+            and self.setup.docking_frame.landing_depth_m <= self.setup.depth_m
+        ):
+            raise ValueError(
+                "setup.docking_frame.landing_depth_m must be deeper than "
+                "setup.depth_m (the tree starts above the frame)"
+            )
         return self
 
 
@@ -261,8 +323,11 @@ def _where(data: dict, loc: tuple) -> str:
     node: object = data
     for p in loc:
         if isinstance(p, int):
-            kind = node[p].get("type") if isinstance(node, list) and p < len(node) and \
-                isinstance(node[p], dict) else None
+            kind = (
+                node[p].get("type")
+                if isinstance(node, list) and p < len(node) and isinstance(node[p], dict)
+                else None
+            )
             parts[-1] = f"{parts[-1]}[{p + 1}]" + (f" ({kind})" if kind else "")
             node = node[p] if isinstance(node, list) and p < len(node) else None
         else:
@@ -312,8 +377,7 @@ def parse_mission(data: dict, source: str = "<mission>", text: str | None = None
         for e in err.errors():
             line = _line_of(text, e["loc"]) if text is not None else None
             where = f"line {line}: " if line else ""
-            lines.append(f"  {where}{_where(data, e['loc'])}: {e['msg']} "
-                         f"(got {e.get('input')!r})")
+            lines.append(f"  {where}{_where(data, e['loc'])}: {e['msg']} (got {e.get('input')!r})")
         raise MissionError("\n".join(lines)) from None
 
 
@@ -327,8 +391,10 @@ def load_mission(path_or_name: str | Path) -> Mission:
         elif path.suffix == ".toml" or "/" in str(path_or_name):
             raise MissionError(f"mission file not found: {path}")
         else:
-            raise MissionError(f"unknown mission {str(path_or_name)!r}; the library has: "
-                               f"{', '.join(library_names())}")
+            raise MissionError(
+                f"unknown mission {str(path_or_name)!r}; the library has: "
+                f"{', '.join(library_names())}"
+            )
     text = path.read_text()
     try:
         data = tomllib.loads(text)

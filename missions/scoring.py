@@ -76,18 +76,26 @@ class MissionResult:
     @property
     def failed(self) -> bool:
         """A mission fails when it diverged, a leg timed out or a landing failed."""
-        return (self.diverged or any(leg.timed_out for leg in self.legs) or
-                any(not landing.success for landing in self.landings))
+        return (
+            self.diverged
+            or any(leg.timed_out for leg in self.legs)
+            or any(not landing.success for landing in self.landings)
+        )
 
     def summary(self) -> dict:
         """JSON-ready figures."""
         return {
-            "name": self.name, "rms_north_m": self.rms_north_m, "rms_east_m": self.rms_east_m,
+            "name": self.name,
+            "rms_north_m": self.rms_north_m,
+            "rms_east_m": self.rms_east_m,
             "rms_heading_deg": self.rms_heading_deg,
             "max_thruster_utilisation": self.max_thruster_utilisation,
-            "saturated_time_s": self.saturated_time_s, "settling_time_s": self.settling_time_s,
-            "final_eta_n": self.final_eta_n, "diverged": self.diverged,
-            "warnings": self.warnings, "quality_counters": self.quality_counters,
+            "saturated_time_s": self.saturated_time_s,
+            "settling_time_s": self.settling_time_s,
+            "final_eta_n": self.final_eta_n,
+            "diverged": self.diverged,
+            "warnings": self.warnings,
+            "quality_counters": self.quality_counters,
             "legs": [vars(leg) for leg in self.legs],
             "landings": [vars(landing) for landing in self.landings],
             "failed": self.failed,
@@ -144,16 +152,25 @@ def settling_time(rows: LogRows, dt_s: float, tol_m: float, tol_deg: float) -> f
 
 def counters_by_name(counters: NDArray[np.int64]) -> dict[str, dict[str, int]]:
     """Signal-check counters as {sensor: {check: count}}."""
-    return {name: {check: int(counters[k, j]) for j, check in enumerate(QUALITY_CHECKS)}
-            for k, name in enumerate(SENSOR_NAMES)}
+    return {
+        name: {check: int(counters[k, j]) for j, check in enumerate(QUALITY_CHECKS)}
+        for k, name in enumerate(SENSOR_NAMES)
+    }
 
 
 def _take(rows: LogRows, start: int, stop: int) -> LogRows:
     return LogRows(rows.data[start:stop], rows.n_thrusters, rows.quality_counters)
 
 
-def score(name: str, rows: LogRows, spans: list[LegSpan], dt_s: float, tree_size_m: float,
-          diverged: bool, warnings: list[str]) -> MissionResult:
+def score(
+    name: str,
+    rows: LogRows,
+    spans: list[LegSpan],
+    dt_s: float,
+    tree_size_m: float,
+    diverged: bool,
+    warnings: list[str],
+) -> MissionResult:
     """Score a mission's log: each leg, the scored legs together (all legs when none is
     scored) and the whole run (utilisation, saturation, settling)."""
     legs = []
@@ -161,8 +178,17 @@ def score(name: str, rows: LogRows, spans: list[LegSpan], dt_s: float, tree_size
     for span in spans:
         part = _take(rows, span.start, span.stop)
         fig = tracking_figures(part, dt_s)
-        legs.append(LegResult(span.index, span.type, span.name, span.start * dt_s,
-                              (span.stop - span.start) * dt_s, *fig, span.timed_out))
+        legs.append(
+            LegResult(
+                span.index,
+                span.type,
+                span.name,
+                span.start * dt_s,
+                (span.stop - span.start) * dt_s,
+                *fig,
+                span.timed_out,
+            )
+        )
         if span.score:
             scored.append(part.data)
     scored_rows = LogRows(np.vstack(scored), rows.n_thrusters) if scored else rows
@@ -175,8 +201,17 @@ def score(name: str, rows: LogRows, spans: list[LegSpan], dt_s: float, tree_size
     if any(leg.timed_out for leg in legs):
         warnings.append("a leg timed out before its reference arrived: see legs[].timed_out")
     return MissionResult(
-        name=name, legs=legs, rms_north_m=rms_n, rms_east_m=rms_e,
-        rms_heading_deg=rms_psi, max_thruster_utilisation=full[3], saturated_time_s=full[4],
+        name=name,
+        legs=legs,
+        rms_north_m=rms_n,
+        rms_east_m=rms_e,
+        rms_heading_deg=rms_psi,
+        max_thruster_utilisation=full[3],
+        saturated_time_s=full[4],
         settling_time_s=settling_time(rows, dt_s, tol_m, 2.0) if len(rows) else None,
-        final_eta_n=[round(v, 6) for v in final_eta], diverged=diverged, warnings=warnings,
-        quality_counters=counters_by_name(rows.quality_counters), log=rows)
+        final_eta_n=[round(v, 6) for v in final_eta],
+        diverged=diverged,
+        warnings=warnings,
+        quality_counters=counters_by_name(rows.quality_counters),
+        log=rows,
+    )

@@ -15,9 +15,13 @@ from sim import params as params_mod
 from sim.docking import DockingFrame
 
 
-def build_simulation(mission: schema.Mission, seed: int | None = None,
-                     allocation: Allocation | None = None, feedback: Feedback | None = None,
-                     feedforward: bool | None = None) -> Simulation:
+def build_simulation(
+    mission: schema.Mission,
+    seed: int | None = None,
+    allocation: Allocation | None = None,
+    feedback: Feedback | None = None,
+    feedforward: bool | None = None,
+) -> Simulation:
     """The Simulation a mission's set-up describes (options override the file)."""
     s = mission.setup
     ps = params_mod.load(s.params)
@@ -27,34 +31,52 @@ def build_simulation(mission: schema.Mission, seed: int | None = None,
     d = math.radians(s.current.direction_deg)
     db = math.radians(s.current.direction_band_deg)
     cur = envmod.CurrentParams(
-        speed_mps=s.current.speed_mps, direction_rad=d,
+        speed_mps=s.current.speed_mps,
+        direction_rad=d,
         speed_min_mps=max(s.current.speed_mps - s.current.speed_band_mps, 0.0),
         speed_max_mps=s.current.speed_mps + s.current.speed_band_mps,
-        direction_min_rad=d - db, direction_max_rad=d + db,
+        direction_min_rad=d - db,
+        direction_max_rad=d + db,
         speed_walk_mps_per_sqrt_s=s.current.speed_walk_mps_per_sqrt_s,
-        direction_walk_rad_per_sqrt_s=math.radians(s.current.direction_walk_deg_per_sqrt_s))
+        direction_walk_rad_per_sqrt_s=math.radians(s.current.direction_walk_deg_per_sqrt_s),
+    )
     waves = None
     if s.waves is not None:
-        waves = envmod.WaveParams(significant_height_m=s.waves.significant_height_m,
-                                  peak_period_s=s.waves.peak_period_s,
-                                  direction_rad=math.radians(s.waves.direction_deg))
+        waves = envmod.WaveParams(
+            significant_height_m=s.waves.significant_height_m,
+            peak_period_s=s.waves.peak_period_s,
+            direction_rad=math.radians(s.waves.direction_deg),
+        )
     settings = ControlSettings(
-        feedback=feedback or s.feedback, allocation=allocation or s.allocation,
-        reference=s.reference, feedforward=s.feedforward if feedforward is None else feedforward,
+        feedback=feedback or s.feedback,
+        allocation=allocation or s.allocation,
+        reference=s.reference,
+        feedforward=s.feedforward if feedforward is None else feedforward,
         heave_force_newton=s.heave_force_newton,
-        r_mount_config_m=None if s.r_mount_config_m is None else (
-            float(s.r_mount_config_m[0]), float(s.r_mount_config_m[1]),
-            float(s.r_mount_config_m[2])))
-    sim = Simulation(ps, tree_depth_m=s.depth_m, settings=settings,
-                     crane_tip_n=np.array([*s.crane_tip_n, 0.0]), current=cur, waves=waves,
-                     seed=s.seed if seed is None else seed,
-                     tree_heading_rad=math.radians(s.heading_deg), plant_ps=plant_ps,
-                     start_gripping=s.start_gripping)
+        r_mount_config_m=None
+        if s.r_mount_config_m is None
+        else (
+            float(s.r_mount_config_m[0]),
+            float(s.r_mount_config_m[1]),
+            float(s.r_mount_config_m[2]),
+        ),
+    )
+    sim = Simulation(
+        ps,
+        tree_depth_m=s.depth_m,
+        settings=settings,
+        crane_tip_n=np.array([*s.crane_tip_n, 0.0]),
+        current=cur,
+        waves=waves,
+        seed=s.seed if seed is None else seed,
+        tree_heading_rad=math.radians(s.heading_deg),
+        plant_ps=plant_ps,
+        start_gripping=s.start_gripping,
+    )
     chart = charted_frame(mission)
     if s.docking_frame is not None and chart is not None:
         real_center = chart.center_n + np.asarray(s.docking_frame.survey_error_ne_m, float)
-        sim.set_docking_frame(DockingFrame(real_center, chart.heading_rad,
-                                           chart.landing_depth_m))
+        sim.set_docking_frame(DockingFrame(real_center, chart.heading_rad, chart.landing_depth_m))
     return sim
 
 
@@ -63,18 +85,23 @@ def charted_frame(mission: schema.Mission) -> DockingFrame | None:
     f = mission.setup.docking_frame
     if f is None:
         return None
-    return DockingFrame(np.asarray(f.center_ne_m, float), math.radians(f.heading_deg),
-                        f.landing_depth_m)
+    return DockingFrame(
+        np.asarray(f.center_ne_m, float), math.radians(f.heading_deg), f.landing_depth_m
+    )
 
 
-def vary_tree(ps: params_mod.ParameterSet, mass_scale: float,
-              weight_scale: float) -> params_mod.ParameterSet:
+def vary_tree(
+    ps: params_mod.ParameterSet, mass_scale: float, weight_scale: float
+) -> params_mod.ParameterSet:
     """The same parameter set with the tree's mass (rigid-body mass and inertia) and submerged
     weight scaled: the plant of the robustness study (thesis 4.2.3)."""
     tree = ps.spec.tree
     w0 = tree.submerged_weight_newton or ps.tree.submerged_weight_newton
-    new_tree = tree.model_copy(update=dict(
-        mass_kg=tree.mass_kg * mass_scale,
-        rigid_body_inertia=[v * mass_scale for v in tree.rigid_body_inertia],
-        submerged_weight_newton=w0 * weight_scale))
+    new_tree = tree.model_copy(
+        update=dict(
+            mass_kg=tree.mass_kg * mass_scale,
+            rigid_body_inertia=[v * mass_scale for v in tree.rigid_body_inertia],
+            submerged_weight_newton=w0 * weight_scale,
+        )
+    )
     return params_mod.build(ps.spec.model_copy(update=dict(tree=new_tree)))

@@ -57,27 +57,38 @@ def wave_case(period_s: float, hs_m: float, duration_s: float, seed: int) -> tup
     """One sea state at 100 m, no current: uncontrolled (ROV attached, thrusters off; RMS about
     the mean, eq. 4.1) and controlled (station keeping; RMS about the set point, eq. 4.2)."""
     ps = params.load("full-scale")
-    waves = envmod.WaveParams(significant_height_m=hs_m, peak_period_s=period_s,
-                              direction_rad=math.radians(WAVE_DIRECTION_DEG))
+    waves = envmod.WaveParams(
+        significant_height_m=hs_m,
+        peak_period_s=period_s,
+        direction_rad=math.radians(WAVE_DIRECTION_DEG),
+    )
     warmup = 120.0
     sim = Simulation(ps, tree_depth_m=100.0, waves=waves, seed=seed, control=False)
     sim.run_for(warmup)
     traj = sim.run_for(duration_s)["tree_eta_n"]
     psi = np.unwrap(traj[:, 5])
-    unc = (_rms_about(traj[:, 0], traj[:, 0].mean()), _rms_about(traj[:, 1], traj[:, 1].mean()),
-           math.degrees(_rms_about(psi, psi.mean())))
-    cl = Simulation(ps, tree_depth_m=100.0, waves=waves, seed=seed,
-                    settings=ControlSettings(feedforward=True))
+    unc = (
+        _rms_about(traj[:, 0], traj[:, 0].mean()),
+        _rms_about(traj[:, 1], traj[:, 1].mean()),
+        math.degrees(_rms_about(psi, psi.mean())),
+    )
+    cl = Simulation(
+        ps, tree_depth_m=100.0, waves=waves, seed=seed, settings=ControlSettings(feedforward=True)
+    )
     set_point = cl.eta_estimate
     cl.run_for(warmup)
     log = cl.run_for(duration_s)["tree_eta_n"]
     err_psi = np.array([ssa(v) for v in log[:, 5] - set_point[2]])
-    ctl = (_rms_about(log[:, 0], set_point[0]), _rms_about(log[:, 1], set_point[1]),
-           math.degrees(_rms_about(err_psi, 0.0)))
+    ctl = (
+        _rms_about(log[:, 0], set_point[0]),
+        _rms_about(log[:, 1], set_point[1]),
+        math.degrees(_rms_about(err_psi, 0.0)),
+    )
     thesis_unc, thesis_ctl = TABLE_4_1[(period_s, hs_m)]
     label = f"T = {period_s:g} s, Hs = {hs_m:g} m"
-    return Row(f"{label}  uncontrolled", unc, thesis_unc), Row(f"{label}  controlled", ctl,
-                                                                thesis_ctl)
+    return Row(f"{label}  uncontrolled", unc, thesis_unc), Row(
+        f"{label}  controlled", ctl, thesis_ctl
+    )
 
 
 def table_4_1(duration_s: float = 600.0, seed: int = 0) -> list[Row]:
@@ -91,9 +102,13 @@ def table_4_2(seed: int | None = None) -> list[Row]:
     rows = []
     for name, (param, change, *thesis) in TABLE_4_2.items():
         r = runner.run_mission(schema.load_mission(name), seed=seed)
-        rows.append(Row(f"{param:6s} {change:>5s}  ({name})",
-                        (r.rms_north_m, r.rms_east_m, r.rms_heading_deg),
-                        (float(thesis[0]), float(thesis[1]), float(thesis[2]))))
+        rows.append(
+            Row(
+                f"{param:6s} {change:>5s}  ({name})",
+                (r.rms_north_m, r.rms_east_m, r.rms_heading_deg),
+                (float(thesis[0]), float(thesis[1]), float(thesis[2])),
+            )
+        )
     return rows
 
 

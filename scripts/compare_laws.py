@@ -32,16 +32,22 @@ def run_both(name: str) -> dict[str, runner.MissionResult]:
 
 def print_table(name: str, results: dict[str, runner.MissionResult]) -> None:
     print(f"\n{name}")
-    print(f"  {'law':12s} {'RMS N [m]':>10s} {'RMS E [m]':>10s} {'RMS psi [deg]':>14s} "
-          f"{'max util':>9s}")
+    print(
+        f"  {'law':12s} {'RMS N [m]':>10s} {'RMS E [m]':>10s} {'RMS psi [deg]':>14s} "
+        f"{'max util':>9s}"
+    )
     for law, r in results.items():
-        print(f"  {law:12s} {r.rms_north_m:10.4f} {r.rms_east_m:10.4f} "
-              f"{r.rms_heading_deg:14.3f} {r.max_thruster_utilisation:9.2f}")
+        print(
+            f"  {law:12s} {r.rms_north_m:10.4f} {r.rms_east_m:10.4f} "
+            f"{r.rms_heading_deg:14.3f} {r.max_thruster_utilisation:9.2f}"
+        )
     a, b = results["thesis"], results["feedforward"]
     pos_a = math.hypot(a.rms_north_m, a.rms_east_m)
     pos_b = math.hypot(b.rms_north_m, b.rms_east_m)
-    print(f"  feedforward: position RMS {pos_a / max(pos_b, 1e-9):.1f}x smaller, heading RMS "
-          f"{a.rms_heading_deg / max(b.rms_heading_deg, 1e-9):.1f}x smaller")
+    print(
+        f"  feedforward: position RMS {pos_a / max(pos_b, 1e-9):.1f}x smaller, heading RMS "
+        f"{a.rms_heading_deg / max(b.rms_heading_deg, 1e-9):.1f}x smaller"
+    )
 
 
 def rotation_figure(results: dict[str, runner.MissionResult]) -> Path:
@@ -69,8 +75,9 @@ def rotation_figure(results: dict[str, runner.MissionResult]) -> Path:
 
 
 def square_figure(results: dict[str, runner.MissionResult]) -> Path:
-    fig, (ax, ax_err) = plt.subplots(1, 2, figsize=(12, 5.5),
-                                     gridspec_kw={"width_ratios": [1, 1.4]})
+    fig, (ax, ax_err) = plt.subplots(
+        1, 2, figsize=(12, 5.5), gridspec_kw={"width_ratios": [1, 1.4]}
+    )
     for law, r in results.items():
         assert r.log is not None
         start = int(r.legs[-1].start_s / 0.01)

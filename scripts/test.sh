@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Set up (if needed) and run the default test suite. Extra arguments go to pytest.
+# Set up (if needed), run the static checks (ruff lint and format, mypy) and the default test
+# suite. Extra arguments go to pytest.
 # Installs what the tests need beyond Python packages: Debian's chromium (the console is tested
 # in a real headless browser) and the JavaScript MCAP reader used to cross-check our logs.
 set -euo pipefail
@@ -17,4 +18,10 @@ if [[ -f tests/js/package.json && ! -d tests/js/node_modules ]]; then
   echo "test: installing the JavaScript test packages" >&2
   (cd tests/js && npm ci --no-audit --no-fund --loglevel=error >&2)
 fi
+# static checks first: lint, format and types (CI enforces all three)
+code=(sim control missions app web tests benchmarks scripts)
+echo "test: ruff check, ruff format --check, mypy" >&2
+.venv/bin/ruff check "${code[@]}"
+.venv/bin/ruff format --check "${code[@]}"
+.venv/bin/mypy
 exec .venv/bin/python -m pytest "$@"

@@ -86,11 +86,13 @@ class LandingCheck:
     """Every funnel within the capture tolerance."""
 
 
-def check_alignment(tree_eta_n: FloatArray, frame: DockingFrame,
-                    layout: DockingLayout) -> LandingCheck:
+def check_alignment(
+    tree_eta_n: FloatArray, frame: DockingFrame, layout: DockingLayout
+) -> LandingCheck:
     """How well the funnels sit over the posts right now."""
-    miss = np.linalg.norm(funnel_positions_n(tree_eta_n, layout) -
-                          frame.post_positions_n(layout), axis=1)
+    miss = np.linalg.norm(
+        funnel_positions_n(tree_eta_n, layout) - frame.post_positions_n(layout), axis=1
+    )
     err = (tree_eta_n[5] - frame.heading_rad + math.pi) % (2 * math.pi) - math.pi
     worst = float(miss.max())
     return LandingCheck(worst, math.degrees(err), worst <= layout.tolerance_m)

@@ -68,8 +68,9 @@ def _require_at_least(name: str, value: float, lower: float, lower_name: str = "
         raise ValueError(f"{name} must lie in [{bound}, inf), got {value!r}")
 
 
-def _require_in_band(name: str, value: float, lo_name: str, lo: float, hi_name: str,
-                     hi: float) -> None:
+def _require_in_band(
+    name: str, value: float, lo_name: str, lo: float, hi_name: str, hi: float
+) -> None:
     """Raise ValueError naming ``name`` unless lo <= value <= hi (NaN fails)."""
     if not lo <= value <= hi:
         raise ValueError(
@@ -113,18 +114,29 @@ class CurrentParams:
     def __post_init__(self) -> None:
         """Check finiteness, ordered bounds, initial values inside them, intensities >= 0."""
         _require_at_least("speed_min_mps", self.speed_min_mps, 0.0)
-        _require_at_least("speed_max_mps", self.speed_max_mps, self.speed_min_mps,
-                          "speed_min_mps")
-        _require_in_band("speed_mps", self.speed_mps, "speed_min_mps", self.speed_min_mps,
-                         "speed_max_mps", self.speed_max_mps)
+        _require_at_least("speed_max_mps", self.speed_max_mps, self.speed_min_mps, "speed_min_mps")
+        _require_in_band(
+            "speed_mps",
+            self.speed_mps,
+            "speed_min_mps",
+            self.speed_min_mps,
+            "speed_max_mps",
+            self.speed_max_mps,
+        )
         _require_finite("direction_min_rad", self.direction_min_rad)
-        _require_at_least("direction_max_rad", self.direction_max_rad, self.direction_min_rad,
-                          "direction_min_rad")
-        _require_in_band("direction_rad", self.direction_rad, "direction_min_rad",
-                         self.direction_min_rad, "direction_max_rad", self.direction_max_rad)
+        _require_at_least(
+            "direction_max_rad", self.direction_max_rad, self.direction_min_rad, "direction_min_rad"
+        )
+        _require_in_band(
+            "direction_rad",
+            self.direction_rad,
+            "direction_min_rad",
+            self.direction_min_rad,
+            "direction_max_rad",
+            self.direction_max_rad,
+        )
         _require_at_least("speed_walk_mps_per_sqrt_s", self.speed_walk_mps_per_sqrt_s, 0.0)
-        _require_at_least("direction_walk_rad_per_sqrt_s", self.direction_walk_rad_per_sqrt_s,
-                          0.0)
+        _require_at_least("direction_walk_rad_per_sqrt_s", self.direction_walk_rad_per_sqrt_s, 0.0)
 
 
 @dataclass(frozen=True)
@@ -162,8 +174,9 @@ class CurrentChunk(NamedTuple):
 
 def initial_current(params: CurrentParams) -> CurrentState:
     """Current state at t = 0: the initial speed and direction of ``params``."""
-    return CurrentState(speed_mps=float(params.speed_mps),
-                        direction_rad=float(params.direction_rad))
+    return CurrentState(
+        speed_mps=float(params.speed_mps), direction_rad=float(params.direction_rad)
+    )
 
 
 def _fold_into_band(
@@ -223,22 +236,39 @@ def advance_current(
         raise ValueError(f"dt_s must lie in (0, inf), got {dt_s!r}")
     if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or n_steps < 0:
         raise ValueError(f"n_steps must be an integer in [0, inf), got {n_steps!r}")
-    _require_in_band("state.speed_mps", state.speed_mps, "speed_min_mps", params.speed_min_mps,
-                     "speed_max_mps", params.speed_max_mps)
-    _require_in_band("state.direction_rad", state.direction_rad, "direction_min_rad",
-                     params.direction_min_rad, "direction_max_rad", params.direction_max_rad)
+    _require_in_band(
+        "state.speed_mps",
+        state.speed_mps,
+        "speed_min_mps",
+        params.speed_min_mps,
+        "speed_max_mps",
+        params.speed_max_mps,
+    )
+    _require_in_band(
+        "state.direction_rad",
+        state.direction_rad,
+        "direction_min_rad",
+        params.direction_min_rad,
+        "direction_max_rad",
+        params.direction_max_rad,
+    )
     normals = rng.standard_normal((int(n_steps), 2))
     sqrt_dt = math.sqrt(dt_s)
     speeds, speed_sign = _reflected_walk(
-        state.speed_mps, state.speed_fold_sign,
+        state.speed_mps,
+        state.speed_fold_sign,
         params.speed_walk_mps_per_sqrt_s * sqrt_dt * normals[:, 0],
-        params.speed_min_mps, params.speed_max_mps)
+        params.speed_min_mps,
+        params.speed_max_mps,
+    )
     directions, direction_sign = _reflected_walk(
-        state.direction_rad, state.direction_fold_sign,
+        state.direction_rad,
+        state.direction_fold_sign,
         params.direction_walk_rad_per_sqrt_s * sqrt_dt * normals[:, 1],
-        params.direction_min_rad, params.direction_max_rad)
-    new_state = CurrentState(float(speeds[-1]), float(directions[-1]),
-                             speed_sign, direction_sign)
+        params.direction_min_rad,
+        params.direction_max_rad,
+    )
+    new_state = CurrentState(float(speeds[-1]), float(directions[-1]), speed_sign, direction_sign)
     return CurrentChunk(new_state, speeds[:-1], directions[:-1])
 
 
@@ -249,8 +279,9 @@ def current_velocity_n(speeds: ArrayLike, directions: ArrayLike) -> NDArray[np.f
     shape s; the result has shape s + (3,), e.g. (n, 3) for two (n,) arrays and (3,) for two
     scalars. The vertical current is neglected near the seafloor (section 2.5.1).
     """
-    speed, beta = np.broadcast_arrays(np.asarray(speeds, dtype=np.float64),
-                                      np.asarray(directions, dtype=np.float64))
+    speed, beta = np.broadcast_arrays(
+        np.asarray(speeds, dtype=np.float64), np.asarray(directions, dtype=np.float64)
+    )
     return np.stack([speed * np.cos(beta), speed * np.sin(beta), np.zeros_like(speed)], axis=-1)
 
 
@@ -361,8 +392,9 @@ def ittc_spectrum(
     omega_p = 2.0 * math.pi / peak_period_s
     positive = omega > 0.0
     ratio = np.minimum(omega_p / np.where(positive, omega, 1.0), _RATIO_CLIP)
-    spectrum = (5.0 / 16.0) * significant_height_m**2 / omega_p * ratio**5 * np.exp(
-        -1.25 * ratio**4)
+    spectrum = (
+        (5.0 / 16.0) * significant_height_m**2 / omega_p * ratio**5 * np.exp(-1.25 * ratio**4)
+    )
     return np.where(positive, spectrum, 0.0)
 
 
@@ -373,8 +405,9 @@ def wave_frequency_bands(params: WaveParams) -> NDArray[np.float64]:
     component k draws its frequency uniformly inside band k.
     """
     omega_p = 2.0 * math.pi / params.peak_period_s
-    return np.linspace(OMEGA_MIN_PER_PEAK * omega_p, OMEGA_MAX_PER_PEAK * omega_p,
-                       params.n_components + 1)
+    return np.linspace(
+        OMEGA_MIN_PER_PEAK * omega_p, OMEGA_MAX_PER_PEAK * omega_p, params.n_components + 1
+    )
 
 
 def make_wave_field(params: WaveParams, rng: np.random.Generator) -> WaveField:
@@ -417,9 +450,9 @@ def _harmonic_sums(
     cos_sum = np.zeros((n, weights.shape[1]))
     rows = max(1, _BLOCK_ELEMENTS // max(1, omega_rad_s.shape[0]))
     for start in range(0, n, rows):
-        theta = np.outer(t_s[start:start + rows], omega_rad_s) + offset_rad
-        sin_sum[start:start + rows] = np.sin(theta) @ weights
-        cos_sum[start:start + rows] = np.cos(theta) @ weights
+        theta = np.outer(t_s[start : start + rows], omega_rad_s) + offset_rad
+        sin_sum[start : start + rows] = np.sin(theta) @ weights
+        cos_sum[start : start + rows] = np.cos(theta) @ weights
     return sin_sum, cos_sum
 
 

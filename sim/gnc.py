@@ -168,8 +168,9 @@ def coriolis_force(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
 
 
 @njit(**JIT)
-def gvect(W: float, B: float, theta: float, phi: float, r_bg: np.ndarray,
-          r_bb: np.ndarray) -> np.ndarray:
+def gvect(
+    W: float, B: float, theta: float, phi: float, r_bg: np.ndarray, r_bb: np.ndarray
+) -> np.ndarray:
     """Restoring vector g(eta) of weight W at r_bg and buoyancy B at r_bb, both in body axes
     (Fossen 2011 eq. 4.6, the 6-row form; thesis eq. 2.9 is printed with 7 rows)."""
     sth, cth = np.sin(theta), np.cos(theta)
@@ -264,5 +265,11 @@ def quaternion_wxyz_from_rpy_radians(phi: float, theta: float, psi: float) -> np
     cr, sr = math.cos(phi / 2.0), math.sin(phi / 2.0)
     cp, sp = math.cos(theta / 2.0), math.sin(theta / 2.0)
     cy, sy = math.cos(psi / 2.0), math.sin(psi / 2.0)
-    return np.array([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-                     cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy])
+    return np.array(
+        [
+            cr * cp * cy + sr * sp * sy,
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+        ]
+    )

@@ -41,10 +41,12 @@ PositiveFloat = Annotated[float, Field(gt=0.0, allow_inf_nan=False)]
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 Vec3 = Annotated[list[FiniteFloat], Field(min_length=3, max_length=3)]
 Vec6 = Annotated[list[FiniteFloat], Field(min_length=6, max_length=6)]
-PositiveVec6 = Annotated[list[Annotated[float, Field(gt=0.0, allow_inf_nan=False)]],
-                         Field(min_length=6, max_length=6)]
-NonNegVec6 = Annotated[list[Annotated[float, Field(ge=0.0, allow_inf_nan=False)]],
-                       Field(min_length=6, max_length=6)]
+PositiveVec6 = Annotated[
+    list[Annotated[float, Field(gt=0.0, allow_inf_nan=False)]], Field(min_length=6, max_length=6)
+]
+NonNegVec6 = Annotated[
+    list[Annotated[float, Field(ge=0.0, allow_inf_nan=False)]], Field(min_length=6, max_length=6)
+]
 
 
 class ParameterError(ValueError):
@@ -76,36 +78,46 @@ class TreeSpec(_Strict):
     height_m: PositiveFloat = Field(le=20.0, description="box height along body z [m]")
     mass_kg: PositiveFloat = Field(le=5.0e5, description="mass in air [kg]")
     submerged_weight_newton: float | None = Field(
-        default=None, gt=0.0, description="W0 [N]; default m g (1 - rho_w/rho_steel)",
-        validation_alias=AliasChoices("submerged_weight_newton", "submerged_weight_n"))
+        default=None,
+        gt=0.0,
+        description="W0 [N]; default m g (1 - rho_w/rho_steel)",
+        validation_alias=AliasChoices("submerged_weight_newton", "submerged_weight_n"),
+    )
     attachment_height_m: PositiveFloat = Field(
-        le=20.0, description="z_a: wire attachment above the centre of gravity [m] (eq. 2.22)")
+        le=20.0, description="z_a: wire attachment above the centre of gravity [m] (eq. 2.22)"
+    )
     rigid_body_inertia: PositiveVec6 = Field(description="diagonal of M_RB [kg, kg m^2] (B.1/B.5)")
     added_mass: PositiveVec6 = Field(description="diagonal of M_A [kg, kg m^2] (eq. 2.21/B.6)")
     linear_damping: NonNegVec6 | None = Field(
-        default=None, description="diagonal of D_L; default from the drag rules (section 2.3.4)")
+        default=None, description="diagonal of D_L; default from the drag rules (section 2.3.4)"
+    )
     quadratic_damping: NonNegVec6 | None = Field(
-        default=None, description="diagonal of D_NL; default from the drag rules")
+        default=None, description="diagonal of D_NL; default from the drag rules"
+    )
 
 
 class ThrusterSpec(_Strict):
     """Thrusters: tau_b = T f, f_i = k_pos n^2 (n >= 0) or -k_neg n^2 (n < 0), |n| <= n_max."""
 
     configuration: list[Vec6] = Field(
-        min_length=1, max_length=16,
-        description="columns of the 6 x m thrust configuration matrix T, one row here per thruster")
+        min_length=1,
+        max_length=16,
+        description="columns of the 6 x m thrust configuration matrix T, one row here per thruster",
+    )
     k_pos: list[PositiveFloat] = Field(description="forward thrust coefficient [N/(rev/s)^2]")
     k_neg: list[PositiveFloat] = Field(description="reverse thrust coefficient [N/(rev/s)^2]")
     n_max_rps: list[Annotated[float, Field(gt=0.0, le=200.0)]] = Field(
-        description="rated propeller speed [rev/s]")
+        description="rated propeller speed [rev/s]"
+    )
 
     @model_validator(mode="after")
     def _same_length(self) -> ThrusterSpec:
         m = len(self.configuration)
         for name in ("k_pos", "k_neg", "n_max_rps"):
             if len(getattr(self, name)) != m:
-                raise ValueError(f"{name} must have one entry per thruster ({m}), "
-                                 f"got {len(getattr(self, name))}")
+                raise ValueError(
+                    f"{name} must have one entry per thruster ({m}), got {len(getattr(self, name))}"
+                )
         return self
 
 
@@ -134,20 +146,29 @@ class WireSpec(_Strict):
     mass_per_length_kg_m: PositiveFloat = Field(le=500.0)
     diameter_m: PositiveFloat = Field(le=0.5)
     axial_stiffness_newton: PositiveFloat = Field(
-        ge=1.0e4, le=1.0e11, description="EA [N]",
-        validation_alias=AliasChoices("axial_stiffness_newton", "axial_stiffness_n"))
+        ge=1.0e4,
+        le=1.0e11,
+        description="EA [N]",
+        validation_alias=AliasChoices("axial_stiffness_newton", "axial_stiffness_n"),
+    )
     drag_coefficient: PositiveFloat = Field(le=3.0)
 
     @model_validator(mode="after")
     def _sinks(self) -> WireSpec:
         if self.to_numeric().submerged_weight_per_length() <= 0.0:
-            raise ValueError("mass_per_length_kg_m: the wire must be heavier than the water it "
-                             "displaces (submerged weight per metre > 0)")
+            raise ValueError(
+                "mass_per_length_kg_m: the wire must be heavier than the water it "
+                "displaces (submerged weight per metre > 0)"
+            )
         return self
 
     def to_numeric(self) -> wire_mod.WireProperties:
-        return wire_mod.WireProperties(self.mass_per_length_kg_m, self.diameter_m,
-                                       self.axial_stiffness_newton, self.drag_coefficient)
+        return wire_mod.WireProperties(
+            self.mass_per_length_kg_m,
+            self.diameter_m,
+            self.axial_stiffness_newton,
+            self.drag_coefficient,
+        )
 
 
 class MountSpec(_Strict):
@@ -155,17 +176,22 @@ class MountSpec(_Strict):
     in the tree's body axes (the sea trial entered it with the wrong sign, thesis 6.2.1)."""
 
     r_rov_from_tree_tree_m: Vec3 = Field(
-        description="tree origin -> ROV origin, tree body axes [m]; thesis: [-2, 0, 0]")
+        description="tree origin -> ROV origin, tree body axes [m]; thesis: [-2, 0, 0]"
+    )
     psi_rov_from_tree_deg: float = Field(
-        default=0.0, ge=-180.0, le=180.0, description="ROV heading relative to the tree [deg]")
+        default=0.0, ge=-180.0, le=180.0, description="ROV heading relative to the tree [deg]"
+    )
 
 
 class CouplingSpec(_Strict):
     """The stiff gripper spring between ROV and tree (eq. 2.45-2.47)."""
 
     natural_frequency_hz: float = Field(
-        default=2.5, gt=0.2, le=8.0,
-        description="uncoupled ROV-on-spring frequency [Hz]; must stay well below 1/(2 pi dt)")
+        default=2.5,
+        gt=0.2,
+        le=8.0,
+        description="uncoupled ROV-on-spring frequency [Hz]; must stay well below 1/(2 pi dt)",
+    )
     damping_ratio: float = Field(default=0.3, ge=0.0, le=2.0, description="structural damping [-]")
 
 
@@ -173,8 +199,9 @@ class SensorSpec(_Strict):
     """One sensor: white noise, zero-order hold at its own rate, random dropouts (sec. 2.6.4)."""
 
     rate_hz: float = Field(gt=0.0, le=100.0)
-    noise_std: float = Field(ge=0.0, allow_inf_nan=False,
-                             description="1-sigma noise per axis [m, m/s, rad or rad/s]")
+    noise_std: float = Field(
+        ge=0.0, allow_inf_nan=False, description="1-sigma noise per axis [m, m/s, rad or rad/s]"
+    )
     dropout_probability: float = Field(default=0.0, ge=0.0, lt=1.0)
 
 
@@ -192,13 +219,16 @@ GAIN_LIMITS = {"kp": 1.0e7, "ki": 1.0e6, "kd": 1.0e8}
 """Largest accepted controller gain per term; parameter files, missions, the console and the
 control system all check against these."""
 _THREE = Field(min_length=3, max_length=3)
-KpVector = Annotated[list[Annotated[float, Field(ge=0.0, le=GAIN_LIMITS["kp"],
-                                                 allow_inf_nan=False)]], _THREE]
+KpVector = Annotated[
+    list[Annotated[float, Field(ge=0.0, le=GAIN_LIMITS["kp"], allow_inf_nan=False)]], _THREE
+]
 """[surge, sway, yaw] proportional gains, each in [0, GAIN_LIMITS["kp"]]."""
-KiVector = Annotated[list[Annotated[float, Field(ge=0.0, le=GAIN_LIMITS["ki"],
-                                                 allow_inf_nan=False)]], _THREE]
-KdVector = Annotated[list[Annotated[float, Field(ge=0.0, le=GAIN_LIMITS["kd"],
-                                                 allow_inf_nan=False)]], _THREE]
+KiVector = Annotated[
+    list[Annotated[float, Field(ge=0.0, le=GAIN_LIMITS["ki"], allow_inf_nan=False)]], _THREE
+]
+KdVector = Annotated[
+    list[Annotated[float, Field(ge=0.0, le=GAIN_LIMITS["kd"], allow_inf_nan=False)]], _THREE
+]
 
 
 class GainsSpec(_Strict):
@@ -217,35 +247,41 @@ class ReferenceSpec(_Strict):
     max_yaw_rate_deg_s: float = Field(gt=0.0, le=30.0, description="turn rate limit [deg/s]")
     max_yaw_accel_deg_s2: float = Field(gt=0.0, le=10.0, description="turn accel limit [deg/s^2]")
     bandwidth_rad_s: float = Field(gt=0.0, le=5.0, description="omega of the models [rad/s]")
-    damping_ratio: float = Field(default=1.0, ge=0.5, le=3.0,
-                                 description="third order: relative damping (>= 1: no overshoot)")
+    damping_ratio: float = Field(
+        default=1.0,
+        ge=0.5,
+        le=3.0,
+        description="third order: relative damping (>= 1: no overshoot)",
+    )
 
 
 class ObserverSpec(_Strict):
     """EKF tuning (table 3.1), [surge, sway, yaw]."""
 
-    process_force_std: Annotated[list[Annotated[float, Field(gt=0.0, le=1e7)]],
-                                 Field(min_length=3, max_length=3)] = Field(
-        description="unmodelled force noise intensity [N, N, N m per sqrt(Hz)]")
-    bias_drive_std: Annotated[list[Annotated[float, Field(gt=0.0, le=1e7)]],
-                              Field(min_length=3, max_length=3)] = Field(
-        description="bias random-walk intensity [N, N, N m per sqrt(s)]")
-    bias_time_constant_s: Annotated[list[Annotated[float, Field(gt=1.0, le=1e6)]],
-                                    Field(min_length=3, max_length=3)] = Field(
-        description="T_b of eq. 2.48b [s]")
+    process_force_std: Annotated[
+        list[Annotated[float, Field(gt=0.0, le=1e7)]], Field(min_length=3, max_length=3)
+    ] = Field(description="unmodelled force noise intensity [N, N, N m per sqrt(Hz)]")
+    bias_drive_std: Annotated[
+        list[Annotated[float, Field(gt=0.0, le=1e7)]], Field(min_length=3, max_length=3)
+    ] = Field(description="bias random-walk intensity [N, N, N m per sqrt(s)]")
+    bias_time_constant_s: Annotated[
+        list[Annotated[float, Field(gt=1.0, le=1e6)]], Field(min_length=3, max_length=3)
+    ] = Field(description="T_b of eq. 2.48b [s]")
 
 
 class DockingSpec(_Strict):
     """Guideposts on the docking frame and funnels on the tree (thesis chapter 5)."""
 
     post_xy_m: list[Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]] = Field(
-        min_length=1, max_length=8, description="post positions in the frame's axes [m]")
+        min_length=1, max_length=8, description="post positions in the frame's axes [m]"
+    )
     post_height_m: float = Field(gt=0.0, le=10.0)
     post_radius_m: float = Field(gt=0.0, le=1.0)
     funnel_mouth_radius_m: float = Field(gt=0.0, le=2.0)
     max_landing_speed_mps: float = Field(gt=0.0, le=2.0)
-    frame_size_m: Annotated[list[Annotated[float, Field(gt=0.0, le=50.0)]],
-                            Field(min_length=2, max_length=2)]
+    frame_size_m: Annotated[
+        list[Annotated[float, Field(gt=0.0, le=50.0)]], Field(min_length=2, max_length=2)
+    ]
 
     @model_validator(mode="after")
     def _mouth_wider_than_post(self) -> DockingSpec:
@@ -256,9 +292,14 @@ class DockingSpec(_Strict):
     def to_numeric(self):
         from sim.docking import DockingLayout
 
-        return DockingLayout(np.asarray(self.post_xy_m, float), self.post_height_m,
-                             self.post_radius_m, self.funnel_mouth_radius_m,
-                             self.max_landing_speed_mps, np.asarray(self.frame_size_m, float))
+        return DockingLayout(
+            np.asarray(self.post_xy_m, float),
+            self.post_height_m,
+            self.post_radius_m,
+            self.funnel_mouth_radius_m,
+            self.max_landing_speed_mps,
+            np.asarray(self.frame_size_m, float),
+        )
 
 
 class ParameterSetSpec(_Strict):
@@ -392,8 +433,9 @@ class ParameterSet:
     spec: ParameterSetSpec = field(repr=False)
 
 
-def tree_drag_coefficients(length_m: float, width_m: float, height_m: float,
-                           heave_linear_n_s_m: float) -> tuple[FloatArray, FloatArray]:
+def tree_drag_coefficients(
+    length_m: float, width_m: float, height_m: float, heave_linear_n_s_m: float
+) -> tuple[FloatArray, FloatArray]:
     """Diagonal damping of the tree from the thesis's drag rules (section 2.3.4, eq. 2.39-2.40).
 
     Returns (D_l, D_nl), both (6,). Translational drag F = 1/2 rho A (C_l U + C_nl |U| U) with
@@ -442,9 +484,14 @@ def _tree_params(spec: TreeSpec, wire: wire_mod.WireProperties) -> TreeParams:
         d_nl = np.asarray(spec.quadratic_damping, dtype=float)
     return TreeParams(
         dimensions_m=np.array([spec.length_m, spec.width_m, spec.height_m]),
-        mass_kg=spec.mass_kg, submerged_weight_newton=float(w0),
+        mass_kg=spec.mass_kg,
+        submerged_weight_newton=float(w0),
         attachment_height_m=spec.attachment_height_m,
-        M_rb=m_rb, M_a=m_a, D_l=d_l, D_nl=d_nl)
+        M_rb=m_rb,
+        M_a=m_a,
+        D_l=d_l,
+        D_nl=d_nl,
+    )
 
 
 def _rov_params(spec: RovSpec) -> RovParams:
@@ -452,15 +499,22 @@ def _rov_params(spec: RovSpec) -> RovParams:
     weight = float(m_rb[0, 0] * wire_mod.GRAVITY)
     thr = spec.thrusters
     return RovParams(
-        name=spec.name, M_rb=m_rb, M_a=np.asarray(spec.added_mass, dtype=float),
+        name=spec.name,
+        M_rb=m_rb,
+        M_a=np.asarray(spec.added_mass, dtype=float),
         D_l=np.asarray(spec.linear_damping, dtype=float),
         D_nl=np.asarray(spec.quadratic_damping, dtype=float),
-        r_cg_m=np.asarray(spec.r_cg_m, dtype=float), r_cb_m=np.asarray(spec.r_cb_m, dtype=float),
-        weight_newton=weight, buoyancy_newton=weight * spec.buoyancy_ratio,
+        r_cg_m=np.asarray(spec.r_cg_m, dtype=float),
+        r_cb_m=np.asarray(spec.r_cb_m, dtype=float),
+        weight_newton=weight,
+        buoyancy_newton=weight * spec.buoyancy_ratio,
         thrusters=ThrusterParams(
             T=np.asarray(thr.configuration, dtype=float).T,
-            k_pos=np.asarray(thr.k_pos, dtype=float), k_neg=np.asarray(thr.k_neg, dtype=float),
-            n_max_rps=np.asarray(thr.n_max_rps, dtype=float)))
+            k_pos=np.asarray(thr.k_pos, dtype=float),
+            k_neg=np.asarray(thr.k_neg, dtype=float),
+            n_max_rps=np.asarray(thr.n_max_rps, dtype=float),
+        ),
+    )
 
 
 def _coupling_params(spec: CouplingSpec, rov: RovParams) -> CouplingParams:
@@ -469,9 +523,11 @@ def _coupling_params(spec: CouplingSpec, rov: RovParams) -> CouplingParams:
     above that frequency (measured in tests/test_plant.py)."""
     omega = 2.0 * math.pi * spec.natural_frequency_hz
     m_diag = np.diag(rov.M_rb + rov.M_a)
-    return CouplingParams(stiffness=omega**2 * m_diag,
-                          damping=2.0 * spec.damping_ratio * omega * m_diag,
-                          natural_frequency_hz=spec.natural_frequency_hz)
+    return CouplingParams(
+        stiffness=omega**2 * m_diag,
+        damping=2.0 * spec.damping_ratio * omega * m_diag,
+        natural_frequency_hz=spec.natural_frequency_hz,
+    )
 
 
 def build(spec: ParameterSetSpec) -> ParameterSet:
@@ -479,11 +535,19 @@ def build(spec: ParameterSetSpec) -> ParameterSet:
     wire = spec.wire.to_numeric()
     rov = _rov_params(spec.rov)
     return ParameterSet(
-        name=spec.name, tree=_tree_params(spec.tree, wire), rov=rov, wire=wire,
-        mount=MountParams(np.asarray(spec.mount.r_rov_from_tree_tree_m, dtype=float),
-                          math.radians(spec.mount.psi_rov_from_tree_deg)),
-        coupling=_coupling_params(spec.coupling, rov), sensors=spec.sensors, gains=spec.gains,
-        spec=spec)
+        name=spec.name,
+        tree=_tree_params(spec.tree, wire),
+        rov=rov,
+        wire=wire,
+        mount=MountParams(
+            np.asarray(spec.mount.r_rov_from_tree_tree_m, dtype=float),
+            math.radians(spec.mount.psi_rov_from_tree_deg),
+        ),
+        coupling=_coupling_params(spec.coupling, rov),
+        sensors=spec.sensors,
+        gains=spec.gains,
+        spec=spec,
+    )
 
 
 def available_presets() -> list[str]:
@@ -513,8 +577,10 @@ def load_spec(name_or_path: str | Path) -> ParameterSetSpec:
     if not path.suffix:
         preset = PRESET_DIR / f"{name_or_path}.toml"
         if not preset.exists():
-            raise ParameterError(f"unknown parameter set {name_or_path!r}; "
-                                 f"available: {', '.join(available_presets())}, or a file path")
+            raise ParameterError(
+                f"unknown parameter set {name_or_path!r}; "
+                f"available: {', '.join(available_presets())}, or a file path"
+            )
         path = preset
     if not path.exists():
         raise ParameterError(f"parameter file not found: {path}")
@@ -543,8 +609,9 @@ def froude_scale(spec: ParameterSetSpec, scale: float) -> ParameterSetSpec:
         raise ParameterError(f"scale must be in (0, 10], got {scale}")
     lam = scale
     t = spec.tree
-    inertia = [v * lam**3 for v in t.rigid_body_inertia[:3]] + \
-              [v * lam**5 for v in t.rigid_body_inertia[3:]]
+    inertia = [v * lam**3 for v in t.rigid_body_inertia[:3]] + [
+        v * lam**5 for v in t.rigid_body_inertia[3:]
+    ]
     added = [v * lam**3 for v in t.added_mass[:3]] + [v * lam**5 for v in t.added_mass[3:]]
 
     def _damp(values: list[float] | None, trans: float, rot: float) -> list[float] | None:
@@ -552,13 +619,20 @@ def froude_scale(spec: ParameterSetSpec, scale: float) -> ParameterSetSpec:
             return None
         return [v * trans for v in values[:3]] + [v * rot for v in values[3:]]
 
-    tree = t.model_copy(update=dict(
-        length_m=t.length_m * lam, width_m=t.width_m * lam, height_m=t.height_m * lam,
-        mass_kg=t.mass_kg * lam**3,
-        submerged_weight_newton=(None if t.submerged_weight_newton is None
-                                 else t.submerged_weight_newton * lam**3),
-        attachment_height_m=t.attachment_height_m * lam,
-        rigid_body_inertia=inertia, added_mass=added,
-        linear_damping=_damp(t.linear_damping, lam**2.5, lam**4.5),
-        quadratic_damping=_damp(t.quadratic_damping, lam**2, lam**5)))
+    tree = t.model_copy(
+        update=dict(
+            length_m=t.length_m * lam,
+            width_m=t.width_m * lam,
+            height_m=t.height_m * lam,
+            mass_kg=t.mass_kg * lam**3,
+            submerged_weight_newton=(
+                None if t.submerged_weight_newton is None else t.submerged_weight_newton * lam**3
+            ),
+            attachment_height_m=t.attachment_height_m * lam,
+            rigid_body_inertia=inertia,
+            added_mass=added,
+            linear_damping=_damp(t.linear_damping, lam**2.5, lam**4.5),
+            quadratic_damping=_damp(t.quadratic_damping, lam**2, lam**5),
+        )
+    )
     return spec.model_copy(update=dict(name=f"{spec.name}-x{scale:g}", tree=tree))

@@ -101,8 +101,9 @@ class PlantArrays(NamedTuple):
     friction_mu: float  # friction coefficient on the landing surface / post tops [-]
 
 
-def plant_arrays(ps: ParameterSet, has_rov: bool = True,
-                 r_mount_tree_m: np.ndarray | None = None) -> PlantArrays:
+def plant_arrays(
+    ps: ParameterSet, has_rov: bool = True, r_mount_tree_m: np.ndarray | None = None
+) -> PlantArrays:
     """Pack a parameter set for the compiled plant. ``r_mount_tree_m`` overrides where the ROV
     really sits on the tree (used to study a wrongly configured controller)."""
     t, r = ps.tree, ps.rov
@@ -110,18 +111,33 @@ def plant_arrays(ps: ParameterSet, has_rov: bool = True,
     m_r = r.M_rb + r.M_a
     r_mount = ps.mount.r_rov_from_tree_tree_m if r_mount_tree_m is None else r_mount_tree_m
     return PlantArrays(
-        tree_M_rb=t.M_rb.copy(), tree_M_a=t.M_a.copy(), tree_M_inv=np.linalg.inv(m_t),
-        tree_D_l=t.D_l.copy(), tree_D_nl=t.D_nl.copy(), tree_W0=float(t.submerged_weight_newton),
+        tree_M_rb=t.M_rb.copy(),
+        tree_M_a=t.M_a.copy(),
+        tree_M_inv=np.linalg.inv(m_t),
+        tree_D_l=t.D_l.copy(),
+        tree_D_nl=t.D_nl.copy(),
+        tree_W0=float(t.submerged_weight_newton),
         tree_r_att=np.array([0.0, 0.0, -t.attachment_height_m]),
-        rov_M_rb=r.M_rb.copy(), rov_M_a=r.M_a.copy(), rov_M_inv=np.linalg.inv(m_r),
-        rov_D_l=r.D_l.copy(), rov_D_nl=r.D_nl.copy(), rov_W=float(r.weight_newton),
-        rov_B=float(r.buoyancy_newton), rov_r_cg=r.r_cg_m.copy(), rov_r_cb=r.r_cb_m.copy(),
-        thr_T=np.ascontiguousarray(r.thrusters.T), thr_k_pos=r.thrusters.k_pos.copy(),
-        thr_k_neg=r.thrusters.k_neg.copy(), thr_n_max=r.thrusters.n_max_rps.copy(),
+        rov_M_rb=r.M_rb.copy(),
+        rov_M_a=r.M_a.copy(),
+        rov_M_inv=np.linalg.inv(m_r),
+        rov_D_l=r.D_l.copy(),
+        rov_D_nl=r.D_nl.copy(),
+        rov_W=float(r.weight_newton),
+        rov_B=float(r.buoyancy_newton),
+        rov_r_cg=r.r_cg_m.copy(),
+        rov_r_cb=r.r_cb_m.copy(),
+        thr_T=np.ascontiguousarray(r.thrusters.T),
+        thr_k_pos=r.thrusters.k_pos.copy(),
+        thr_k_neg=r.thrusters.k_neg.copy(),
+        thr_n_max=r.thrusters.n_max_rps.copy(),
         mount_r=np.asarray(r_mount, dtype=float).copy(),
         mount_R=Rzyx(0.0, 0.0, ps.mount.psi_rov_from_tree_rad),
-        coupling_K=ps.coupling.stiffness.copy(), coupling_C=ps.coupling.damping.copy(),
-        has_rov=bool(has_rov), **_contact_params(ps))
+        coupling_K=ps.coupling.stiffness.copy(),
+        coupling_C=ps.coupling.damping.copy(),
+        has_rov=bool(has_rov),
+        **_contact_params(ps),
+    )
 
 
 def _contact_params(ps: ParameterSet) -> dict:
@@ -141,12 +157,17 @@ def _contact_params(ps: ParameterSet) -> dict:
     n_posts = layout.post_xy_m.shape[0]
     return dict(
         dock_xy=np.ascontiguousarray(layout.post_xy_m, dtype=float),
-        dock_post_height=float(layout.post_height_m), dock_tolerance=float(layout.tolerance_m),
-        dock_skirt=float(3.0 * layout.funnel_mouth_radius_m), tree_half_height=height / 2.0,
+        dock_post_height=float(layout.post_height_m),
+        dock_tolerance=float(layout.tolerance_m),
+        dock_skirt=float(3.0 * layout.funnel_mouth_radius_m),
+        tree_half_height=height / 2.0,
         tree_footprint=np.array(ps.tree.dimensions_m[0:2], dtype=float),
-        contact_k=float(k), contact_c=float(2.0 * 0.7 * omega * m_heave),
-        guide_k=float(k_guide), guide_c=float(2.0 * 0.7 * (k_guide * m_surge / n_posts) ** 0.5),
-        friction_mu=0.3)
+        contact_k=float(k),
+        contact_c=float(2.0 * 0.7 * omega * m_heave),
+        guide_k=float(k_guide),
+        guide_c=float(2.0 * 0.7 * (k_guide * m_surge / n_posts) ** 0.5),
+        friction_mu=0.3,
+    )
 
 
 @njit(**JIT)
@@ -208,8 +229,9 @@ def wire_force_n(p_att_n: np.ndarray, env: np.ndarray, W0: float) -> np.ndarray:
 
 
 @njit(**JIT)
-def coupling_wrench(x: np.ndarray, P: PlantArrays, R_t: np.ndarray,
-                    R_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def coupling_wrench(
+    x: np.ndarray, P: PlantArrays, R_t: np.ndarray, R_r: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Gripper spring (eq. 2.45-2.47): wrench on the ROV in ROV axes and the equal and opposite
     wrench on the tree in tree axes (the force applied at the mounting point). R_t, R_r are the
     tree's and the ROV's R_nb."""
@@ -297,8 +319,10 @@ def contact_force_n(x: np.ndarray, env: np.ndarray, P: PlantArrays) -> np.ndarra
         c, s = np.cos(x[5]), np.sin(x[5])
         cf, sf = np.cos(env[E_FRAME_PSI]), np.sin(env[E_FRAME_PSI])
         for i in range(P.dock_xy.shape[0]):
-            ax_, ay = c * P.dock_xy[i, 0] - s * P.dock_xy[i, 1], s * P.dock_xy[i, 0] + \
-                c * P.dock_xy[i, 1]
+            ax_, ay = (
+                c * P.dock_xy[i, 0] - s * P.dock_xy[i, 1],
+                s * P.dock_xy[i, 0] + c * P.dock_xy[i, 1],
+            )
             px = env[E_FRAME] + cf * P.dock_xy[i, 0] - sf * P.dock_xy[i, 1]
             py = env[E_FRAME + 1] + sf * P.dock_xy[i, 0] + cf * P.dock_xy[i, 1]
             vfx = v_n[0] - x[11] * ay
@@ -328,13 +352,12 @@ def contact_force_n(x: np.ndarray, env: np.ndarray, P: PlantArrays) -> np.ndarra
 
 
 @njit(**JIT)
-def tree_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays,
-                R_t: np.ndarray) -> np.ndarray:
+def tree_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarray) -> np.ndarray:
     """Net weight, wire, push and hydrodynamic forces on the tree, tree axes (eq. 2.44)."""
     nu = x[6:12]
-    nu_rel, v_c_dot_b = _relative_velocity(R_t, nu, env[E_VC:E_VC + 3], env[E_AC:E_AC + 3])
+    nu_rel, v_c_dot_b = _relative_velocity(R_t, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3])
     tau = _hydro(P.tree_M_rb, P.tree_M_a, P.tree_D_l, P.tree_D_nl, nu, nu_rel, v_c_dot_b)
-    f_n = env[E_PUSH:E_PUSH + 3].copy()
+    f_n = env[E_PUSH : E_PUSH + 3].copy()
     f_n[2] += P.tree_W0
     tau[0:3] += mtv(R_t, f_n)
     p_att_n = x[0:3] + mv(R_t, P.tree_r_att)
@@ -352,11 +375,12 @@ def tree_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays,
 
 
 @njit(**JIT)
-def rov_wrench(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays,
-               R_r: np.ndarray) -> np.ndarray:
+def rov_wrench(
+    x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays, R_r: np.ndarray
+) -> np.ndarray:
     """Restoring, thruster and hydrodynamic forces on the ROV, ROV axes (eq. 2.14)."""
     eta, nu = x[12:18], x[18:24]
-    nu_rel, v_c_dot_b = _relative_velocity(R_r, nu, env[E_VC:E_VC + 3], env[E_AC:E_AC + 3])
+    nu_rel, v_c_dot_b = _relative_velocity(R_r, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3])
     tau = _hydro(P.rov_M_rb, P.rov_M_a, P.rov_D_l, P.rov_D_nl, nu, nu_rel, v_c_dot_b)
     tau -= gvect(P.rov_W, P.rov_B, eta[4], eta[3], P.rov_r_cg, P.rov_r_cb)
     tau += mv(P.thr_T, thrust_from_speed(n_rps, P.thr_k_pos, P.thr_k_neg, P.thr_n_max))
@@ -384,8 +408,9 @@ def rhs(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays) -> np
 
 
 @njit(**JIT)
-def rk4_step(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays,
-             dt: float) -> np.ndarray:
+def rk4_step(
+    x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays, dt: float
+) -> np.ndarray:
     """One classical Runge-Kutta step with inputs held over the step."""
     k1 = rhs(x, n_rps, env, P)
     k2 = rhs(x + 0.5 * dt * k1, n_rps, env, P)
@@ -395,8 +420,9 @@ def rk4_step(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays,
 
 
 @njit(**JIT)
-def advance(x0: np.ndarray, n_rps: np.ndarray, env_series: np.ndarray, P: PlantArrays,
-            dt: float) -> tuple[np.ndarray, int]:
+def advance(
+    x0: np.ndarray, n_rps: np.ndarray, env_series: np.ndarray, P: PlantArrays, dt: float
+) -> tuple[np.ndarray, int]:
     """Run len(env_series) steps with constant propeller speeds.
 
     Returns (states, n_done): states[k] is the state at the END of step k. n_done is smaller

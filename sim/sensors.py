@@ -56,8 +56,10 @@ def sensor_config(spec: SensorsSpec, dt: float) -> SensorConfig:
         s = getattr(spec, name)
         ratio = 1.0 / (s.rate_hz * dt)
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
-            raise ValueError(f"sensors.{name}.rate_hz = {s.rate_hz} Hz must divide the plant "
-                             f"rate {1.0 / dt:g} Hz into a whole number of steps")
+            raise ValueError(
+                f"sensors.{name}.rate_hz = {s.rate_hz} Hz must divide the plant "
+                f"rate {1.0 / dt:g} Hz into a whole number of steps"
+            )
         decimation[k] = int(round(ratio))
         noise[Y_SENSOR == k] = s.noise_std
         dropout[k] = s.dropout_probability
@@ -97,8 +99,9 @@ def true_outputs(x: np.ndarray) -> np.ndarray:
 
 
 @njit(**JIT)
-def sample(x: np.ndarray, held: np.ndarray, noise: np.ndarray, fresh: np.ndarray,
-           y_sensor: np.ndarray) -> np.ndarray:
+def sample(
+    x: np.ndarray, held: np.ndarray, noise: np.ndarray, fresh: np.ndarray, y_sensor: np.ndarray
+) -> np.ndarray:
     """Zero-order hold: entries whose sensor is fresh take truth + noise, others keep ``held``.
     Heading is wrapped into [-pi, pi) as a compass reports it."""
     y_true = true_outputs(x)
@@ -120,7 +123,8 @@ def _sample_series(states, noise, fresh, held, y_sensor):
     return ys, h
 
 
-def sample_series(states: NDArray[np.float64], chunk: NoiseChunk,
-                  held: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def sample_series(
+    states: NDArray[np.float64], chunk: NoiseChunk, held: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Measurements for a recorded series of states (one per step). Returns (y (n, 11), held)."""
     return _sample_series(states, chunk.noise, chunk.fresh, held, Y_SENSOR)

@@ -24,8 +24,13 @@ def tree_drag_force(ps: ParameterSet, current_speed_mps: float) -> float:
 
 def vertical_stiffness(ps: ParameterSet, length_m: float, current_speed_mps: float) -> float:
     """Elastic and geometric stiffness in series for this set's wire and tree (eq. 2.25)."""
-    return wire_mod.vertical_stiffness(ps.wire, ps.tree.submerged_weight_newton, length_m,
-                                       current_speed_mps, tree_drag_force(ps, current_speed_mps))
+    return wire_mod.vertical_stiffness(
+        ps.wire,
+        ps.tree.submerged_weight_newton,
+        length_m,
+        current_speed_mps,
+        tree_drag_force(ps, current_speed_mps),
+    )
 
 
 def self_weight_stretch(ps: ParameterSet, length_m: float) -> float:
@@ -34,15 +39,21 @@ def self_weight_stretch(ps: ParameterSet, length_m: float) -> float:
     return 0.5 * w * length_m**2 / ps.wire.axial_stiffness_newton
 
 
-def wire_length_for_depth(ps: ParameterSet, tree_depth_m: float, crane_tip_depth_m: float = 0.0,
-                          current_speed_mps: float = 0.0) -> float:
+def wire_length_for_depth(
+    ps: ParameterSet,
+    tree_depth_m: float,
+    crane_tip_depth_m: float = 0.0,
+    current_speed_mps: float = 0.0,
+) -> float:
     """Unstretched wire length that hangs the tree's centre at ``tree_depth_m`` in still
     equilibrium: depth = crane tip + L + self-weight stretch + W0 / k_z(L) + z_a."""
     drop = tree_depth_m - crane_tip_depth_m - ps.tree.attachment_height_m
     if drop <= 1.0:
-        raise ValueError(f"depth must put the tree more than 1 m below the crane tip plus the "
-                         f"attachment height ({ps.tree.attachment_height_m + 1.0:.2f} m), "
-                         f"got {tree_depth_m} m")
+        raise ValueError(
+            f"depth must put the tree more than 1 m below the crane tip plus the "
+            f"attachment height ({ps.tree.attachment_height_m + 1.0:.2f} m), "
+            f"got {tree_depth_m} m"
+        )
     length = drop
     for _ in range(50):
         k_z = vertical_stiffness(ps, length, current_speed_mps)
@@ -53,8 +64,13 @@ def wire_length_for_depth(ps: ParameterSet, tree_depth_m: float, crane_tip_depth
     return length
 
 
-def wire_environment(ps: ParameterSet, length_m: float, crane_tip_n: np.ndarray,
-                     current_speed_mps: float, current_direction_rad: float) -> np.ndarray:
+def wire_environment(
+    ps: ParameterSet,
+    length_m: float,
+    crane_tip_n: np.ndarray,
+    current_speed_mps: float,
+    current_direction_rad: float,
+) -> np.ndarray:
     """Wire entries of the environment vector (the rest of it is zero): crane tip, rest length,
     horizontal and vertical stiffness, and the drag offset of the equilibrium point (eq. 2.29
     with F0 = 0, along the current)."""
@@ -62,7 +78,7 @@ def wire_environment(ps: ParameterSet, length_m: float, crane_tip_n: np.ndarray,
     w0 = ps.tree.submerged_weight_newton
     q = ps.wire.drag_per_length(abs(current_speed_mps))
     env = np.zeros(plant.N_ENV)
-    env[plant.E_CT:plant.E_CT + 3] = crane_tip_n
+    env[plant.E_CT : plant.E_CT + 3] = crane_tip_n
     env[plant.E_LREST] = length_m + self_weight_stretch(ps, length_m)
     env[plant.E_KH] = wire_mod.horizontal_stiffness(w, w0, length_m)
     env[plant.E_KZ] = vertical_stiffness(ps, length_m, current_speed_mps)

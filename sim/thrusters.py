@@ -45,8 +45,9 @@ def speed_of_one(force_newton: float, k_pos: float, k_neg: float, n_max: float) 
 
 
 @njit(**JIT)
-def thrust_from_speed(n_rps: FloatArray, k_pos: FloatArray, k_neg: FloatArray,
-                      n_max: FloatArray) -> FloatArray:
+def thrust_from_speed(
+    n_rps: FloatArray, k_pos: FloatArray, k_neg: FloatArray, n_max: FloatArray
+) -> FloatArray:
     """(m,) thrusts [N] from (m,) propeller speeds [rev/s] (``thrust_of_one`` per thruster)."""
     f = np.empty(n_rps.shape[0])
     for i in range(n_rps.shape[0]):
@@ -55,8 +56,9 @@ def thrust_from_speed(n_rps: FloatArray, k_pos: FloatArray, k_neg: FloatArray,
 
 
 @njit(**JIT)
-def speed_from_thrust(force_newton: FloatArray, k_pos: FloatArray, k_neg: FloatArray,
-                      n_max: FloatArray) -> FloatArray:
+def speed_from_thrust(
+    force_newton: FloatArray, k_pos: FloatArray, k_neg: FloatArray, n_max: FloatArray
+) -> FloatArray:
     """(m,) propeller speeds [rev/s] from (m,) thrusts [N] (``speed_of_one`` per thruster)."""
     n = np.empty(force_newton.shape[0])
     for i in range(force_newton.shape[0]):

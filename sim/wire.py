@@ -89,8 +89,9 @@ def elastic_compliance(axial_stiffness_newton: float, L: float) -> float:
     return L / axial_stiffness_newton
 
 
-def vertical_stiffness(wire: WireProperties, W0: float, L: float, current_speed_mps: float,
-                       F0: float) -> float:
+def vertical_stiffness(
+    wire: WireProperties, W0: float, L: float, current_speed_mps: float, F0: float
+) -> float:
     """Total vertical stiffness, elastic and geometric in series (eq. 2.25) [N/m]."""
     w = wire.submerged_weight_per_length()
     q = abs(wire.drag_per_length(current_speed_mps))

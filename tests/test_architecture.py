@@ -35,8 +35,10 @@ def _imports(path: Path) -> list[str]:
             out.extend(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
             # "from missions import schema" names the module missions.schema
-            out.extend(f"{node.module}.{a.name}" if node.module in {"missions", "app"}
-                       else node.module for a in node.names)
+            out.extend(
+                f"{node.module}.{a.name}" if node.module in {"missions", "app"} else node.module
+                for a in node.names
+            )
     return out
 
 
@@ -48,24 +50,39 @@ def test_web_uses_only_the_console_api_and_the_mission_schema():
         for name in _imports(path):
             top = name.split(".")[0]
             if top in {"sim", "control", "missions", "app", "web"}:
-                assert name in allowed_project or name.startswith("web."), \
+                assert name in allowed_project or name.startswith("web."), (
                     f"{path.name} imports {name}"
+                )
 
 
 def test_log_offsets_are_read_only_by_the_declaration_and_the_kernel():
     """Everyone else reads the log row by block name (control.columns.LogRows / LAYOUT)."""
-    pattern = ("L_T", "L_TREE", "L_ROV", "L_ETA_D", "L_ETA_HAT", "L_UTIL", "L_TAU_ROV",
-               "L_MODE", "L_ACCEPT", "L_NIS", "L_TENSION", "L_CRANE", "L_Y", "L_F")
+    pattern = (
+        "L_T",
+        "L_TREE",
+        "L_ROV",
+        "L_ETA_D",
+        "L_ETA_HAT",
+        "L_UTIL",
+        "L_TAU_ROV",
+        "L_MODE",
+        "L_ACCEPT",
+        "L_NIS",
+        "L_TENSION",
+        "L_CRANE",
+        "L_Y",
+        "L_F",
+    )
     allowed = {ROOT / "control" / "columns.py", ROOT / "control" / "loop.py"}
-    for folder in ("sim", "control", "missions", "app", "web", "tests", "benchmarks",
-                   "scripts"):
+    for folder in ("sim", "control", "missions", "app", "web", "tests", "benchmarks", "scripts"):
         for path in sorted((ROOT / folder).rglob("*.py")):
             if path in allowed or path.name == "test_architecture.py":
                 continue
             text = path.read_text()
             for name in pattern:
-                assert f"loop.{name}" not in text and f"import {name}" not in text, \
+                assert f"loop.{name}" not in text and f"import {name}" not in text, (
                     f"{path.relative_to(ROOT)} reads log offset {name}"
+                )
 
 
 def test_one_simulation_owner():
@@ -79,8 +96,10 @@ def test_one_simulation_owner():
                 assert kernel not in text, f"{path.relative_to(ROOT)} steps the plant itself"
 
 
-NEWTON_AS_N = re.compile(r"\b\w*(weight|tension|force|thrust|heave|drag|load|buoyancy|stiffness)"
-                         r"_(n|nm|n_per_m)\b")
+NEWTON_AS_N = re.compile(
+    r"\b\w*(weight|tension|force|thrust|heave|drag|load|buoyancy|stiffness)"
+    r"_(n|nm|n_per_m)\b"
+)
 """Names that would read newtons as '_n' (which means NED): force_n, tension_n, ..."""
 NED_FORCES = {"wire_force_n", "contact_force_n", "_force_n"}
 """Force vectors that really are in NED."""
@@ -95,5 +114,6 @@ def test_newtons_are_never_spelt_n():
                 if "AliasChoices" in line or "validation_alias" in line:
                     continue
                 for match in NEWTON_AS_N.finditer(line):
-                    assert match.group(0) in NED_FORCES, \
+                    assert match.group(0) in NED_FORCES, (
                         f"{path.relative_to(ROOT)}:{lineno}: {match.group(0)} spells newtons _n"
+                    )

@@ -23,9 +23,16 @@ from app.console import ConsoleSettings
 from app.server import RunningServer, serve_in_thread
 
 CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-                 "--no-first-run", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync"]
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 SCREENSHOTS = Path(__file__).resolve().parents[1] / "docs" / "screenshots"
 
 pytestmark = pytest.mark.skipif(not CHROMIUM.exists(), reason="Debian's chromium is missing")
@@ -34,8 +41,9 @@ playwright_api = pytest.importorskip("playwright.sync_api")
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningServer]:
-    settings = ConsoleSettings(port=0, viser_port=0,
-                               recordings_dir=tmp_path_factory.mktemp("recordings"))
+    settings = ConsoleSettings(
+        port=0, viser_port=0, recordings_dir=tmp_path_factory.mktemp("recordings")
+    )
     with serve_in_thread(settings) as srv:
         yield srv
 
@@ -44,8 +52,12 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningServer]:
 def page(server: RunningServer, tmp_path_factory: pytest.TempPathFactory):
     with playwright_api.sync_playwright() as pw:
         context = pw.chromium.launch_persistent_context(
-            str(tmp_path_factory.mktemp("chromium-profile")), executable_path=str(CHROMIUM),
-            args=CHROMIUM_ARGS, headless=True, viewport={"width": 1400, "height": 900})
+            str(tmp_path_factory.mktemp("chromium-profile")),
+            executable_path=str(CHROMIUM),
+            args=CHROMIUM_ARGS,
+            headless=True,
+            viewport={"width": 1400, "height": 900},
+        )
         try:
             pg = context.new_page()
             pg.goto(server.view_url)
@@ -77,15 +89,17 @@ def _dismiss_notifications(pg) -> None:
 def field(pg, label: str):
     """The text/number input of a viser control, found by its label."""
     inputs = "*[self::input[not(@type='hidden')] or self::select or self::textarea]"
-    return pg.locator(f"xpath=//label[normalize-space(.)='{label}']"
-                      f"/ancestor::div[.//{inputs}][1]//{inputs}").first
+    return pg.locator(
+        f"xpath=//label[normalize-space(.)='{label}']/ancestor::div[.//{inputs}][1]//{inputs}"
+    ).first
 
 
 def choose(pg, label: str, option: str) -> None:
     """Pick an option of a viser dropdown (a combobox with a list of options)."""
     field(pg, label).click()
     pg.locator(f"xpath=//*[@role='option'][normalize-space(.)='{option}']").filter(
-        visible=True).first.click()
+        visible=True
+    ).first.click()
 
 
 def button(pg, name: str):
@@ -148,16 +162,19 @@ def test_page_loads_with_live_state_and_locked_controls(page, server: RunningSer
 
 def test_camera_presets_show_different_views_and_are_saved(page) -> None:
     shots = {}
-    for button, name in (("Overview", "console-overview.png"),
-                         ("Top-down", "console-top-down.png"),
-                         ("ROV camera", "console-rov-camera.png")):
+    for button, name in (
+        ("Overview", "console-overview.png"),
+        ("Top-down", "console-top-down.png"),
+        ("ROV camera", "console-rov-camera.png"),
+    ):
         click(page, button)
         time.sleep(2.0)
         _dismiss_notifications(page)
         data = page.screenshot()
         save(data, name)
-        shots[button] = scene_part(np.asarray(Image.open(io.BytesIO(data)).convert("RGB"),
-                                              dtype=float))
+        shots[button] = scene_part(
+            np.asarray(Image.open(io.BytesIO(data)).convert("RGB"), dtype=float)
+        )
     for name, img in shots.items():
         assert img.std() > 10.0, f"{name}: the scene looks blank"
     names = list(shots)
@@ -168,8 +185,9 @@ def test_camera_presets_show_different_views_and_are_saved(page) -> None:
     click(page, "Overview")
 
 
-def test_gain_change_in_the_panel_is_applied(page, server: RunningServer,
-                                             api: httpx.Client) -> None:
+def test_gain_change_in_the_panel_is_applied(
+    page, server: RunningServer, api: httpx.Client
+) -> None:
     unlock(page, server.token)
     tab(page, "Control")
     before = api.get("/api/gains").json()
@@ -177,16 +195,20 @@ def test_gain_change_in_the_panel_is_applied(page, server: RunningServer,
     box = field(page, "kp surge")
     box.fill(f"{target:g}")
     box.press("Enter")
-    wait_for(lambda: abs(api.get("/api/gains").json()["kp"][0] - target) < 1e-6, 10.0,
-             "the panel's gain in GET /api/gains")
+    wait_for(
+        lambda: abs(api.get("/api/gains").json()["kp"][0] - target) < 1e-6,
+        10.0,
+        "the panel's gain in GET /api/gains",
+    )
     after = api.get("/api/gains").json()
     assert after["kp"][1:] == before["kp"][1:] and after["kd"] == before["kd"]
     click(page, "Preset gains")
     wait_for(lambda: api.get("/api/gains").json() == before, 10.0, "preset gains back")
 
 
-def test_mission_built_in_the_panel_moves_the_tree(page, server: RunningServer,
-                                                   api: httpx.Client) -> None:
+def test_mission_built_in_the_panel_moves_the_tree(
+    page, server: RunningServer, api: httpx.Client
+) -> None:
     unlock(page, server.token)
     click(page, "Top-down")
     tab(page, "Mission")
@@ -199,42 +221,55 @@ def test_mission_built_in_the_panel_moves_the_tree(page, server: RunningServer,
     click(page, "Validate")
     page.get_by_text("valid: 1 legs").wait_for(timeout=5000)
     click(page, "Start built mission")
-    wait_for(lambda: api.get("/api/state").json()["mission"]["name"] == "built mission", 20.0,
-             "the built mission to start")
+    wait_for(
+        lambda: api.get("/api/state").json()["mission"]["name"] == "built mission",
+        20.0,
+        "the built mission to start",
+    )
     start = api.get("/api/state").json()["tree_eta_n"]["north_m"]
     tab(page, "Plots")
     time.sleep(1.5)
     _dismiss_notifications(page)
     before = scene_part(image(page))
     api.put("/api/run/speed", json={"speed": 20.0}).raise_for_status()
-    wait_for(lambda: api.get("/api/state").json()["tree_eta_n"]["north_m"] > start + 2.5,
-             40.0, "the tree to move 2.5 m north")
+    wait_for(
+        lambda: api.get("/api/state").json()["tree_eta_n"]["north_m"] > start + 2.5,
+        40.0,
+        "the tree to move 2.5 m north",
+    )
     time.sleep(1.5)
     after_bytes = page.screenshot()
-    after = scene_part(np.asarray(Image.open(io.BytesIO(after_bytes)).convert("RGB"),
-                                  dtype=float))
+    after = scene_part(np.asarray(Image.open(io.BytesIO(after_bytes)).convert("RGB"), dtype=float))
     save(after_bytes, "console-mission.png")
     moved = np.abs(after - before).mean(axis=2) > 30.0
     assert moved.mean() > 0.002, "the tree moved but the picture did not change"
-    wait_for(lambda: api.get("/api/state").json()["mission"]["state"] == "completed", 40.0,
-             "the mission to complete")
+    wait_for(
+        lambda: api.get("/api/state").json()["mission"]["state"] == "completed",
+        40.0,
+        "the mission to complete",
+    )
     api.put("/api/run/speed", json={"speed": 1.0}).raise_for_status()
     click(page, "Overview")
 
 
-def test_recording_from_the_panel_is_written_and_replayed(page, server: RunningServer,
-                                                          api: httpx.Client) -> None:
+def test_recording_from_the_panel_is_written_and_replayed(
+    page, server: RunningServer, api: httpx.Client
+) -> None:
     unlock(page, server.token)
     api.put("/api/run/speed", json={"speed": 10.0}).raise_for_status()
     tab(page, "Record")
     field(page, "Label").fill("browser-test")
     click(page, "Start recording")
-    wait_for(lambda: api.get("/api/state").json()["recording"] is not None, 10.0,
-             "the recording to start")
+    wait_for(
+        lambda: api.get("/api/state").json()["recording"] is not None,
+        10.0,
+        "the recording to start",
+    )
     time.sleep(2.0)
     click(page, "Stop recording")
-    wait_for(lambda: api.get("/api/state").json()["recording"] is None, 10.0,
-             "the recording to stop")
+    wait_for(
+        lambda: api.get("/api/state").json()["recording"] is None, 10.0, "the recording to stop"
+    )
     listed = api.get("/api/recordings").json()["recordings"]
     names = [r["name"] for r in listed if "browser-test" in r["name"]]
     assert names and listed[0]["size_bytes"] > 1000
@@ -246,17 +281,20 @@ def test_recording_from_the_panel_is_written_and_replayed(page, server: RunningS
     assert replay["end_s"] - replay["start_s"] > 5.0
     click(page, "Play replay")
     t0 = api.get("/api/state").json()["t_s"]
-    wait_for(lambda: api.get("/api/state").json()["t_s"] > t0 + 1.0, 15.0,
-             "the replay to play")
+    wait_for(lambda: api.get("/api/state").json()["t_s"] > t0 + 1.0, 15.0, "the replay to play")
     page.get_by_text("REPLAY").first.wait_for(timeout=5000)
     save(page.screenshot(), "console-replay.png")
     click(page, "Pause replay")
-    wait_for(lambda: not api.get("/api/replay").json()["replay"]["playing"], 10.0,
-             "the replay to pause")
+    wait_for(
+        lambda: not api.get("/api/replay").json()["replay"]["playing"], 10.0, "the replay to pause"
+    )
     field(page, "Replay time s").fill(f"{replay['start_s'] + 1.0:.1f}")
     field(page, "Replay time s").press("Enter")
-    wait_for(lambda: abs(api.get("/api/state").json()["t_s"] - replay["start_s"] - 1.0) < 0.5,
-             10.0, "the replay to seek back")
+    wait_for(
+        lambda: abs(api.get("/api/state").json()["t_s"] - replay["start_s"] - 1.0) < 0.5,
+        10.0,
+        "the replay to seek back",
+    )
     click(page, "Close replay")
     wait_for(lambda: api.get("/api/state").json()["source"] == "live", 10.0, "live again")
     api.put("/api/run/speed", json={"speed": 1.0}).raise_for_status()
@@ -269,8 +307,7 @@ def test_several_browsers_watch_the_same_session(page, server: RunningServer) ->
         other.get_by_text("Unlock controls").wait_for(timeout=60_000)
         wait_for(lambda: server.app.state.view.clients >= 2, 10.0, "two clients")
         other.get_by_text("live").first.wait_for(timeout=10_000)
-        assert button(other, "Pause").is_disabled(), \
-            "unlocking one browser must not unlock another"
+        assert button(other, "Pause").is_disabled(), "unlocking one browser must not unlock another"
     finally:
         other.close()
     wait_for(lambda: server.app.state.view.clients == 1, 10.0, "the second client to leave")

@@ -22,10 +22,15 @@ from app.console import (
 from app.console import commands as cmd
 from missions import runner, schema
 
-MOVE = {"format_version": 1, "name": "loop-test",
-        "setup": {"params": "full-scale", "depth_m": 100.0, "seed": 3},
-        "legs": [{"type": "move", "north_m": 0.5, "east_m": 0.0, "settle_s": 2.0},
-                 {"type": "rotate", "angle_deg": 10.0, "settle_s": 2.0}]}
+MOVE = {
+    "format_version": 1,
+    "name": "loop-test",
+    "setup": {"params": "full-scale", "depth_m": 100.0, "seed": 3},
+    "legs": [
+        {"type": "move", "north_m": 0.5, "east_m": 0.0, "settle_s": 2.0},
+        {"type": "rotate", "angle_deg": 10.0, "settle_s": 2.0},
+    ],
+}
 
 
 def engine_for(mission: dict, tmp_path: Path, run_legs: bool = True) -> Session:
@@ -33,8 +38,7 @@ def engine_for(mission: dict, tmp_path: Path, run_legs: bool = True) -> Session:
 
 
 def test_engine_steps_exactly_what_it_is_asked(tmp_path: Path) -> None:
-    eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False),
-                        tmp_path)
+    eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
     for n in (1, 7, 100, 250):
         t0 = eng.sim.t_s
         eng.advance(n)
@@ -62,8 +66,9 @@ def test_engine_runs_a_mission_in_small_slices_to_the_end(tmp_path: Path) -> Non
     assert np.degrees(snap.tree_eta_n[5]) == pytest.approx(10.0, abs=2.0), "turned 10 deg"
     batch = runner.run_mission(schema.parse_mission(MOVE)).summary()
     for key in ("rms_north_m", "rms_east_m", "rms_heading_deg", "max_thruster_utilisation"):
-        assert snap.mission.result[key] == pytest.approx(batch[key], rel=1e-6, abs=1e-9), \
+        assert snap.mission.result[key] == pytest.approx(batch[key], rel=1e-6, abs=1e-9), (
             f"{key}: the console's sliced run differs from the batch runner"
+        )
 
 
 def test_same_seed_same_commands_same_state(tmp_path: Path) -> None:
@@ -71,8 +76,9 @@ def test_same_seed_same_commands_same_state(tmp_path: Path) -> None:
     b = engine_for(MOVE, tmp_path / "b")
     for eng in (a, b):
         eng.advance(300)
-        eng.sim.set_gains(Gains((2500.0, 2500.0, 2000.0), (175.0, 175.0, 75.0),
-                               (8000.0, 8000.0, 38500.0)))
+        eng.sim.set_gains(
+            Gains((2500.0, 2500.0, 2000.0), (175.0, 175.0, 75.0), (8000.0, 8000.0, 38500.0))
+        )
         eng.advance(300)
     assert np.array_equal(a.last_row, b.last_row)
 
@@ -101,8 +107,7 @@ async def _run_for(console: PacedLoop, seconds: float) -> None:
 
 def test_loop_keeps_wall_clock_pace_at_each_speed(tmp_path: Path) -> None:
     async def scenario() -> dict[float, float]:
-        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False),
-                            tmp_path)
+        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
         eng.advance(1)  # compiled code warmed up
         console = PacedLoop(eng)
         task = asyncio.create_task(console.run())
@@ -123,8 +128,7 @@ def test_loop_keeps_wall_clock_pace_at_each_speed(tmp_path: Path) -> None:
 
 def test_pause_step_and_commands_between_steps(tmp_path: Path) -> None:
     async def scenario() -> None:
-        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False),
-                            tmp_path)
+        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
         console = PacedLoop(eng, paused=True)
         task = asyncio.create_task(console.run())
         await asyncio.sleep(0.2)
@@ -150,12 +154,10 @@ def test_pause_step_and_commands_between_steps(tmp_path: Path) -> None:
 
 def test_commands_from_threads_are_applied_by_the_loop(tmp_path: Path) -> None:
     async def scenario() -> None:
-        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False),
-                            tmp_path)
+        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
         console = PacedLoop(eng)
         task = asyncio.create_task(console.run())
-        target = Gains((3000.0, 3000.0, 3000.0), (100.0, 100.0, 50.0),
-                       (9000.0, 9000.0, 40000.0))
+        target = Gains((3000.0, 3000.0, 3000.0), (100.0, 100.0, 50.0), (9000.0, 9000.0, 40000.0))
         # what a viser callback does: block its own thread until the loop has applied it
         result = await asyncio.to_thread(console.call_blocking, cmd.SetGains(target))
         assert result == target and console.snapshot.gains == target
@@ -166,8 +168,7 @@ def test_commands_from_threads_are_applied_by_the_loop(tmp_path: Path) -> None:
 
 
 def test_published_snapshots_cannot_be_changed_by_readers(tmp_path: Path) -> None:
-    eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False),
-                        tmp_path)
+    eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
     eng.advance(500)
     time.sleep(0.15)
     snap = PacedLoop(eng).snapshot

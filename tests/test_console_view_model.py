@@ -23,9 +23,13 @@ angles = st.floats(-math.pi, math.pi, allow_nan=False)
 
 def rotation_of(q: np.ndarray) -> np.ndarray:
     w, x, y, z = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 @given(angles, st.floats(-1.5, 1.5), angles)
@@ -33,8 +37,7 @@ def test_quaternion_is_the_zyx_rotation_of_the_core(phi: float, theta: float, ps
     q = geo.quaternion_wxyz_from_rpy_radians(phi, theta, psi)
     assert np.linalg.norm(q) == pytest.approx(1.0)
     np.testing.assert_allclose(rotation_of(q), gnc.Rzyx(phi, theta, psi), atol=1e-12)
-    np.testing.assert_allclose(geo.Rzyx(phi, theta, psi), gnc.Rzyx(phi, theta, psi),
-                               atol=1e-12)
+    np.testing.assert_allclose(geo.Rzyx(phi, theta, psi), gnc.Rzyx(phi, theta, psi), atol=1e-12)
 
 
 def test_attachment_point_is_above_the_cg_and_tilts_with_the_tree() -> None:
@@ -121,8 +124,9 @@ def test_every_leg_type_builds_with_its_initial_values_or_names_the_missing_fiel
         try:
             mission = mb.build_mission("m", setup, [leg])
         except schema.MissionError as err:
-            missing = [s.name for s in mb.field_specs(model) if s.required and
-                       values[s.name] is None]
+            missing = [
+                s.name for s in mb.field_specs(model) if s.required and values[s.name] is None
+            ]
             named = any(name in str(err) for name in missing) or f"({leg_type})" in str(err)
             assert named, str(err)
         else:

@@ -28,8 +28,11 @@ def test_system_model_mass_is_spd_and_wrench_map_is_the_lever_arm():
     tau_tree = sysm.rov_to_tree @ np.array([0, 100.0, 0, 0, 0, 0])
     np.testing.assert_allclose(tau_tree[[0, 1, 5]], [0, 100.0, -200.0], atol=1e-9)
     np.testing.assert_allclose(sysm.tree_to_rov @ tau_tree, [0, 100.0, 0, 0, 0, 0], atol=1e-9)
-    np.testing.assert_allclose(np.linalg.inv(Hmtrx(sysm.r_rov_from_tree_tree_m)),
-                               Hmtrx(-sysm.r_rov_from_tree_tree_m), atol=1e-12)
+    np.testing.assert_allclose(
+        np.linalg.inv(Hmtrx(sysm.r_rov_from_tree_tree_m)),
+        Hmtrx(-sysm.r_rov_from_tree_tree_m),
+        atol=1e-12,
+    )
 
 
 def test_capacity_matches_the_thrusters():
@@ -47,7 +50,7 @@ def test_gain_change_is_bumpless():
     sim.set_target(1.5, 1.0, 0.3)  # a moving reference: errors and rates are not zero
     before = sim.run_for(20.0)["tau_tree_cmd"][-1].copy()
     g = sim.gains
-    integral_before = sim.cs[loop.CS_I:loop.CS_I + 3].copy()
+    integral_before = sim.cs[loop.CS_I : loop.CS_I + 3].copy()
     sim.set_gains(Gains(tuple(2 * v for v in g.kp), g.ki, tuple(3 * v for v in g.kd)))
     after = sim.step(1)["tau_tree_cmd"][0]
     # one step later the command may only move by what one 10 ms step moves it: 2 % of the
@@ -56,7 +59,7 @@ def test_gain_change_is_bumpless():
     assert np.array_equal(sim.C.Kp, 2 * np.array(g.kp))
     # the jump that would have happened went into the integral instead (so the test is not
     # passing merely because the errors were zero)
-    absorbed = np.abs(sim.cs[loop.CS_I:loop.CS_I + 3] - integral_before).max()
+    absorbed = np.abs(sim.cs[loop.CS_I : loop.CS_I + 3] - integral_before).max()
     assert absorbed > 5.0
     assert np.abs(after - before).max() < 0.1 * absorbed
 
@@ -95,8 +98,12 @@ def test_supervisor_switch_to_free_rov_has_no_thrust_jump_and_keeps_station():
 
 def test_heading_only_mode_holds_heading_and_lets_position_go():
     gains = Gains(tuple(MODEL.gains.kp), tuple(MODEL.gains.ki), tuple(MODEL.gains.kd))
-    sim = Simulation(MODEL, tree_depth_m=100.0, current=steady_current(0.1, 90.0),
-                     settings=ControlSettings(gains=gains.heading_only()))
+    sim = Simulation(
+        MODEL,
+        tree_depth_m=100.0,
+        current=steady_current(0.1, 90.0),
+        settings=ControlSettings(gains=gains.heading_only()),
+    )
     sim.set_target(1.0, 1.0, math.radians(30.0))
     rows = sim.run_for(300.0)
     tree = rows["tree_eta_n"]
@@ -115,11 +122,17 @@ def test_heading_only_mode_holds_heading_and_lets_position_go():
 
 def test_observer_coasts_through_position_dropouts():
     spec = MODEL.spec
-    sensors = spec.sensors.model_copy(update={"position": spec.sensors.position.model_copy(
-        update={"dropout_probability": 0.97})})
+    sensors = spec.sensors.model_copy(
+        update={"position": spec.sensors.position.model_copy(update={"dropout_probability": 0.97})}
+    )
     ps = params.build(spec.model_copy(update={"sensors": sensors}))
-    sim = Simulation(ps, tree_depth_m=100.0, current=steady_current(),
-                     settings=ControlSettings(feedback="ekf"), seed=3)
+    sim = Simulation(
+        ps,
+        tree_depth_m=100.0,
+        current=steady_current(),
+        settings=ControlSettings(feedback="ekf"),
+        seed=3,
+    )
     rows = sim.run_for(300.0)
     fixes = rows["accepted"][:, SENSOR_NAMES.index("position")].sum()
     assert 0 < fixes < 20  # 300 fixes due, 97 % lost
@@ -143,9 +156,23 @@ def test_signal_checks_count_each_failure():
     counters = np.zeros((5, 4), np.int64)
 
     def check(k, y, t):
-        return quality.check_sample(k, y, t, last, last_t, repeat, hist, counters, cfg.lo,
-                                    cfg.hi, cfg.wild_jump, cfg.max_rate, cfg.frozen_count,
-                                    cfg.variance_limit, Y_SENSOR)
+        return quality.check_sample(
+            k,
+            y,
+            t,
+            last,
+            last_t,
+            repeat,
+            hist,
+            counters,
+            cfg.lo,
+            cfg.hi,
+            cfg.wild_jump,
+            cfg.max_rate,
+            cfg.frozen_count,
+            cfg.variance_limit,
+            Y_SENSOR,
+        )
 
     y = np.zeros(11)
     y[0:3] = [10.0, 5.0, 100.0]

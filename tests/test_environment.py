@@ -83,8 +83,9 @@ def _band_grid(params: WaveParams) -> tuple[NDArray[np.float64], NDArray[np.floa
     return grid, widths
 
 
-def _single_component(period_s: float, amplitude_m: float, direction_rad: float,
-                      phase_rad: float = 0.3) -> WaveField:
+def _single_component(
+    period_s: float, amplitude_m: float, direction_rad: float, phase_rad: float = 0.3
+) -> WaveField:
     """A one-component field: a regular deep-water wave."""
     omega = 2 * math.pi / period_s
     return WaveField(
@@ -192,8 +193,9 @@ def test_field_elevation_variance_is_hs_squared_over_16(hs: float, tp: float, se
     # 1 - exp(-1.25 / 6^4) above, exp(-1.25 * 2^4) below; plus 4 std of the random
     # frequencies (an unbiased stratified estimate of the band integral).
     m0 = hs**2 / 16.0
-    truncated = 1.0 - math.exp(-1.25 / OMEGA_MAX_PER_PEAK**4) + math.exp(
-        -1.25 / OMEGA_MIN_PER_PEAK**4)
+    truncated = (
+        1.0 - math.exp(-1.25 / OMEGA_MAX_PER_PEAK**4) + math.exp(-1.25 / OMEGA_MIN_PER_PEAK**4)
+    )
     assert variance == pytest.approx(m0, abs=truncated * m0 + 4.0 * sampling)
     # The requirement 'within a few percent': 3 %, about 4 times the sampling bound above.
     assert abs(variance / m0 - 1.0) < 0.03
@@ -201,8 +203,9 @@ def test_field_elevation_variance_is_hs_squared_over_16(hs: float, tp: float, se
 
 @pytest.mark.parametrize(("hs", "tp"), SEA_STATES)
 @pytest.mark.parametrize("depth_m", [0.0, 20.0, 100.0])
-def test_field_velocity_variance_matches_spectrum_integral(hs: float, tp: float,
-                                                           depth_m: float) -> None:
+def test_field_velocity_variance_matches_spectrum_integral(
+    hs: float, tp: float, depth_m: float
+) -> None:
     params = WaveParams(hs, tp, 0.0)
     field = make_wave_field(params, np.random.default_rng(7))
     decay = np.exp(-field.wavenumber_rad_m * depth_m)
@@ -221,7 +224,8 @@ def test_field_velocity_variance_matches_spectrum_integral(hs: float, tp: float,
     # Spectrum outside the bands, integrated piecewise on the same grid (both pieces).
     below, above = omega[omega < lower], omega[omega > upper]
     tail = _log_trapezoid(below * integrand(below), below) + _log_trapezoid(
-        above * integrand(above), above)
+        above * integrand(above), above
+    )
     assert outside.size > 0
     grid, widths = _band_grid(params)
     sampling = _stratified_std_bound(integrand(grid), widths)
@@ -297,12 +301,23 @@ def test_single_component_is_periodic_in_space_and_uniform_crosswise() -> None:
     wavelength = 2 * math.pi / float(field.wavenumber_rad_m[0])
     t = np.linspace(0.0, 20.0, 81)
     base = wave_kinematics_n(field, t, 5.0).velocity_n
-    along = wave_kinematics_n(field, t, 5.0, north_m=wavelength * math.cos(direction),
-                              east_m=wavelength * math.sin(direction)).velocity_n
-    across = wave_kinematics_n(field, t, 5.0, north_m=-37.0 * math.sin(direction),
-                               east_m=37.0 * math.cos(direction)).velocity_n
-    half = wave_kinematics_n(field, t, 5.0, north_m=0.5 * wavelength * math.cos(direction),
-                             east_m=0.5 * wavelength * math.sin(direction)).velocity_n
+    along = wave_kinematics_n(
+        field,
+        t,
+        5.0,
+        north_m=wavelength * math.cos(direction),
+        east_m=wavelength * math.sin(direction),
+    ).velocity_n
+    across = wave_kinematics_n(
+        field, t, 5.0, north_m=-37.0 * math.sin(direction), east_m=37.0 * math.cos(direction)
+    ).velocity_n
+    half = wave_kinematics_n(
+        field,
+        t,
+        5.0,
+        north_m=0.5 * wavelength * math.cos(direction),
+        east_m=0.5 * wavelength * math.sin(direction),
+    ).velocity_n
     # Phase errors of order eps * k * x (k x ~ 2 pi): absolute 1e-12 of the speed amplitude.
     scale = 1e-12 * 2 * math.pi / period * 1.5
     np.testing.assert_allclose(along, base, atol=scale)
@@ -329,10 +344,15 @@ def test_acceleration_is_time_derivative_of_velocity(depth_m: float) -> None:
 
 
 @settings(max_examples=40, deadline=None)
-@given(direction=st.floats(-2 * math.pi, 2 * math.pi), seed=st.integers(0, 2**32 - 1),
-       north=st.floats(-500.0, 500.0), east=st.floats(-500.0, 500.0))
-def test_horizontal_velocity_is_along_wave_direction(direction: float, seed: int, north: float,
-                                                     east: float) -> None:
+@given(
+    direction=st.floats(-2 * math.pi, 2 * math.pi),
+    seed=st.integers(0, 2**32 - 1),
+    north=st.floats(-500.0, 500.0),
+    east=st.floats(-500.0, 500.0),
+)
+def test_horizontal_velocity_is_along_wave_direction(
+    direction: float, seed: int, north: float, east: float
+) -> None:
     field = make_wave_field(WaveParams(4.0, 12.0, direction, 50), np.random.default_rng(seed))
     t = np.linspace(0.0, 60.0, 61)
     kinematics = wave_kinematics_n(field, t, 10.0, north, east)
@@ -352,10 +372,12 @@ def test_same_seed_same_field_different_seed_different_field() -> None:
     for name in ("omega_rad_s", "amplitude_m", "wavenumber_rad_m", "phase_rad"):
         assert np.array_equal(getattr(first, name), getattr(again, name))
         assert not np.array_equal(getattr(first, name), getattr(other, name))
-    assert np.array_equal(wave_kinematics_n(first, t, 50.0).velocity_n,
-                          wave_kinematics_n(again, t, 50.0).velocity_n)
-    assert not np.array_equal(wave_kinematics_n(first, t, 50.0).velocity_n,
-                              wave_kinematics_n(other, t, 50.0).velocity_n)
+    assert np.array_equal(
+        wave_kinematics_n(first, t, 50.0).velocity_n, wave_kinematics_n(again, t, 50.0).velocity_n
+    )
+    assert not np.array_equal(
+        wave_kinematics_n(first, t, 50.0).velocity_n, wave_kinematics_n(other, t, 50.0).velocity_n
+    )
 
 
 def test_zero_height_gives_still_water() -> None:
@@ -420,10 +442,14 @@ def test_long_record_is_computed_in_blocks_without_seams(monkeypatch: pytest.Mon
         ({"n_components": 5001}, "n_components"),
     ],
 )
-def test_invalid_wave_params_raise_naming_the_field(kwargs: dict[str, float],
-                                                    field_name: str) -> None:
-    values: dict[str, float] = {"significant_height_m": 8.0, "peak_period_s": 10.0,
-                                "direction_rad": 0.0}
+def test_invalid_wave_params_raise_naming_the_field(
+    kwargs: dict[str, float], field_name: str
+) -> None:
+    values: dict[str, float] = {
+        "significant_height_m": 8.0,
+        "peak_period_s": 10.0,
+        "direction_rad": 0.0,
+    }
     values.update(kwargs)
     with pytest.raises(ValueError, match=rf"^{field_name} "):
         WaveParams(**values)  # type: ignore[arg-type]
@@ -488,8 +514,10 @@ def test_rng_consumption_does_not_depend_on_intensity() -> None:
 
 def test_current_is_deterministic_per_seed() -> None:
     params = _thesis_current(speed_walk_mps_per_sqrt_s=0.01, direction_walk_rad_per_sqrt_s=0.01)
-    runs = [advance_current(initial_current(params), params, 0.01, 500,
-                            np.random.default_rng(seed)) for seed in (3, 3, 4)]
+    runs = [
+        advance_current(initial_current(params), params, 0.01, 500, np.random.default_rng(seed))
+        for seed in (3, 3, 4)
+    ]
     assert np.array_equal(runs[0].speeds_mps, runs[1].speeds_mps)
     assert np.array_equal(runs[0].directions_rad, runs[1].directions_rad)
     assert not np.array_equal(runs[0].speeds_mps, runs[2].speeds_mps)
@@ -514,8 +542,9 @@ def test_increment_std_is_sigma_sqrt_dt(column: str) -> None:
 def test_walk_reflects_at_bounds_rather_than_sticking() -> None:
     # Spread sigma sqrt(T) = 1.6 m/s against a 0.1 m/s band: many reflections.
     params = CurrentParams(0.1, 1.0, 0.05, 0.15, 0.9, 1.1, 0.05, 0.05)
-    chunk = advance_current(initial_current(params), params, 0.01, 100_000,
-                            np.random.default_rng(2))
+    chunk = advance_current(
+        initial_current(params), params, 0.01, 100_000, np.random.default_rng(2)
+    )
     for samples, lo, hi in ((chunk.speeds_mps, 0.05, 0.15), (chunk.directions_rad, 0.9, 1.1)):
         assert np.all((samples >= lo) & (samples <= hi))
         # Clipping would pile samples exactly on the bounds; reflection never lands on them.
@@ -525,9 +554,18 @@ def test_walk_reflects_at_bounds_rather_than_sticking() -> None:
 
 
 bounded_currents = st.builds(
-    lambda lo, width, start, direction_lo, direction_width, direction_start, sigma, dsigma:
-    CurrentParams(lo + start * width, direction_lo + direction_start * direction_width,
-                  lo, lo + width, direction_lo, direction_lo + direction_width, sigma, dsigma),
+    lambda lo, width, start, direction_lo, direction_width, direction_start, sigma, dsigma: (
+        CurrentParams(
+            lo + start * width,
+            direction_lo + direction_start * direction_width,
+            lo,
+            lo + width,
+            direction_lo,
+            direction_lo + direction_width,
+            sigma,
+            dsigma,
+        )
+    ),
     lo=st.floats(0.0, 2.0),
     width=st.floats(0.0, 1.0),
     start=st.floats(0.0, 1.0),
@@ -540,38 +578,59 @@ bounded_currents = st.builds(
 
 
 @settings(max_examples=150, deadline=None)
-@given(params=bounded_currents, dt=st.floats(1e-3, 1.0), n_steps=st.integers(0, 3000),
-       seed=st.integers(0, 2**32 - 1))
-def test_walk_stays_inside_bounds(params: CurrentParams, dt: float, n_steps: int,
-                                  seed: int) -> None:
+@given(
+    params=bounded_currents,
+    dt=st.floats(1e-3, 1.0),
+    n_steps=st.integers(0, 3000),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_walk_stays_inside_bounds(
+    params: CurrentParams, dt: float, n_steps: int, seed: int
+) -> None:
     state = initial_current(params)
     rng = np.random.default_rng(seed)
     for _ in range(3):  # several chunks, carrying the state
         state, speeds, directions = advance_current(state, params, dt, n_steps, rng)
         assert np.all((speeds >= params.speed_min_mps) & (speeds <= params.speed_max_mps))
-        assert np.all((directions >= params.direction_min_rad)
-                      & (directions <= params.direction_max_rad))
+        assert np.all(
+            (directions >= params.direction_min_rad) & (directions <= params.direction_max_rad)
+        )
         assert params.speed_min_mps <= state.speed_mps <= params.speed_max_mps
         assert params.direction_min_rad <= state.direction_rad <= params.direction_max_rad
 
 
 @settings(max_examples=100, deadline=None)
-@given(params=bounded_currents, dt=st.floats(1e-3, 1.0), first=st.integers(0, 1500),
-       second=st.integers(0, 1500), seed=st.integers(0, 2**32 - 1))
-def test_chunked_run_equals_one_run(params: CurrentParams, dt: float, first: int, second: int,
-                                    seed: int) -> None:
-    whole = advance_current(initial_current(params), params, dt, first + second,
-                            np.random.default_rng(seed))
+@given(
+    params=bounded_currents,
+    dt=st.floats(1e-3, 1.0),
+    first=st.integers(0, 1500),
+    second=st.integers(0, 1500),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_chunked_run_equals_one_run(
+    params: CurrentParams, dt: float, first: int, second: int, seed: int
+) -> None:
+    whole = advance_current(
+        initial_current(params), params, dt, first + second, np.random.default_rng(seed)
+    )
     rng = np.random.default_rng(seed)
     head = advance_current(initial_current(params), params, dt, first, rng)
     tail = advance_current(head.state, params, dt, second, rng)
     # Only round-off differs (a cumulative sum restarted at another point): at most about
     # n eps max|x| = 3000 * 2.2e-16 * (free path up to ~10^3) = 7e-10.
     tolerance = 1e-9
-    np.testing.assert_allclose(np.concatenate([head.speeds_mps, tail.speeds_mps]),
-                               whole.speeds_mps, rtol=0.0, atol=tolerance)
-    np.testing.assert_allclose(np.concatenate([head.directions_rad, tail.directions_rad]),
-                               whole.directions_rad, rtol=0.0, atol=tolerance)
+    np.testing.assert_allclose(
+        np.concatenate([head.speeds_mps, tail.speeds_mps]),
+        whole.speeds_mps,
+        rtol=0.0,
+        atol=tolerance,
+    )
+    np.testing.assert_allclose(
+        np.concatenate([head.directions_rad, tail.directions_rad]),
+        whole.directions_rad,
+        rtol=0.0,
+        atol=tolerance,
+    )
     assert tail.state.speed_mps == pytest.approx(whole.state.speed_mps, abs=tolerance)
     assert tail.state.direction_rad == pytest.approx(whole.state.direction_rad, abs=tolerance)
 
@@ -590,8 +649,9 @@ def test_chunked_run_equals_one_run(params: CurrentParams, dt: float, first: int
         ({"direction_walk_rad_per_sqrt_s": math.nan}, "direction_walk_rad_per_sqrt_s"),
     ],
 )
-def test_invalid_current_params_raise_naming_the_field(overrides: dict[str, float],
-                                                       field_name: str) -> None:
+def test_invalid_current_params_raise_naming_the_field(
+    overrides: dict[str, float], field_name: str
+) -> None:
     with pytest.raises(ValueError, match=rf"^{field_name} must") as info:
         _thesis_current(**overrides)
     assert " must lie in " in str(info.value)  # the allowed range is stated

@@ -43,9 +43,13 @@ def test_rotation_matches_scipy_intrinsic_zyx(phi, theta, psi):
 def rotation_of_quaternion(w: float, x: float, y: float, z: float) -> np.ndarray:
     """The rotation matrix of a unit quaternion [w, x, y, z], written out (independent of
     sim.gnc)."""
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 @given(angle, angle, angle)
@@ -60,8 +64,9 @@ def test_quaternion_is_the_zyx_rotation(phi, theta, psi):
 
 @given(st.floats(-3.0, 3.0), st.floats(-1.4, 1.4), st.floats(-3.0, 3.0))
 def test_euler_round_trip(phi, theta, psi):
-    np.testing.assert_allclose(euler_from_rotation(Rzyx(phi, theta, psi)), [phi, theta, psi],
-                               atol=1e-9)
+    np.testing.assert_allclose(
+        euler_from_rotation(Rzyx(phi, theta, psi)), [phi, theta, psi], atol=1e-9
+    )
 
 
 @given(st.floats(-1e6, 1e6, allow_nan=False))

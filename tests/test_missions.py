@@ -14,11 +14,26 @@ from missions import runner, schema, studies
 ROOT = Path(__file__).resolve().parents[1]
 EXE = shutil.which("rov-console", path=str(Path(sys.executable).parent)) or "rov-console"
 
-REQUIRED = ["full-rotation-400", "full-square-400", "full-square-100", "model-square-ekf-400",
-            "model-step-pinv", "model-step-priority", "model-step-qp", "model-mass-m50",
-            "model-mass-m20", "model-mass-p20", "model-mass-p50", "model-weight-m50",
-            "model-weight-m20", "model-weight-p20", "model-weight-p50", "model-rotation-wrong-r",
-            "sea-trial-appendix-c", "full-docking-current-0.3"]
+REQUIRED = [
+    "full-rotation-400",
+    "full-square-400",
+    "full-square-100",
+    "model-square-ekf-400",
+    "model-step-pinv",
+    "model-step-priority",
+    "model-step-qp",
+    "model-mass-m50",
+    "model-mass-m20",
+    "model-mass-p20",
+    "model-mass-p50",
+    "model-weight-m50",
+    "model-weight-m20",
+    "model-weight-p20",
+    "model-weight-p50",
+    "model-rotation-wrong-r",
+    "sea-trial-appendix-c",
+    "full-docking-current-0.3",
+]
 
 
 def test_library_has_every_scenario_and_each_file_round_trips(tmp_path):
@@ -65,8 +80,11 @@ def test_bad_file_names_file_line_field_and_allowed_values(tmp_path):
 def test_out_of_range_and_missing_frame_are_refused():
     base = schema.load_mission("full-square-400").model_dump(mode="json")
     base["legs"][0]["duration_s"] = -1
-    with pytest.raises(schema.MissionError, match=r"legs\[1\] \(hold\)\.duration_s: Input should "
-                                                  r"be greater than 0"):
+    with pytest.raises(
+        schema.MissionError,
+        match=r"legs\[1\] \(hold\)\.duration_s: Input should "
+        r"be greater than 0",
+    ):
         schema.parse_mission(base)
     docking = schema.load_mission("full-docking-current-0.3").model_dump(mode="json")
     del docking["setup"]["docking_frame"]
@@ -138,8 +156,11 @@ def test_run_command_json_plots_and_exit_codes(tmp_path):
     assert out["rms_north_m"] < 0.10 and not out["failed"]
     assert [leg["type"] for leg in out["legs"]] == ["hold", "rotate", "square"]
     pngs = sorted(p.name for p in tmp_path.glob("*.png"))
-    assert pngs == ["full-square-400-forces.png", "full-square-400-pose.png",
-                    "full-square-400-track.png"]
+    assert pngs == [
+        "full-square-400-forces.png",
+        "full-square-400-pose.png",
+        "full-square-400-track.png",
+    ]
     assert all((tmp_path / p).stat().st_size > 10_000 for p in pngs)
     # a mission whose leg times out fails: exit 1
     bad = schema.load_mission("model-step-priority").model_dump(mode="json")
@@ -185,13 +206,15 @@ def test_killed_run_leaves_a_readable_log(tmp_path):
     from app.recording import load_session
 
     path = tmp_path / "killed.mcap"
-    proc = subprocess.Popen([EXE, "run", "sea-trial-appendix-c", "--log", str(path),
-                             "--no-progress"], cwd=ROOT, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(
+        [EXE, "run", "sea-trial-appendix-c", "--log", str(path), "--no-progress"],
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         deadline = time.monotonic() + 60
-        while (not path.exists() or path.stat().st_size < 200_000) and \
-                time.monotonic() < deadline:
+        while (not path.exists() or path.stat().st_size < 200_000) and time.monotonic() < deadline:
             time.sleep(0.1)
         time.sleep(1.0)
         size_one_second_before = path.stat().st_size
@@ -210,9 +233,12 @@ def test_killed_run_leaves_a_readable_log(tmp_path):
 
 def test_missions_with_the_old_newton_spelling_still_load():
     """`heave_force_n` / `force_n` (before newtons were spelt `_newton`) mean the same."""
-    data = {"format_version": 1, "name": "old spelling",
-            "setup": {"params": "model-scale", "depth_m": 100.0, "heave_force_n": 12.5},
-            "legs": [{"type": "heave", "force_n": -7.0}]}
+    data = {
+        "format_version": 1,
+        "name": "old spelling",
+        "setup": {"params": "model-scale", "depth_m": 100.0, "heave_force_n": 12.5},
+        "legs": [{"type": "heave", "force_n": -7.0}],
+    }
     mission = schema.parse_mission(data)
     assert mission.setup.heave_force_newton == 12.5
     assert mission.legs[0].force_newton == -7.0

@@ -99,8 +99,9 @@ def test_froude_scaling_round_trip_and_laws():
     lam = 1 / 3.5
     small = params.froude_scale(spec, lam)
     back = params.froude_scale(small, 1 / lam)
-    np.testing.assert_allclose(back.tree.rigid_body_inertia, spec.tree.rigid_body_inertia,
-                               rtol=1e-12)
+    np.testing.assert_allclose(
+        back.tree.rigid_body_inertia, spec.tree.rigid_body_inertia, rtol=1e-12
+    )
     np.testing.assert_allclose(back.tree.added_mass, spec.tree.added_mass, rtol=1e-12)
     assert back.tree.length_m == pytest.approx(spec.tree.length_m)
     assert small.tree.mass_kg == pytest.approx(36000 * lam**3)

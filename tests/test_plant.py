@@ -66,32 +66,40 @@ def test_undamped_pendulum_keeps_its_energy_over_100_periods():
     assert sim.vessel_at(np.array([0.0, 1.5, 0.0]))
     x0 = sim.plant_state
     env = site.wire_environment(ps, sim.wire_length_m, sim.crane_tip_n, 0.0, 0.0)
-    k = wm.horizontal_stiffness(ps.wire.submerged_weight_per_length(),
-                                ps.tree.submerged_weight_newton, sim.wire_length_m)
+    k = wm.horizontal_stiffness(
+        ps.wire.submerged_weight_per_length(), ps.tree.submerged_weight_newton, sim.wire_length_m
+    )
     period = 2 * math.pi * math.sqrt((ps.tree.M_rb[0, 0] + ps.tree.M_a[0, 0]) / k)
     rows = sim.step(round(100 * period / sim.dt_s))
     # energy above the still hang: the reference that the 1 % is taken of
     x_rest = np.zeros(plant.N_STATE)
     x_rest[0:2] = sim.crane_tip_n[0:2]
     pivot, rest = plant.wire_pivot(env, ps.tree.submerged_weight_newton)
-    x_rest[2] = pivot[2] + rest + ps.tree.submerged_weight_newton / env[plant.E_KZ] + \
-        ps.tree.attachment_height_m
+    x_rest[2] = (
+        pivot[2]
+        + rest
+        + ps.tree.submerged_weight_newton / env[plant.E_KZ]
+        + ps.tree.attachment_height_m
+    )
     e_rest = _mechanical_energy(x_rest, sim.arrays, env)
     e0 = _mechanical_energy(x0, sim.arrays, env) - e_rest
-    e = np.array([_mechanical_energy(x, sim.arrays, env)
-                  for x in rows.plant_state()[::50]]) - e_rest
+    e = (
+        np.array([_mechanical_energy(x, sim.arrays, env) for x in rows.plant_state()[::50]])
+        - e_rest
+    )
     assert e0 > 0
     assert np.max(np.abs(e - e0)) < 0.01 * e0
     # the swing is still there (the test would pass trivially if the tree stood still)
-    assert np.ptp(rows["tree_eta_n"][-int(period / 0.01):, 0]) > 1.5
+    assert np.ptp(rows["tree_eta_n"][-int(period / 0.01) :, 0]) > 1.5
 
 
 def test_tree_alone_settles_downstream_in_the_steady_current():
     """Issue 2 / thesis 4.1.1: 0.1 m/s towards 225 deg, wire at N=1, E=1, 400 m, no ROV: the tree
     settles 0.15 to 0.35 m from the wire's surface point (thesis 0.25 m; MODEL_NOTES explains
     why the default wire gives less), downstream, without turning."""
-    sim = Simulation(FULL, tree_depth_m=400.0, current=steady_current(), has_rov=False,
-                     control=False)
+    sim = Simulation(
+        FULL, tree_depth_m=400.0, current=steady_current(), has_rov=False, control=False
+    )
     rows = sim.run_for(1500.0)
     x = sim.tree_eta_n
     offset = math.hypot(x[0] - 1.0, x[1] - 1.0)
@@ -150,8 +158,11 @@ def test_coupling_mode_frequency_is_where_the_parameters_put_it():
     m_rov = FULL.rov.M_rb[0, 0] + FULL.rov.M_a[0, 0]
     m_tree = FULL.tree.M_rb[0, 0] + FULL.tree.M_a[0, 0]
     zeta = FULL.spec.coupling.damping_ratio * math.sqrt(m_rov / (1 / (1 / m_rov + 1 / m_tree)))
-    f_pred = math.sqrt(k * (1 / m_rov + 1 / m_tree)) / (2 * math.pi) * math.sqrt(1 - zeta**2 / (
-        1 + m_rov / m_tree))
+    f_pred = (
+        math.sqrt(k * (1 / m_rov + 1 / m_tree))
+        / (2 * math.pi)
+        * math.sqrt(1 - zeta**2 / (1 + m_rov / m_tree))
+    )
     assert f_meas == pytest.approx(f_pred, rel=0.03)
     # RK4 at the default 100 Hz: omega dt = 0.16, far inside RK4's stability limit of 2.78
     assert 2 * math.pi * f_pred * 0.01 < 0.2
@@ -161,11 +172,13 @@ def test_thrusters_saturate_at_rated_speed():
     thr = FULL.rov.thrusters
     n = np.array([10.0, -40.0, 25.0, 100.0])
     f = thrusters.thrust_from_speed(n, thr.k_pos, thr.k_neg, thr.n_max_rps)
-    np.testing.assert_allclose(f, [thr.k_pos[0] * 100.0, -thr.f_max_neg[1], thr.f_max_pos[2],
-                                   thr.f_max_pos[3]])
+    np.testing.assert_allclose(
+        f, [thr.k_pos[0] * 100.0, -thr.f_max_neg[1], thr.f_max_pos[2], thr.f_max_pos[3]]
+    )
     mthr = MODEL.rov.thrusters
-    fm = thrusters.thrust_from_speed(np.array([-30.0, 30.0, 0.0, -30.0, 30.0]), mthr.k_pos,
-                                     mthr.k_neg, mthr.n_max_rps)
+    fm = thrusters.thrust_from_speed(
+        np.array([-30.0, 30.0, 0.0, -30.0, 30.0]), mthr.k_pos, mthr.k_neg, mthr.n_max_rps
+    )
     # Minerva: backward thrust is weaker than forward (K_b = 0.1909 vs K_fw = 0.4149), and two
     # surge thrusters at the limit backwards give the -200 N seen in the sea trial (MODEL_NOTES)
     assert fm[0] == pytest.approx(-0.1909 * 23.0**2)
@@ -186,14 +199,22 @@ def test_thrust_and_speed_invert_each_other_inside_the_rated_range(thr, fraction
     m = thr.n_max_rps.shape[0]
     n = fraction[:m] * thr.n_max_rps
     f = thrusters.thrust_from_speed(n, thr.k_pos, thr.k_neg, thr.n_max_rps)
-    np.testing.assert_allclose(thrusters.speed_from_thrust(f, thr.k_pos, thr.k_neg, thr.n_max_rps),
-                               n, rtol=0, atol=1e-12 * thr.n_max_rps.max())
+    np.testing.assert_allclose(
+        thrusters.speed_from_thrust(f, thr.k_pos, thr.k_neg, thr.n_max_rps),
+        n,
+        rtol=0,
+        atol=1e-12 * thr.n_max_rps.max(),
+    )
     force = np.where(fraction[:m] >= 0, fraction[:m] * thr.f_max_pos, fraction[:m] * thr.f_max_neg)
     back = thrusters.thrust_from_speed(
         thrusters.speed_from_thrust(force, thr.k_pos, thr.k_neg, thr.n_max_rps),
-        thr.k_pos, thr.k_neg, thr.n_max_rps)
-    np.testing.assert_allclose(back, force, rtol=0,
-                               atol=1e-12 * max(thr.f_max_pos.max(), thr.f_max_neg.max()))
+        thr.k_pos,
+        thr.k_neg,
+        thr.n_max_rps,
+    )
+    np.testing.assert_allclose(
+        back, force, rtol=0, atol=1e-12 * max(thr.f_max_pos.max(), thr.f_max_neg.max())
+    )
     # a thruster never pushes against the way its propeller turns
     assert np.all(np.sign(f) * np.sign(n) >= 0.0)
 

@@ -41,17 +41,44 @@ ROOT = Path(__file__).resolve().parents[1]
 JS_DIR = ROOT / "tests" / "js"
 RUN_S = 20.0
 NUMERIC_HZ, SCENE_HZ = 20.0, 5.0
-PLOT_TOPICS = ("/tree/state", "/rov/state", "/tree/estimate", "/reference", "/measurements",
-               "/control/forces", "/thrusters", "/control/terms", "/wire")
-FOXGLOVE = {"/tf": "foxglove.FrameTransforms", "/scene": "foxglove.SceneUpdate",
-            "/log": "foxglove.Log"}
-EVENTS = [(2.0, "leg", "leg 1: hold", {"leg": 1}), (7.5, "alarm", "compass frozen", {}),
-          (12.0, "gains", "kp x2", {"kp": [100.0, 100.0, 600.0]})]
+PLOT_TOPICS = (
+    "/tree/state",
+    "/rov/state",
+    "/tree/estimate",
+    "/reference",
+    "/measurements",
+    "/control/forces",
+    "/thrusters",
+    "/control/terms",
+    "/wire",
+)
+FOXGLOVE = {
+    "/tf": "foxglove.FrameTransforms",
+    "/scene": "foxglove.SceneUpdate",
+    "/log": "foxglove.Log",
+}
+EVENTS = [
+    (2.0, "leg", "leg 1: hold", {"leg": 1}),
+    (7.5, "alarm", "compass frozen", {}),
+    (12.0, "gains", "kp x2", {"kp": [100.0, 100.0, 600.0]}),
+]
 MISSION = "model-square-ekf-400"
 STARTED = datetime(2024, 5, 1, 12, 0, tzinfo=UTC)
-SESSION_KEYS = {"mission_name", "mission_toml", "seed", "settings", "gains", "params_name",
-                "label", "started_utc", "start_t_s", "dt_s", "crane_tip_n", "wire_length_m",
-                "docking_frame"}
+SESSION_KEYS = {
+    "mission_name",
+    "mission_toml",
+    "seed",
+    "settings",
+    "gains",
+    "params_name",
+    "label",
+    "started_utc",
+    "start_t_s",
+    "dt_s",
+    "crane_tip_n",
+    "wire_length_m",
+    "docking_frame",
+}
 
 
 def first_in_each_slot(t_s: np.ndarray, rate_hz: float) -> np.ndarray:
@@ -60,26 +87,44 @@ def first_in_each_slot(t_s: np.ndarray, rate_hz: float) -> np.ndarray:
     return np.unique(np.floor(t_s * rate_hz + 1e-9), return_index=True)[1]
 
 
-def record_run(path: Path, *, seed: int = 0, feedback: str = "perfect", seconds: float = RUN_S,
-               flush_interval_s: float = 0.5, with_events: bool = True) -> np.ndarray:
+def record_run(
+    path: Path,
+    *,
+    seed: int = 0,
+    feedback: str = "perfect",
+    seconds: float = RUN_S,
+    flush_interval_s: float = 0.5,
+    with_events: bool = True,
+) -> np.ndarray:
     """Record a real closed-loop run in 1 s calls; returns the full source log."""
     ps = params.load("model-scale")
-    sim = Simulation(ps, tree_depth_m=100.0, seed=seed,
-                     settings=ControlSettings(feedback=feedback))  # type: ignore[arg-type]
+    sim = Simulation(ps, tree_depth_m=100.0, seed=seed, settings=ControlSettings(feedback=feedback))  # type: ignore[arg-type]
     dock = DockingFrame(np.array([1.5, 1.0]), math.radians(20.0), 101.0)
-    meta = recording.session_metadata(sim, schema.load_mission(MISSION), seed=seed,
-                                      label="test", docking=dock, started_utc=STARTED)
+    meta = recording.session_metadata(
+        sim,
+        schema.load_mission(MISSION),
+        seed=seed,
+        label="test",
+        docking=dock,
+        started_utc=STARTED,
+    )
     pieces = []
-    with recording.SessionRecorder(path, metadata=meta, params=ps, n_thrusters=sim.n_thrusters,
-                                   flush_interval_s=flush_interval_s) as rec:
+    with recording.SessionRecorder(
+        path,
+        metadata=meta,
+        params=ps,
+        n_thrusters=sim.n_thrusters,
+        flush_interval_s=flush_interval_s,
+    ) as rec:
         pending = list(EVENTS) if with_events else []
         for k in range(int(seconds)):
             if k == 5:
                 sim.set_target(1.5, 1.2, math.radians(30.0))
             rows = sim.run_for(1.0)
             pieces.append(rows.data)
-            rec.write_log(rows, crane_tip_n=sim.crane_tip_n, wire_length_m=sim.wire_length_m,
-                          docking=dock)
+            rec.write_log(
+                rows, crane_tip_n=sim.crane_tip_n, wire_length_m=sim.wire_length_m, docking=dock
+            )
             while pending and pending[0][0] <= sim.t_s:
                 rec.event(*pending.pop(0))
     return np.vstack(pieces)
@@ -97,8 +142,7 @@ def mcap_messages(path: Path) -> tuple[dict, dict[str, list], dict[str, dict[str
         reader = make_reader(f)
         summary = reader.get_summary()
         assert summary is not None, "a closed file has a summary section"
-        channels = {c.topic: (c, summary.schemas[c.schema_id])
-                    for c in summary.channels.values()}
+        channels = {c.topic: (c, summary.schemas[c.schema_id]) for c in summary.channels.values()}
         msgs: dict[str, list] = {t: [] for t in channels}
         for _, channel, message in reader.iter_messages():
             msgs[channel.topic].append((message.log_time, json.loads(message.data)))
@@ -109,10 +153,16 @@ def mcap_messages(path: Path) -> tuple[dict, dict[str, list], dict[str, dict[str
 def node_read(path: Path) -> dict:
     node = shutil.which("node")
     if node is None or not (JS_DIR / "node_modules" / "@mcap" / "core").is_dir():
-        pytest.fail("the JavaScript reader needs node and `npm ci` in tests/js "
-                    "(scripts/test.sh does it)")
-    proc = subprocess.run([node, str(JS_DIR / "read_mcap.mjs"), str(path)], capture_output=True,
-                          text=True, timeout=60, cwd=ROOT)
+        pytest.fail(
+            "the JavaScript reader needs node and `npm ci` in tests/js (scripts/test.sh does it)"
+        )
+    proc = subprocess.run(
+        [node, str(JS_DIR / "read_mcap.mjs"), str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=ROOT,
+    )
     assert proc.returncode == 0, proc.stderr
     return json.loads(proc.stdout)
 
@@ -145,7 +195,8 @@ def test_plot_fields_read_their_block_by_name():
     assert plots["/rov/state"]["down_m"] == value["rov_down_m"]
     assert plots["/tree/estimate"]["bias_yaw_newton_m"] == value["bias_yaw_newton_m"]
     assert plots["/reference"]["error_yaw_deg"] == pytest.approx(
-        math.degrees(value["tree_yaw_rad"] - value["ref_yaw_rad"]), rel=1e-12)
+        math.degrees(value["tree_yaw_rad"] - value["ref_yaw_rad"]), rel=1e-12
+    )
     assert plots["/measurements"]["heading_deg"] == math.degrees(value["y_heading_rad"])
     assert plots["/measurements"]["accepted_gyro"] == value["accepted_gyro"]
     assert plots["/control/forces"]["rov_ach_pitch_newton_m"] == value["tau_rov_ach_pitch_newton_m"]
@@ -164,8 +215,11 @@ def test_attachment_point_is_above_the_centre_in_body_axes():
     np.testing.assert_allclose(attachment_point_n(eta, 2.5), [3.0, -2.0, 97.5])
     tilted = np.array([0.0, 0.0, 100.0, 0.0, math.radians(10.0), 0.0])
     p = attachment_point_n(tilted, 2.0)  # nose up: the top leans aft (south)
-    np.testing.assert_allclose(p, [-2.0 * math.sin(math.radians(10.0)), 0.0,
-                                   100.0 - 2.0 * math.cos(math.radians(10.0))], atol=1e-12)
+    np.testing.assert_allclose(
+        p,
+        [-2.0 * math.sin(math.radians(10.0)), 0.0, 100.0 - 2.0 * math.cos(math.radians(10.0))],
+        atol=1e-12,
+    )
 
 
 def test_rov_is_drawn_about_minervas_size():
@@ -186,8 +240,13 @@ def test_mcap_reader_sees_every_channel_at_its_rate(session):
     n_scene = len(first_in_each_slot(block(source, "t_s"), SCENE_HZ))
     # rows at 0.01 .. 20.00 s: slot 0 (t < 0.05 s) and slots 1 .. 400
     assert n_numeric == RUN_S * NUMERIC_HZ + 1 and n_scene == RUN_S * SCENE_HZ + 1
-    expected = {"/session/log": n_numeric, "/tf": n_numeric, "/scene": n_scene,
-                "/events": len(EVENTS), "/log": len(EVENTS)}
+    expected = {
+        "/session/log": n_numeric,
+        "/tf": n_numeric,
+        "/scene": n_scene,
+        "/events": len(EVENTS),
+        "/log": len(EVENTS),
+    }
     expected |= dict.fromkeys(PLOT_TOPICS, n_numeric)
     assert {t: len(m) for t, m in msgs.items()} == expected
     for topic, name in FOXGLOVE.items():
@@ -196,8 +255,13 @@ def test_mcap_reader_sees_every_channel_at_its_rate(session):
         assert json.loads(sch.data)["title"] == name
     tf_schema = json.loads(channels["/tf"][1].data)
     item = tf_schema["properties"]["transforms"]["items"]["properties"]
-    assert set(item) == {"timestamp", "parent_frame_id", "child_frame_id", "translation",
-                         "rotation"}
+    assert set(item) == {
+        "timestamp",
+        "parent_frame_id",
+        "child_frame_id",
+        "translation",
+        "rotation",
+    }
     thr = msgs["/thrusters"][0][1]
     assert "thruster5_utilisation" in thr and "thruster6_force_newton" not in thr  # Minerva: 5
 
@@ -219,8 +283,11 @@ def test_messages_carry_the_rows_in_foxglove_frames(session):
     assert last_eta[5] > 0.1 and last_eta[4] < -0.005  # turned and pitched: a rotation to check
     last = {x["child_frame_id"]: x["rotation"] for x in msgs["/tf"][-1][1]["transforms"]}
     q = last["tree"]  # Foxglove's {x, y, z, w}, as scipy reads it
-    np.testing.assert_allclose(Rotation.from_quat([q["x"], q["y"], q["z"], q["w"]]).as_matrix(),
-                               Rzyx(*last_eta[3:6]), atol=1e-12)
+    np.testing.assert_allclose(
+        Rotation.from_quat([q["x"], q["y"], q["z"], q["w"]]).as_matrix(),
+        Rzyx(*last_eta[3:6]),
+        atol=1e-12,
+    )
     state = msgs["/tree/state"][k][1]
     assert state["yaw_deg"] == pytest.approx(math.degrees(tree_eta[5]), rel=1e-12)
     reference = msgs["/reference"][k][1]
@@ -307,8 +374,11 @@ def test_metadata_holds_the_setup(session):
     assert setup["settings"]["feedback"] == "perfect"
     assert setup["started_utc"] == STARTED.isoformat() and setup["start_t_s"] == 0.0
     assert setup["crane_tip_n"] == [1.0, 1.0, 0.0]
-    assert setup["docking_frame"] == {"center_n": [1.5, 1.0], "heading_rad": math.radians(20.0),
-                                      "landing_depth_m": 101.0}
+    assert setup["docking_frame"] == {
+        "center_n": [1.5, 1.0],
+        "heading_rad": math.radians(20.0),
+        "landing_depth_m": 101.0,
+    }
     assert setup["recorder"]["software_version"] == recording.software_version()
     assert setup["recorder"]["numeric_rate_hz"] == NUMERIC_HZ
     assert setup["recorder"]["format_version"] == recording.FORMAT_VERSION == 2
@@ -339,21 +409,55 @@ def columns_before_control_columns() -> list[str]:
     pose = ("north_m", "east_m", "down_m", "roll_rad", "pitch_rad", "yaw_rad")
     axes3 = ("surge_n", "sway_n", "yaw_nm")
     axes6 = ("surge_n", "sway_n", "heave_n", "roll_nm", "pitch_nm", "yaw_nm")
-    held = ("pos_north_m", "pos_east_m", "pos_down_m", "depth_m", "heading_rad", "dvl_u_mps",
-            "dvl_v_mps", "dvl_w_mps", "gyro_p_rad_s", "gyro_q_rad_s", "gyro_r_rad_s")
+    held = (
+        "pos_north_m",
+        "pos_east_m",
+        "pos_down_m",
+        "depth_m",
+        "heading_rad",
+        "dvl_u_mps",
+        "dvl_v_mps",
+        "dvl_w_mps",
+        "gyro_p_rad_s",
+        "gyro_q_rad_s",
+        "gyro_r_rad_s",
+    )
     thr = range(1, 9)
-    return ["t_s", *(f"tree_{n}" for n in pose), *(f"rov_{n}" for n in pose),
-            "est_tree_north_m", "est_tree_east_m", "est_tree_yaw_rad", "est_tree_u_mps",
-            "est_tree_v_mps", "est_tree_r_rad_s", *(f"bias_{n}" for n in axes3),
-            "ref_north_m", "ref_east_m", "ref_yaw_rad", "ref_north_rate_mps",
-            "ref_east_rate_mps", "ref_yaw_rate_rad_s", *(f"tau_tree_{n}" for n in axes3),
-            *(f"tau_rov_cmd_{n}" for n in axes6), *(f"tau_rov_ach_{n}" for n in axes6),
-            *(f"thruster{i}_force_n" for i in thr), *(f"thruster{i}_speed_rps" for i in thr),
-            *(f"thruster{i}_utilisation" for i in thr),
-            *(f"term_{p}_{a}" for p in ("p", "i", "d", "ff") for a in axes3),
-            *(f"y_{n}" for n in held), "mode", "nis_north", "nis_east", "nis_heading",
-            *(f"accepted_{s}" for s in ("position", "depth", "compass", "dvl", "gyro")),
-            "crane_tip_north_m", "crane_tip_east_m", "wire_rest_length_m", "wire_tension_n"]
+    return [
+        "t_s",
+        *(f"tree_{n}" for n in pose),
+        *(f"rov_{n}" for n in pose),
+        "est_tree_north_m",
+        "est_tree_east_m",
+        "est_tree_yaw_rad",
+        "est_tree_u_mps",
+        "est_tree_v_mps",
+        "est_tree_r_rad_s",
+        *(f"bias_{n}" for n in axes3),
+        "ref_north_m",
+        "ref_east_m",
+        "ref_yaw_rad",
+        "ref_north_rate_mps",
+        "ref_east_rate_mps",
+        "ref_yaw_rate_rad_s",
+        *(f"tau_tree_{n}" for n in axes3),
+        *(f"tau_rov_cmd_{n}" for n in axes6),
+        *(f"tau_rov_ach_{n}" for n in axes6),
+        *(f"thruster{i}_force_n" for i in thr),
+        *(f"thruster{i}_speed_rps" for i in thr),
+        *(f"thruster{i}_utilisation" for i in thr),
+        *(f"term_{p}_{a}" for p in ("p", "i", "d", "ff") for a in axes3),
+        *(f"y_{n}" for n in held),
+        "mode",
+        "nis_north",
+        "nis_east",
+        "nis_heading",
+        *(f"accepted_{s}" for s in ("position", "depth", "compass", "dvl", "gyro")),
+        "crane_tip_north_m",
+        "crane_tip_east_m",
+        "wire_rest_length_m",
+        "wire_tension_n",
+    ]
 
 
 def write_session_by_hand(path: Path, columns: list[str], rows: np.ndarray, setup: dict) -> None:
@@ -362,13 +466,19 @@ def write_session_by_hand(path: Path, columns: list[str], rows: np.ndarray, setu
         w = Writer(f)
         w.start(profile="", library="rov-console 0.1")
         sid = w.register_schema("rov_console.SessionLogRow", "jsonschema", b"{}")
-        cid = w.register_channel("/session/log", "json", sid,
-                                 {"kind": "table", "columns": json.dumps(columns)})
+        cid = w.register_channel(
+            "/session/log", "json", sid, {"kind": "table", "columns": json.dumps(columns)}
+        )
         w.add_metadata("setup", {k: json.dumps(v) for k, v in setup.items()})
         for i, row in enumerate(rows):
             t_ns = round(row[0] * 1e9)
-            w.add_message(cid, log_time=t_ns, publish_time=t_ns, sequence=i,
-                          data=json.dumps({"t_s": row[0], "row": row.tolist()}).encode())
+            w.add_message(
+                cid,
+                log_time=t_ns,
+                publish_time=t_ns,
+                sequence=i,
+                data=json.dumps({"t_s": row[0], "row": row.tolist()}).encode(),
+            )
         w.finish()
 
 
@@ -380,17 +490,22 @@ def test_recordings_of_an_older_layout_are_read_by_block_name(tmp_path):
     rows = np.arange(3.0 * len(columns)).reshape(3, len(columns)) + 0.5
     rows[:, 0] = [0.05, 0.10, 0.15]
     path = tmp_path / "old.mcap"
-    write_session_by_hand(path, columns, rows, {"columns": columns, "mission": "harbour test",
-                                                "recorder": {"n_thrusters": 5}})
+    write_session_by_hand(
+        path,
+        columns,
+        rows,
+        {"columns": columns, "mission": "harbour test", "recorder": {"n_thrusters": 5}},
+    )
     data = recording.load_session(path)
     assert data.complete and data.columns == columns
     assert np.array_equal(data.t_s, [0.05, 0.10, 0.15])
     assert np.array_equal(data.log["tree_eta_n"], rows[:, 1:7])
     bias = columns.index("bias_surge_n")
-    assert np.array_equal(data.log["bias_tree"], rows[:, bias:bias + 3])
+    assert np.array_equal(data.log["bias_tree"], rows[:, bias : bias + 3])
     assert np.array_equal(data.log["wire_tension"], rows[:, -1])
-    assert np.array_equal(data.log["thruster_force"],
-                          rows[:, columns.index("thruster1_force_n"):][:, :5])
+    assert np.array_equal(
+        data.log["thruster_force"], rows[:, columns.index("thruster1_force_n") :][:, :5]
+    )
     with pytest.raises(KeyError, match="rov_nu_b"):
         data.log["rov_nu_b"]  # that file has no velocities
     assert recording.recorded_mission_name(data.metadata) == "harbour test"
@@ -408,11 +523,15 @@ def test_run_and_console_recordings_share_one_metadata_layout(tmp_path):
     assert meta["seed"] == spec.setup.seed and meta["mission_name"] == spec.name
     assert meta["params_name"] == "model-scale" and meta["docking_frame"] is None
     assert recording.recorded_docking_frame(meta) is None
-    assert recording.session_metadata(sim, spec, seed=spec.setup.seed + 7)["seed"] == \
-        spec.setup.seed + 7
+    assert (
+        recording.session_metadata(sim, spec, seed=spec.setup.seed + 7)["seed"]
+        == spec.setup.seed + 7
+    )
     toml = schema.dump_mission(spec)
-    older = [{"mission": toml, "mission_name": spec.name},
-             {"mission": spec.name, "mission_toml": toml}]
+    older = [
+        {"mission": toml, "mission_name": spec.name},
+        {"mission": spec.name, "mission_toml": toml},
+    ]
     for m in (meta, *older):
         assert recording.recorded_mission_name(m, "?") == spec.name
         text = recording.recorded_mission_toml(m)
@@ -439,19 +558,21 @@ def test_truncated_file_is_read_up_to_the_cut_by_both_readers(session, tmp_path)
     whole = path.read_bytes()
     full = recording.load_session(path)
     cut = tmp_path / "cut.mcap"
-    cut.write_bytes(whole[:int(0.6 * len(whole))])
+    cut.write_bytes(whole[: int(0.6 * len(whole))])
     data = recording.load_session(cut)
     assert not data.complete and "cut off" in data.problem
     assert 0 < len(data.rows) < len(full.rows)
-    assert np.array_equal(data.rows, full.rows[:len(data.rows)])
+    assert np.array_equal(data.rows, full.rows[: len(data.rows)])
     assert data.metadata == full.metadata
     report = recording.check_session(cut)
     assert report["status"] == "truncated"
     assert report["intact_bytes"] < report["file_bytes"] == len(whole) * 6 // 10
     js = node_read(cut)
     assert js["reader"] == "stream" and js["complete"] is False
-    assert js["counts"] == data.message_counts | {"/events": data.message_counts.get(
-        "/events", 0), "/log": data.message_counts.get("/log", 0)}
+    assert js["counts"] == data.message_counts | {
+        "/events": data.message_counts.get("/events", 0),
+        "/log": data.message_counts.get("/log", 0),
+    }
     assert path.read_bytes() == whole  # reading changed nothing
     assert recording.load_session(path).complete
 
@@ -461,17 +582,18 @@ def test_damaged_chunk_stops_the_read_before_it(session, tmp_path):
     whole = bytearray(path.read_bytes())
     full = recording.load_session(path)
     middle = len(whole) // 2
-    whole[middle:middle + 64] = bytes(64)
+    whole[middle : middle + 64] = bytes(64)
     bad = tmp_path / "bad.mcap"
     bad.write_bytes(bytes(whole))
     data = recording.load_session(bad)
     assert not data.complete and "damaged" in data.problem
     assert 0 < len(data.rows) < len(full.rows)
-    assert np.array_equal(data.rows, full.rows[:len(data.rows)])
+    assert np.array_equal(data.rows, full.rows[: len(data.rows)])
 
 
-@pytest.mark.parametrize("content", [b"", b"this is not a log\n", bytes(100),
-                                     recording.MCAP_MAGIC + b"\x01\x05"])
+@pytest.mark.parametrize(
+    "content", [b"", b"this is not a log\n", bytes(100), recording.MCAP_MAGIC + b"\x01\x05"]
+)
 def test_non_mcap_input_is_a_clear_error(tmp_path, content):
     bad = tmp_path / "bad.mcap"
     bad.write_bytes(content)
@@ -508,8 +630,13 @@ def test_sigkill_loses_less_than_one_second(tmp_path):
     """Kill a real recording process; the file must hold what the child had handed to the
     recorder one second (wall time) before the kill."""
     path = tmp_path / "killed.mcap"
-    child = subprocess.Popen([sys.executable, "-c", CHILD, str(path)], cwd=ROOT,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    child = subprocess.Popen(
+        [sys.executable, "-c", CHILD, str(path)],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     lines: list[tuple[float, float]] = []
 
     def read() -> None:
@@ -537,10 +664,11 @@ def test_sigkill_loses_less_than_one_second(tmp_path):
     handed_over_1s_before = max(sim for wall, sim in lines if wall <= t_kill - 1.0)
     assert data.t_s[-1] >= handed_over_1s_before - 1e-9
     # rows the child handed over but was killed before reporting count as written at the kill
-    written_at = min((wall for wall, sim in lines if sim >= data.t_s[-1] - 1e-9),
-                     default=t_kill)
-    print(f"SIGKILL: last row {data.t_s[-1]:.2f} s of {lines[-1][1]:.2f} s simulated, "
-          f"handed over {t_kill - written_at:.2f} s of wall time before the kill")
+    written_at = min((wall for wall, sim in lines if sim >= data.t_s[-1] - 1e-9), default=t_kill)
+    print(
+        f"SIGKILL: last row {data.t_s[-1]:.2f} s of {lines[-1][1]:.2f} s simulated, "
+        f"handed over {t_kill - written_at:.2f} s of wall time before the kill"
+    )
     assert np.all(np.diff(data.t_s) > 0)
 
 
@@ -561,8 +689,9 @@ def test_flush_inside_calls_follows_the_wall_clock(tmp_path, monkeypatch):
     sim = Simulation(ps, tree_depth_m=100.0)
     clock = FakeClock()
     path = tmp_path / "clock.mcap"
-    with recording.SessionRecorder(path, metadata={}, params=ps, n_thrusters=5,
-                                   flush_interval_s=0.5, clock=clock) as rec:
+    with recording.SessionRecorder(
+        path, metadata={}, params=ps, n_thrusters=5, flush_interval_s=0.5, clock=clock
+    ) as rec:
         rec.write_log(sim.run_for(1.0).data)
         clock.now = 0.4
         rec.write_log(sim.run_for(1.0).data)
@@ -585,8 +714,9 @@ def test_idle_recorder_flushes_from_its_thread(tmp_path):
     sim = Simulation(ps, tree_depth_m=100.0)
     clock = FakeClock()
     path = tmp_path / "idle.mcap"
-    rec = recording.SessionRecorder(path, metadata={}, params=ps, n_thrusters=5,
-                                    flush_interval_s=0.5, clock=clock)
+    rec = recording.SessionRecorder(
+        path, metadata={}, params=ps, n_thrusters=5, flush_interval_s=0.5, clock=clock
+    )
     try:
         rec.write_log(sim.run_for(1.0).data)
         time.sleep(0.3)
@@ -612,14 +742,17 @@ def test_recorder_refuses_bad_input_and_existing_files(tmp_path):
         recording.SessionRecorder(old, metadata={}, params=ps, n_thrusters=5)
     assert old.read_bytes() == b"an earlier session"
     with pytest.raises(ValueError, match="written by the recorder"):
-        recording.SessionRecorder(tmp_path / "a.mcap", metadata={"params": {}}, params=ps,
-                                  n_thrusters=5)
+        recording.SessionRecorder(
+            tmp_path / "a.mcap", metadata={"params": {}}, params=ps, n_thrusters=5
+        )
     same = {"params": ps.spec.model_dump(mode="json")}  # the recorder's own value is accepted
-    recording.SessionRecorder(tmp_path / "same.mcap", metadata=same, params=ps,
-                              n_thrusters=5).close()
+    recording.SessionRecorder(
+        tmp_path / "same.mcap", metadata=same, params=ps, n_thrusters=5
+    ).close()
     dock = DockingFrame(np.array([0.0, 0.0]), 0.0, 101.0)
-    with recording.SessionRecorder(tmp_path / "b.mcap", metadata={}, params=ps,
-                                   n_thrusters=5, docking=dock) as rec:
+    with recording.SessionRecorder(
+        tmp_path / "b.mcap", metadata={}, params=ps, n_thrusters=5, docking=dock
+    ) as rec:
         with pytest.raises(ValueError, match="shape"):
             rec.write_log(np.zeros((3, N_LOG - 1)))
         reordered = Layout.from_names(list(reversed(COLUMN_NAMES)))
@@ -637,7 +770,7 @@ def test_recorder_refuses_bad_input_and_existing_files(tmp_path):
     assert math.isnan(data.log["nis"][1, 0]) and data.log["nis"][0, 0] == 0.0
     assert not np.isnan(data.log["nis"][1, 1:]).any()
     _, msgs, _ = mcap_messages(tmp_path / "b.mcap")
-    (_, scene), = msgs["/scene"]
+    ((_, scene),) = msgs["/scene"]
     assert "docking_frame" in {e["id"] for e in scene["entities"]}
     assert msgs["/wire"] == []  # no crane tip given: no wire
 
@@ -648,6 +781,7 @@ def test_recorder_refuses_bad_input_and_existing_files(tmp_path):
 def test_same_seed_gives_the_same_log_contents(tmp_path):
     """Same seeded EKF run, recorded twice with different flush timing: every message is the
     same. Another seed gives other contents (the comparison can fail)."""
+
     def contents(path: Path) -> list:
         _, msgs, meta = mcap_messages(path)
         setup = {k: json.loads(v) for k, v in meta["setup"].items()}
@@ -673,7 +807,7 @@ def test_log_check_exit_codes_and_json(session, tmp_path):
     assert ok.exit_code == 0, ok.output
     assert "COMPLETE" in ok.output and "/scene" in ok.output
     cut = tmp_path / "cut.mcap"
-    cut.write_bytes(path.read_bytes()[:path.stat().st_size // 3])
+    cut.write_bytes(path.read_bytes()[: path.stat().st_size // 3])
     res = runner.invoke(log_app, ["check", str(cut), "--json"])
     assert res.exit_code == 1
     report = json.loads(res.output)
@@ -694,8 +828,9 @@ def test_log_export_csv_matches_the_rows(session, tmp_path):
     with (out / "tree_state.csv").open() as f:
         tree = list(csv.DictReader(f))
     assert len(tree) == len(data.rows)
-    np.testing.assert_allclose([float(r["yaw_deg"]) for r in tree],
-                               np.degrees(data.log["tree_eta_n"][:, 5]), rtol=1e-12)
+    np.testing.assert_allclose(
+        [float(r["yaw_deg"]) for r in tree], np.degrees(data.log["tree_eta_n"][:, 5]), rtol=1e-12
+    )
     assert [float(r["t_s"]) for r in tree] == data.t_s.tolist()
     with (out / "events.csv").open() as f:
         assert [r["kind"] for r in csv.DictReader(f)] == [e[1] for e in EVENTS]

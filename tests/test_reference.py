@@ -88,8 +88,9 @@ def at_rest(pose: ArrayLike) -> FloatArray:
     return state
 
 
-def run_reference(params: Params, targets: ArrayLike, dt: float,
-                  start: FloatArray | None = None) -> Run:
+def run_reference(
+    params: Params, targets: ArrayLike, dt: float, start: FloatArray | None = None
+) -> Run:
     """Step the compiled model over ``targets`` (N, 3), one target per step, from ``start``
     (default: at rest at the origin)."""
     kind, p = packed(params)
@@ -104,8 +105,9 @@ def run_reference(params: Params, targets: ArrayLike, dt: float,
     return Run(time_s, states[:, 0:3], states[:, 3:6], states[:, 6:9])
 
 
-def step_response(params: Params, target: ArrayLike, dt: float, n_steps: int,
-                  start: FloatArray | None = None) -> Run:
+def step_response(
+    params: Params, target: ArrayLike, dt: float, n_steps: int, start: FloatArray | None = None
+) -> Run:
     """``n_steps`` steps of ``dt`` towards a constant ``target`` (3,)."""
     return run_reference(params, np.tile(np.asarray(target, float), (n_steps, 1)), dt, start)
 
@@ -124,8 +126,13 @@ HEADING_MODELS = [
 def test_heading_stays_continuous_across_pi(params: Params) -> None:
     # From 170 deg to -170 deg the short way is +20 deg: Simulation.set_target makes the
     # target 190 deg, and psi_d goes there without being wrapped.
-    run = step_response(params, [0.0, 0.0, math.radians(190)], 0.05, 1200,
-                        start=at_rest([0.0, 0.0, math.radians(170)]))
+    run = step_response(
+        params,
+        [0.0, 0.0, math.radians(190)],
+        0.05,
+        1200,
+        start=at_rest([0.0, 0.0, math.radians(170)]),
+    )
     psi = run.eta_d[:, PSI]
     assert psi[-1] == pytest.approx(math.radians(190), abs=1e-6)
     assert np.all(np.diff(psi) >= -ROUNDOFF)
@@ -135,8 +142,9 @@ def test_heading_stays_continuous_across_pi(params: Params) -> None:
 def test_full_circle_target_turns_a_full_circle_and_back(params: Params) -> None:
     psi0 = 0.3
     n_steps = 3000  # 150 s: 360 deg at 5 deg/s is 72 s, plus accel, decel and settling
-    run = step_response(params, [1.0, 1.0, psi0 + 2 * PI], 0.05, n_steps,
-                        start=at_rest([1.0, 1.0, psi0]))
+    run = step_response(
+        params, [1.0, 1.0, psi0 + 2 * PI], 0.05, n_steps, start=at_rest([1.0, 1.0, psi0])
+    )
     psi = run.eta_d[:, PSI]
     assert psi[-1] == pytest.approx(psi0 + 2 * PI, abs=1e-6)
     assert np.all(np.diff(psi) >= -ROUNDOFF)
@@ -380,16 +388,26 @@ def test_third_order_two_metre_step_takes_cruise_plus_ramps() -> None:
     assert cruising.sum() * dt > 28.0
 
 
-def _third_order_ramp(params: ThirdOrderParams, targets: FloatArray, rates: FloatArray,
-                      dt: float) -> tuple[FloatArray, FloatArray]:
+def _third_order_ramp(
+    params: ThirdOrderParams, targets: FloatArray, rates: FloatArray, dt: float
+) -> tuple[FloatArray, FloatArray]:
     """Final pose and velocity (3,) of the third-order kernel following ``targets`` (N, 3) with
     the target rate ``rates`` (3,) fed forward (the kernel's ``vel_ff``; the control loop
     passes zero)."""
     pose, vel, acc = np.zeros(3), np.zeros(3), np.zeros(3)
     for target in targets:
-        delta, vel, acc = third_order_kernel(target - pose, vel, acc, rates, params.k_pos,
-                                             params.k_vel, params.k_acc, params.max_speed,
-                                             params.max_accel, dt)
+        delta, vel, acc = third_order_kernel(
+            target - pose,
+            vel,
+            acc,
+            rates,
+            params.k_pos,
+            params.k_vel,
+            params.k_acc,
+            params.max_speed,
+            params.max_accel,
+            dt,
+        )
         pose = pose + delta
     return pose, vel
 
@@ -452,8 +470,11 @@ def test_packed_params_are_the_loop_gains_and_limits() -> None:
     np.testing.assert_allclose(first[:, 0], [0.2, 0.0, 0.0, 0.05, 0.0], rtol=1e-15)
 
 
-@pytest.mark.parametrize("params", [FirstOrderParams(**GOOD_FIRST), ThirdOrderParams(**GOOD_THIRD)],
-                         ids=["first", "third"])
+@pytest.mark.parametrize(
+    "params",
+    [FirstOrderParams(**GOOD_FIRST), ThirdOrderParams(**GOOD_THIRD)],
+    ids=["first", "third"],
+)
 def test_step_does_not_change_its_arguments_and_is_deterministic(params: Params) -> None:
     kind, p = packed(params)
     state = np.array([0.1, 0.2, 0.3, 0.01, 0.0, -0.01, 0.001, 0.0, 0.0])
@@ -474,10 +495,22 @@ def test_compiled_kernels_do_the_numpy_arithmetic() -> None:
     error = np.array([2.0, -0.01, 0.3])
     first_args = (error, np.full(3, 5.0), np.full(3, 0.05), 0.01)
     params = ThirdOrderParams(**GOOD_THIRD)
-    third_args = (error, np.full(3, 0.01), np.full(3, -0.001), np.zeros(3), params.k_pos,
-                  params.k_vel, params.k_acc, params.max_speed, params.max_accel, 0.01)
-    pairs = ((refkernel._first_kernel, first_order_kernel, first_args),
-             (refkernel._third_kernel, third_order_kernel, third_args))
+    third_args = (
+        error,
+        np.full(3, 0.01),
+        np.full(3, -0.001),
+        np.zeros(3),
+        params.k_pos,
+        params.k_vel,
+        params.k_acc,
+        params.max_speed,
+        params.max_accel,
+        0.01,
+    )
+    pairs = (
+        (refkernel._first_kernel, first_order_kernel, first_args),
+        (refkernel._third_kernel, third_order_kernel, third_args),
+    )
     for jitted, plain, args in pairs:
         for a, b in zip(jitted(*args), plain(*args), strict=True):
             np.testing.assert_allclose(a, b, rtol=1e-14, atol=1e-15)

@@ -87,9 +87,19 @@ def test_impossible_step_loses_heading_with_pinv_and_holds_it_with_priority():
     assert err(pinv).max() > 30.0
 
 
-@pytest.mark.parametrize("name", ["model-mass-m50", "model-mass-m20", "model-mass-p20",
-                                  "model-mass-p50", "model-weight-m50", "model-weight-m20",
-                                  "model-weight-p20", "model-weight-p50"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "model-mass-m50",
+        "model-mass-m20",
+        "model-mass-p20",
+        "model-mass-p50",
+        "model-weight-m50",
+        "model-weight-m20",
+        "model-weight-p20",
+        "model-weight-p50",
+    ],
+)
 def test_robust_to_tree_mass_and_weight_errors(name):
     """Issue 3 / thesis table 4.2: stable, RMS north and east under 0.15 m."""
     r = run(name)

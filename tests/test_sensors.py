@@ -11,7 +11,8 @@ MODEL = params.load("model-scale")
 
 def test_rate_must_divide_the_plant_rate():
     spec = MODEL.spec.sensors.model_copy(
-        update=dict(position=MODEL.spec.sensors.position.model_copy(update=dict(rate_hz=3.0))))
+        update=dict(position=MODEL.spec.sensors.position.model_copy(update=dict(rate_hz=3.0)))
+    )
     with pytest.raises(ValueError, match=r"sensors.position.rate_hz = 3.0 Hz must divide"):
         sensors.sensor_config(spec, 0.01)
 

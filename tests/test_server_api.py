@@ -21,8 +21,9 @@ MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 @pytest.fixture(scope="module")
 def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
-    settings = ConsoleSettings(view=False, token=TOKEN, speed=5.0,
-                               recordings_dir=tmp_path_factory.mktemp("recordings"))
+    settings = ConsoleSettings(
+        view=False, token=TOKEN, speed=5.0, recordings_dir=tmp_path_factory.mktemp("recordings")
+    )
     with TestClient(create_app(settings)) as c:
         yield c
 
@@ -66,10 +67,20 @@ def test_two_apps_share_nothing(tmp_path: Path) -> None:
 
 def test_openapi_lists_one_router_per_resource(client: TestClient) -> None:
     spec = client.get("/openapi.json").json()
-    tags = {tag for path in spec["paths"].values() for op in path.values()
-            for tag in op.get("tags", [])}
-    assert {"health", "state", "run", "missions", "gains", "control", "environment",
-            "recordings", "replay"} <= tags
+    tags = {
+        tag for path in spec["paths"].values() for op in path.values() for tag in op.get("tags", [])
+    }
+    assert {
+        "health",
+        "state",
+        "run",
+        "missions",
+        "gains",
+        "control",
+        "environment",
+        "recordings",
+        "replay",
+    } <= tags
     assert "/api/state" in spec["paths"] and "/api/gains" in spec["paths"]
 
 
@@ -79,12 +90,23 @@ def test_health_and_state_need_no_token(client: TestClient) -> None:
     assert h["status"] == "ok" and h["loop_running"] is True
     s = state(client)
     assert s["source"] == "live" and s["mode"] == "tree"
-    assert set(s["tree_eta_n"]) == {"north_m", "east_m", "down_m", "roll_deg", "pitch_deg",
-                                    "heading_deg"}
+    assert set(s["tree_eta_n"]) == {
+        "north_m",
+        "east_m",
+        "down_m",
+        "roll_deg",
+        "pitch_deg",
+        "heading_deg",
+    }
     assert s["tree_eta_n"]["down_m"] == pytest.approx(400.0, abs=1.0)
     assert s["mission"]["state"] in ("idle", "completed", "aborted")
     assert len(s["thrusters"]) == 4 and {a["name"] for a in s["alarms"]} >= {
-        "saturation", "position_error", "wire_slack", "innovation", "dropout"}
+        "saturation",
+        "position_error",
+        "wire_slack",
+        "innovation",
+        "dropout",
+    }
     t0 = s["t_s"]
     wait_for(lambda: state(client)["t_s"] > t0, what="time to advance")
 
@@ -113,11 +135,17 @@ def test_pause_step_resume_and_speed(client: TestClient) -> None:
     assert r.status_code == 409 and "pause" in detail(r)
 
 
-@pytest.mark.parametrize("body, field", [({"speed": 0.1}, "speed"), ({"speed": 51}, "speed"),
-                                         ({"speed": "fast"}, "speed"), ({}, "speed"),
-                                         ({"speed": 1, "extra": 1}, "extra")])
-def test_bad_speed_is_refused_naming_the_field(client: TestClient, body: dict,
-                                               field: str) -> None:
+@pytest.mark.parametrize(
+    "body, field",
+    [
+        ({"speed": 0.1}, "speed"),
+        ({"speed": 51}, "speed"),
+        ({"speed": "fast"}, "speed"),
+        ({}, "speed"),
+        ({"speed": 1, "extra": 1}, "extra"),
+    ],
+)
+def test_bad_speed_is_refused_naming_the_field(client: TestClient, body: dict, field: str) -> None:
     r = client.put("/api/run/speed", json=body, headers=AUTH)
     assert r.status_code == 422 and field in detail(r)
 
@@ -131,8 +159,9 @@ def test_step_bounds(client: TestClient) -> None:
 def test_reset_builds_a_new_setup_and_refuses_unknown_params(client: TestClient) -> None:
     r = client.post("/api/run/reset", json={"params": "../../etc/passwd"}, headers=AUTH)
     assert r.status_code == 422 and "params" in detail(r)
-    r = client.post("/api/run/reset", json={"params": "model-scale", "depth_m": 100.0},
-                    headers=AUTH)
+    r = client.post(
+        "/api/run/reset", json={"params": "model-scale", "depth_m": 100.0}, headers=AUTH
+    )
     assert r.status_code == 200
     wait_for(lambda: len(state(client)["thrusters"]) == 5, what="model-scale ROV (5 thrusters)")
     assert state(client)["tree_eta_n"]["down_m"] == pytest.approx(100.0, abs=1.0)
@@ -145,19 +174,30 @@ def test_reset_builds_a_new_setup_and_refuses_unknown_params(client: TestClient)
 def test_gains_read_set_and_read_back(client: TestClient) -> None:
     before = client.get("/api/gains").json()
     assert before["kp"] == [2000.0, 2000.0, 2000.0]
-    new = {"kp": [2500.0, 2400.0, 2300.0], "ki": [150.0, 150.0, 70.0],
-           "kd": [9000.0, 9000.0, 40000.0]}
+    new = {
+        "kp": [2500.0, 2400.0, 2300.0],
+        "ki": [150.0, 150.0, 70.0],
+        "kd": [9000.0, 9000.0, 40000.0],
+    }
     r = client.put("/api/gains", json=new, headers=AUTH)
     assert r.status_code == 200 and r.json()["kp"] == new["kp"]
     wait_for(lambda: client.get("/api/gains").json()["kd"] == new["kd"], what="gains")
     client.put("/api/gains", json={k: before[k] for k in ("kp", "ki", "kd")}, headers=AUTH)
 
 
-@pytest.mark.parametrize("change, field", [
-    ({"kp": [1.0, 2.0, -3.0]}, "kp"), ({"ki": [0.0, 0.0, 2.0e6]}, "ki"),
-    ({"kd": [1.0, 2.0]}, "kd"), ({"kp": [1.0, "x", 3.0]}, "kp"), ({"kp": None}, "kp")])
-def test_bad_gains_are_refused_naming_the_field(client: TestClient, change: dict,
-                                                field: str) -> None:
+@pytest.mark.parametrize(
+    "change, field",
+    [
+        ({"kp": [1.0, 2.0, -3.0]}, "kp"),
+        ({"ki": [0.0, 0.0, 2.0e6]}, "ki"),
+        ({"kd": [1.0, 2.0]}, "kd"),
+        ({"kp": [1.0, "x", 3.0]}, "kp"),
+        ({"kp": None}, "kp"),
+    ],
+)
+def test_bad_gains_are_refused_naming_the_field(
+    client: TestClient, change: dict, field: str
+) -> None:
     body = {"kp": [1.0, 1.0, 1.0], "ki": [0.0, 0.0, 0.0], "kd": [1.0, 1.0, 1.0]} | change
     before = client.get("/api/gains").json()
     r = client.put("/api/gains", json=body, headers=AUTH)
@@ -167,63 +207,90 @@ def test_bad_gains_are_refused_naming_the_field(client: TestClient, change: dict
 
 # ------------------------------------------------------------------ control
 def test_mode_allocation_grip_and_target(client: TestClient) -> None:
-    assert client.put("/api/control/allocation", json={"allocation": "pinv"},
-                      headers=AUTH).status_code == 200
+    assert (
+        client.put("/api/control/allocation", json={"allocation": "pinv"}, headers=AUTH).status_code
+        == 200
+    )
     wait_for(lambda: client.get("/api/control").json()["allocation"] == "pinv", what="pinv")
     client.put("/api/control/allocation", json={"allocation": "priority"}, headers=AUTH)
-    assert client.put("/api/control/mode", json={"mode": "free"}, headers=AUTH).status_code \
-        == 200
+    assert client.put("/api/control/mode", json={"mode": "free"}, headers=AUTH).status_code == 200
     wait_for(lambda: state(client)["mode"] == "free", what="free mode")
     client.put("/api/control/mode", json={"mode": "tree"}, headers=AUTH)
     wait_for(lambda: state(client)["mode"] == "tree", what="tree mode")
     s = state(client)
-    target = {"north_m": s["tree_eta_n"]["north_m"] + 0.5,
-              "east_m": s["tree_eta_n"]["east_m"], "heading_deg": 0.0}
+    target = {
+        "north_m": s["tree_eta_n"]["north_m"] + 0.5,
+        "east_m": s["tree_eta_n"]["east_m"],
+        "heading_deg": 0.0,
+    }
     assert client.put("/api/control/target", json=target, headers=AUTH).status_code == 200
-    wait_for(lambda: client.get("/api/control").json()["reference"]["north_m"] >
-             s["reference"]["north_m"] + 0.05, what="the reference to move north")
+    wait_for(
+        lambda: (
+            client.get("/api/control").json()["reference"]["north_m"]
+            > s["reference"]["north_m"] + 0.05
+        ),
+        what="the reference to move north",
+    )
 
 
-@pytest.mark.parametrize("path, body, field", [
-    ("/api/control/mode", {"mode": "autopilot"}, "mode"),
-    ("/api/control/allocation", {"allocation": "magic"}, "allocation"),
-    ("/api/control/grip", {"grip": "maybe"}, "grip"),
-    ("/api/control/target", {"north_m": 1e9, "east_m": 0, "heading_deg": 0}, "north_m"),
-    ("/api/control/target", {"north_m": 0, "east_m": 0}, "heading_deg")])
-def test_bad_control_requests_name_the_field(client: TestClient, path: str, body: dict,
-                                             field: str) -> None:
+@pytest.mark.parametrize(
+    "path, body, field",
+    [
+        ("/api/control/mode", {"mode": "autopilot"}, "mode"),
+        ("/api/control/allocation", {"allocation": "magic"}, "allocation"),
+        ("/api/control/grip", {"grip": "maybe"}, "grip"),
+        ("/api/control/target", {"north_m": 1e9, "east_m": 0, "heading_deg": 0}, "north_m"),
+        ("/api/control/target", {"north_m": 0, "east_m": 0}, "heading_deg"),
+    ],
+)
+def test_bad_control_requests_name_the_field(
+    client: TestClient, path: str, body: dict, field: str
+) -> None:
     r = client.put(path, json=body, headers=AUTH)
     assert r.status_code == 422 and field in detail(r)
 
 
 # ------------------------------------------------------------------ environment
 def test_current_and_vessel(client: TestClient) -> None:
-    r = client.put("/api/environment/current", json={"speed_mps": 0.2, "direction_deg": 90.0},
-                   headers=AUTH)
+    r = client.put(
+        "/api/environment/current", json={"speed_mps": 0.2, "direction_deg": 90.0}, headers=AUTH
+    )
     assert r.status_code == 200
-    wait_for(lambda: abs(client.get("/api/environment").json()["current"]["speed_mps"] - 0.2)
-             < 1e-9, what="the current")
+    wait_for(
+        lambda: abs(client.get("/api/environment").json()["current"]["speed_mps"] - 0.2) < 1e-9,
+        what="the current",
+    )
     env = client.get("/api/environment").json()
     assert env["current"]["direction_deg"] == pytest.approx(90.0)
     assert env["wire_tension_newton"] > 1e5
     tip = env["crane_tip_n"]
-    r = client.put("/api/environment/vessel",
-                   json={"north_m": tip[0] + 1.0, "east_m": tip[1], "speed_mps": 1.0},
-                   headers=AUTH)
+    r = client.put(
+        "/api/environment/vessel",
+        json={"north_m": tip[0] + 1.0, "east_m": tip[1], "speed_mps": 1.0},
+        headers=AUTH,
+    )
     assert r.status_code == 200
-    wait_for(lambda: client.get("/api/environment").json()["crane_tip_n"][0] > tip[0] + 0.05,
-             what="the vessel to move")
-    client.put("/api/environment/current", json={"speed_mps": 0.0, "direction_deg": 0.0},
-               headers=AUTH)
+    wait_for(
+        lambda: client.get("/api/environment").json()["crane_tip_n"][0] > tip[0] + 0.05,
+        what="the vessel to move",
+    )
+    client.put(
+        "/api/environment/current", json={"speed_mps": 0.0, "direction_deg": 0.0}, headers=AUTH
+    )
 
 
-@pytest.mark.parametrize("path, body, field", [
-    ("/api/environment/current", {"speed_mps": 5.0, "direction_deg": 0}, "speed_mps"),
-    ("/api/environment/current", {"speed_mps": 0.1, "direction_deg": "nan"}, "direction_deg"),
-    ("/api/environment/vessel", {"north_m": 0, "east_m": 5000}, "east_m"),
-    ("/api/environment/vessel", {"north_m": 0, "east_m": 0, "speed_mps": 0}, "speed_mps")])
-def test_bad_environment_requests_name_the_field(client: TestClient, path: str, body: dict,
-                                                 field: str) -> None:
+@pytest.mark.parametrize(
+    "path, body, field",
+    [
+        ("/api/environment/current", {"speed_mps": 5.0, "direction_deg": 0}, "speed_mps"),
+        ("/api/environment/current", {"speed_mps": 0.1, "direction_deg": "nan"}, "direction_deg"),
+        ("/api/environment/vessel", {"north_m": 0, "east_m": 5000}, "east_m"),
+        ("/api/environment/vessel", {"north_m": 0, "east_m": 0, "speed_mps": 0}, "speed_mps"),
+    ],
+)
+def test_bad_environment_requests_name_the_field(
+    client: TestClient, path: str, body: dict, field: str
+) -> None:
     r = client.put(path, json=body, headers=AUTH)
     assert r.status_code == 422 and field in detail(r)
 
@@ -276,17 +343,24 @@ def test_validate_names_the_field_and_its_range(client: TestClient) -> None:
 
 
 def test_upload_start_follow_and_abort_a_mission(client: TestClient) -> None:
-    bad = client.post("/api/missions/uploads", json={"toml": SMALL_MISSION.replace(
-        'type = "hold"', 'type = "teleport"')}, headers=AUTH)
+    bad = client.post(
+        "/api/missions/uploads",
+        json={"toml": SMALL_MISSION.replace('type = "hold"', 'type = "teleport"')},
+        headers=AUTH,
+    )
     assert bad.status_code == 422 and "legs[2]" in detail(bad)
-    clash = client.post("/api/missions/uploads", json={"toml": SMALL_MISSION.replace(
-        "api-test-move", "full-square-400")}, headers=AUTH)
+    clash = client.post(
+        "/api/missions/uploads",
+        json={"toml": SMALL_MISSION.replace("api-test-move", "full-square-400")},
+        headers=AUTH,
+    )
     assert clash.status_code == 409 and "name" in detail(clash)
     up = client.post("/api/missions/uploads", json={"toml": SMALL_MISSION}, headers=AUTH)
     assert up.status_code == 201 and up.json() == {"name": "api-test-move"}
     assert "api-test-move" in [m["name"] for m in client.get("/api/missions").json()["uploaded"]]
-    assert client.post("/api/missions/start", json={"name": "nope"},
-                       headers=AUTH).status_code == 404
+    assert (
+        client.post("/api/missions/start", json={"name": "nope"}, headers=AUTH).status_code == 404
+    )
     r = client.post("/api/missions/start", json={"name": "api-test-move"}, headers=AUTH)
     assert r.status_code == 200
     wait_for(lambda: state(client)["mission"]["name"] == "api-test-move", what="start")
@@ -296,8 +370,10 @@ def test_upload_start_follow_and_abort_a_mission(client: TestClient) -> None:
     assert current["state"] == "running" and current["leg_type"] == "hold"
     assert state(client)["tree_eta_n"]["north_m"] > 1.7, "the move leg moved the tree north"
     assert client.post("/api/missions/abort", headers=AUTH).status_code == 200
-    wait_for(lambda: client.get("/api/missions/current").json()["result"] is not None,
-             what="the aborted mission's figures")
+    wait_for(
+        lambda: client.get("/api/missions/current").json()["result"] is not None,
+        what="the aborted mission's figures",
+    )
     assert client.get("/api/missions/current").json()["state"] == "aborted"
     r = client.post("/api/missions/abort", headers=AUTH)
     assert r.status_code == 409 and "no mission" in detail(r)
@@ -321,8 +397,10 @@ def test_record_list_download_and_replay(client: TestClient) -> None:
     download = client.get(f"/api/recordings/{name}")
     assert download.status_code == 200 and download.content.startswith(MCAP_MAGIC)
 
-    assert client.post("/api/replay/open", json={"name": "missing.mcap"},
-                       headers=AUTH).status_code == 404
+    assert (
+        client.post("/api/replay/open", json={"name": "missing.mcap"}, headers=AUTH).status_code
+        == 404
+    )
     r = client.post("/api/replay/open", json={"name": name}, headers=AUTH)
     assert r.status_code == 200
     replay = r.json()["replay"]
@@ -370,16 +448,22 @@ def test_a_client_that_does_not_read_does_not_hold_up_the_loop(client: TestClien
 def test_bad_telemetry_rate_is_refused(client: TestClient) -> None:
     from starlette.websockets import WebSocketDisconnect
 
-    with pytest.raises(WebSocketDisconnect), \
-            client.websocket_connect("/api/telemetry?rate_hz=1000") as ws:
+    with (
+        pytest.raises(WebSocketDisconnect),
+        client.websocket_connect("/api/telemetry?rate_hz=1000") as ws,
+    ):
         ws.receive_json()
 
 
 def test_nothing_sent_stops_the_loop(client: TestClient) -> None:
-    junk = [("put", "/api/gains", {"kp": "x"}), ("put", "/api/run/speed", {"speed": 1e308}),
-            ("post", "/api/missions/start", {"name": ""}), ("put", "/api/replay/seek", {}),
-            ("post", "/api/recordings/start", {"label": "a" * 500}),
-            ("put", "/api/control/target", {"north_m": "inf", "east_m": 0, "heading_deg": 0})]
+    junk = [
+        ("put", "/api/gains", {"kp": "x"}),
+        ("put", "/api/run/speed", {"speed": 1e308}),
+        ("post", "/api/missions/start", {"name": ""}),
+        ("put", "/api/replay/seek", {}),
+        ("post", "/api/recordings/start", {"label": "a" * 500}),
+        ("put", "/api/control/target", {"north_m": "inf", "east_m": 0, "heading_deg": 0}),
+    ]
     for method, path, body in junk:
         r = getattr(client, method)(path, json=body, headers=AUTH)
         assert 400 <= r.status_code < 500, (path, r.status_code, r.text)

@@ -21,22 +21,30 @@ EXAMPLES_PER_OPERATION = 8
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningServer]:
-    settings = ConsoleSettings(port=0, view=False, speed=5.0,
-                               recordings_dir=tmp_path_factory.mktemp("recordings"))
+    settings = ConsoleSettings(
+        port=0, view=False, speed=5.0, recordings_dir=tmp_path_factory.mktemp("recordings")
+    )
     with serve_in_thread(settings) as srv:
         yield srv
 
 
 def check_operation(operation, server: RunningServer, failures: list[str]) -> None:
     """Call one operation with generated requests; note every 5xx."""
-    @settings(max_examples=EXAMPLES_PER_OPERATION, deadline=None, database=None,
-              suppress_health_check=list(HealthCheck))
+
+    @settings(
+        max_examples=EXAMPLES_PER_OPERATION,
+        deadline=None,
+        database=None,
+        suppress_health_check=list(HealthCheck),
+    )
     @given(case=operation.as_strategy())
     def check(case) -> None:
         response = case.call(base_url=server.base_url, headers=server.auth, timeout=30)
         if response.status_code >= 500:
-            failures.append(f"{operation.label} -> {response.status_code}: "
-                            f"{response.text[:200]} (body {case.body!r})")
+            failures.append(
+                f"{operation.label} -> {response.status_code}: "
+                f"{response.text[:200]} (body {case.body!r})"
+            )
 
     check()
 

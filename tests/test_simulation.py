@@ -18,9 +18,22 @@ from tests.helpers import steady_current
 
 MODEL = params.load("model-scale")
 
-CONTROL_BLOCKS = ("eta_hat_n", "nu_hat_tree", "bias_tree", "eta_ref_n", "eta_ref_rate_n",
-                  "tau_tree_cmd", "tau_rov_cmd_b", "tau_rov_ach_b", "thruster_force",
-                  "thruster_utilisation", "control_terms", "mode", "nis", "accepted")
+CONTROL_BLOCKS = (
+    "eta_hat_n",
+    "nu_hat_tree",
+    "bias_tree",
+    "eta_ref_n",
+    "eta_ref_rate_n",
+    "tau_tree_cmd",
+    "tau_rov_cmd_b",
+    "tau_rov_ach_b",
+    "thruster_force",
+    "thruster_utilisation",
+    "control_terms",
+    "mode",
+    "nis",
+    "accepted",
+)
 """Log blocks the control system writes (nothing else does)."""
 
 
@@ -102,8 +115,10 @@ def test_divergence_raises_a_named_error_with_the_time():
     sim.run_for(0.5)
     before = sim.plant_state
     sim.set_push(np.array([1e30, 0.0, 0.0]))
-    with pytest.raises(SimulationDiverged,
-                       match=r"plant state not finite at t = 0\.52 s \(tree pose, tree velocity"):
+    with pytest.raises(
+        SimulationDiverged,
+        match=r"plant state not finite at t = 0\.52 s \(tree pose, tree velocity",
+    ):
         sim.run_for(1.0)
     assert sim.t_s == pytest.approx(0.5)
     np.testing.assert_array_equal(sim.plant_state, before)
@@ -148,16 +163,23 @@ def test_plant_state_is_a_copy():
 # --------------------------------------------------------------------------------------------
 
 WAVES = envmod.WaveParams(significant_height_m=8.0, peak_period_s=20.0, direction_rad=0.5)
-WANDERING = envmod.CurrentParams(speed_mps=0.1, direction_rad=1.0, speed_min_mps=0.0,
-                                 speed_max_mps=0.2, direction_min_rad=0.5,
-                                 direction_max_rad=1.5, speed_walk_mps_per_sqrt_s=0.01,
-                                 direction_walk_rad_per_sqrt_s=0.01)
+WANDERING = envmod.CurrentParams(
+    speed_mps=0.1,
+    direction_rad=1.0,
+    speed_min_mps=0.0,
+    speed_max_mps=0.2,
+    direction_min_rad=0.5,
+    direction_max_rad=1.5,
+    speed_walk_mps_per_sqrt_s=0.01,
+    direction_walk_rad_per_sqrt_s=0.01,
+)
 
 
 def test_same_seed_same_rows_open_loop():
     def run(seed):
-        sim = Simulation(MODEL, tree_depth_m=100.0, control=False, current=WANDERING,
-                         waves=WAVES, seed=seed)
+        sim = Simulation(
+            MODEL, tree_depth_m=100.0, control=False, current=WANDERING, waves=WAVES, seed=seed
+        )
         return sim.run_for(30.0)
 
     a, b, c = run(7), run(7), run(8)
@@ -168,8 +190,13 @@ def test_same_seed_same_rows_open_loop():
 
 def test_same_seed_same_rows_closed_loop_with_sensors_and_ekf():
     def run(seed):
-        sim = Simulation(MODEL, tree_depth_m=100.0, current=WANDERING, seed=seed,
-                         settings=ControlSettings(feedback="ekf"))
+        sim = Simulation(
+            MODEL,
+            tree_depth_m=100.0,
+            current=WANDERING,
+            seed=seed,
+            settings=ControlSettings(feedback="ekf"),
+        )
         sim.run_for(5.0)
         sim.set_target(1.5, 1.0, 0.3)
         return sim.run_for(20.0)
@@ -201,36 +228,68 @@ def assert_unchanged(sim: Simulation, before: dict[str, object]) -> None:
 
 
 BAD_COMMANDS = [
-    pytest.param(lambda s: s.set_target(math.nan, 0.0, 0.0),
-                 "target north_m must be finite, got nan", id="target-nan"),
-    pytest.param(lambda s: s.set_target(0.0, 0.0, 0.0, heading_mode="sideways"),
-                 "heading_mode must be one of shortest, absolute, got 'sideways'",
-                 id="heading-mode"),
-    pytest.param(lambda s: s.winch_to(1e9, 0.1),
-                 "wire length must be in [1, 5000] m, got 1000000000.0", id="winch-length"),
-    pytest.param(lambda s: s.winch_to(100.0, 0.0),
-                 "winch rate must be in (0, 2] m/s, got 0.0", id="winch-rate"),
-    pytest.param(lambda s: s.move_vessel(np.array([5.0, 5.0, 0.0]), 50.0),
-                 "vessel speed must be in (0, 5] m/s, got 50.0", id="vessel-speed"),
-    pytest.param(lambda s: s.move_vessel(np.array([5.0, math.inf, 0.0]), 1.0),
-                 "crane tip target must be finite", id="vessel-target"),
-    pytest.param(lambda s: s.set_mode("x"), "mode must be one of tree, free, got 'x'",
-                 id="mode"),
-    pytest.param(lambda s: s.set_grip("yes"), "grip must be true or false, got 'yes'",
-                 id="grip"),
-    pytest.param(lambda s: s.set_allocation("magic"),
-                 "allocation must be one of pinv, priority, qp, got 'magic'", id="allocation"),
-    pytest.param(lambda s: s.set_heave_force(2e5),
-                 "heave force must be in [-100000, 100000] N, got 200000.0", id="heave"),
-    pytest.param(lambda s: s.set_free_setpoint(0.0, 0.0, math.nan, 0.0),
-                 "free-ROV set point must be finite", id="free-setpoint"),
-    pytest.param(lambda s: s.set_thruster_speeds(np.array([1.0, np.nan, 0.0, 0.0, 0.0])),
-                 "thruster speed command [rev/s] must be finite", id="thruster-nan"),
-    pytest.param(lambda s: s.set_thruster_speeds(np.array([1.0, 2.0])),
-                 "thruster speed command [rev/s] must have 5 entries, got shape (2,)",
-                 id="thruster-count"),
-    pytest.param(lambda s: s.set_push(np.array([np.inf, 0.0, 0.0])),
-                 "push force [N] must be finite", id="push"),
+    pytest.param(
+        lambda s: s.set_target(math.nan, 0.0, 0.0),
+        "target north_m must be finite, got nan",
+        id="target-nan",
+    ),
+    pytest.param(
+        lambda s: s.set_target(0.0, 0.0, 0.0, heading_mode="sideways"),
+        "heading_mode must be one of shortest, absolute, got 'sideways'",
+        id="heading-mode",
+    ),
+    pytest.param(
+        lambda s: s.winch_to(1e9, 0.1),
+        "wire length must be in [1, 5000] m, got 1000000000.0",
+        id="winch-length",
+    ),
+    pytest.param(
+        lambda s: s.winch_to(100.0, 0.0),
+        "winch rate must be in (0, 2] m/s, got 0.0",
+        id="winch-rate",
+    ),
+    pytest.param(
+        lambda s: s.move_vessel(np.array([5.0, 5.0, 0.0]), 50.0),
+        "vessel speed must be in (0, 5] m/s, got 50.0",
+        id="vessel-speed",
+    ),
+    pytest.param(
+        lambda s: s.move_vessel(np.array([5.0, math.inf, 0.0]), 1.0),
+        "crane tip target must be finite",
+        id="vessel-target",
+    ),
+    pytest.param(lambda s: s.set_mode("x"), "mode must be one of tree, free, got 'x'", id="mode"),
+    pytest.param(lambda s: s.set_grip("yes"), "grip must be true or false, got 'yes'", id="grip"),
+    pytest.param(
+        lambda s: s.set_allocation("magic"),
+        "allocation must be one of pinv, priority, qp, got 'magic'",
+        id="allocation",
+    ),
+    pytest.param(
+        lambda s: s.set_heave_force(2e5),
+        "heave force must be in [-100000, 100000] N, got 200000.0",
+        id="heave",
+    ),
+    pytest.param(
+        lambda s: s.set_free_setpoint(0.0, 0.0, math.nan, 0.0),
+        "free-ROV set point must be finite",
+        id="free-setpoint",
+    ),
+    pytest.param(
+        lambda s: s.set_thruster_speeds(np.array([1.0, np.nan, 0.0, 0.0, 0.0])),
+        "thruster speed command [rev/s] must be finite",
+        id="thruster-nan",
+    ),
+    pytest.param(
+        lambda s: s.set_thruster_speeds(np.array([1.0, 2.0])),
+        "thruster speed command [rev/s] must have 5 entries, got shape (2,)",
+        id="thruster-count",
+    ),
+    pytest.param(
+        lambda s: s.set_push(np.array([np.inf, 0.0, 0.0])),
+        "push force [N] must be finite",
+        id="push",
+    ),
 ]
 
 

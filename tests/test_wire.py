@@ -69,11 +69,13 @@ def test_geometric_compliance_quadrature_matches_scipy(speed):
 def test_geometric_part_takes_over_with_current_on_a_1200_m_wire():
     """Thesis fig. 2.3 / issue 2: geometric compliance below half of the total at 0.1 m/s and
     above half at 1.0 m/s with 1200 m of wire."""
+
     def geometric_share(speed):
         q = FULL.wire.drag_per_length(speed)
         geo = wm.geometric_compliance(q, W, W0, 1200.0, site.tree_drag_force(FULL, speed))
         ela = wm.elastic_compliance(FULL.wire.axial_stiffness_newton, 1200.0)
         return geo / (geo + ela)
+
     assert geometric_share(0.1) < 0.5
     assert geometric_share(1.0) > 0.5
     assert geometric_share(0.1) < geometric_share(0.5) < geometric_share(1.0)

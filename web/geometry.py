@@ -14,17 +14,30 @@ from numpy.typing import NDArray
 
 from app.console import Rzyx, attachment_point_n, quaternion_wxyz_from_rpy_radians
 
-__all__ = ["CameraPose", "attachment_point_n", "funnel_points_b", "loaded_wire_points_n",
-           "overview_camera", "polyline_segments", "quaternion_wxyz_from_rpy_radians",
-           "rov_camera", "top_down_camera"]
+__all__ = [
+    "CameraPose",
+    "attachment_point_n",
+    "funnel_points_b",
+    "loaded_wire_points_n",
+    "overview_camera",
+    "polyline_segments",
+    "quaternion_wxyz_from_rpy_radians",
+    "rov_camera",
+    "top_down_camera",
+]
 
 FloatArray = NDArray[np.float64]
 
 
-def loaded_wire_points_n(top_n: FloatArray, bottom_n: FloatArray, length_m: float,
-                         weight_newton_per_m: float, load_newton: float,
-                         drag_newton_per_m: FloatArray,
-                         n_points: int = 40) -> FloatArray:
+def loaded_wire_points_n(
+    top_n: FloatArray,
+    bottom_n: FloatArray,
+    length_m: float,
+    weight_newton_per_m: float,
+    load_newton: float,
+    drag_newton_per_m: FloatArray,
+    n_points: int = 40,
+) -> FloatArray:
     """(n_points, 3) points of the loaded line from the load (first) to the crane tip (last).
 
     Small-angle shape of a heavy wire with the load W0 hanging at its end and a uniform
@@ -76,8 +89,9 @@ def overview_camera(tree_eta_n: FloatArray, tree_size_m: float) -> CameraPose:
     return CameraPose(target + np.array([-d, -0.8 * d, -0.9 * d]), target, UP_N)
 
 
-def top_down_camera(frame_center_n: FloatArray, landing_depth_m: float, tree_eta_n: FloatArray,
-                    tree_size_m: float) -> CameraPose:
+def top_down_camera(
+    frame_center_n: FloatArray, landing_depth_m: float, tree_eta_n: FloatArray, tree_size_m: float
+) -> CameraPose:
     """Straight down over the docking frame: the funnels over the posts (alignment view).
     'Up' on the screen is north."""
     eta = np.asarray(tree_eta_n, float)
@@ -86,8 +100,9 @@ def top_down_camera(frame_center_n: FloatArray, landing_depth_m: float, tree_eta
     return CameraPose(center - np.array([0.0, 0.0, height]), center, np.array([1.0, 0.0, 0.0]))
 
 
-def rov_camera(rov_eta_n: FloatArray, rov_size_m: FloatArray, tree_eta_n: FloatArray,
-               tree_height_m: float) -> CameraPose:
+def rov_camera(
+    rov_eta_n: FloatArray, rov_size_m: FloatArray, tree_eta_n: FloatArray, tree_height_m: float
+) -> CameraPose:
     """The pilot's camera: on a mast over the ROV's stern, tilted down past the tree to where
     its funnels meet the posts (the view the pilot aligns the landing with)."""
     eta = np.asarray(rov_eta_n, float)

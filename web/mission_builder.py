@@ -83,8 +83,9 @@ def field_specs(model: type[BaseModel]) -> list[FieldSpec]:
     fields first, then the ones all legs share."""
     specs = []
     common = common_fields()
-    names = [n for n in model.model_fields if n not in common] + \
-        [n for n in model.model_fields if n in common]
+    names = [n for n in model.model_fields if n not in common] + [
+        n for n in model.model_fields if n in common
+    ]
     for name in names:
         info = model.model_fields[name]
         if name in SKIPPED_FIELDS:
@@ -93,8 +94,11 @@ def field_specs(model: type[BaseModel]) -> list[FieldSpec]:
         lo, hi = _bounds(info.metadata)
         required = info.is_required()
         default = None if required else info.get_default(call_default_factory=True)
-        specs.append(FieldSpec(name, kind, default, required, optional, lo, hi, choices,
-                               info.description or ""))
+        specs.append(
+            FieldSpec(
+                name, kind, default, required, optional, lo, hi, choices, info.description or ""
+            )
+        )
     return specs
 
 
@@ -166,9 +170,13 @@ def build_leg(leg_type: str, values: dict[str, Any]) -> dict[str, Any]:
 
 def build_mission(name: str, setup: schema.Setup, legs: list[dict[str, Any]]) -> schema.Mission:
     """Validate a built mission; MissionError names the leg and the field."""
-    data = {"format_version": schema.FORMAT_VERSION, "name": name or "built mission",
-            "description": "built in the console", "setup": setup.model_dump(mode="json"),
-            "legs": legs}
+    data = {
+        "format_version": schema.FORMAT_VERSION,
+        "name": name or "built mission",
+        "description": "built in the console",
+        "setup": setup.model_dump(mode="json"),
+        "legs": legs,
+    }
     return schema.parse_mission(data, "<mission builder>")
 
 

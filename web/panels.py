@@ -116,19 +116,22 @@ class ClientPanel:
         self._action(self._guard(gui.add_button("Pause")), cmd.Pause)
         self._action(self._guard(gui.add_button("Resume")), cmd.Resume)
         self._action(self._guard(gui.add_button("Step 0.1 s")), lambda: cmd.Step(10))
-        self.speed = self._guard(gui.add_dropdown("Speed (x real time)", SPEEDS,
-                                                  initial_value="1"))
+        self.speed = self._guard(gui.add_dropdown("Speed (x real time)", SPEEDS, initial_value="1"))
         self.speed.on_update(self._on_speed)
         self.reset_button = self._guard(gui.add_button("Reset to station keeping"))
         self.reset_button.on_click(self._on_reset)
         with gui.add_folder("Target (no mission)"):
             self.target_n = self._guard(gui.add_number("Target north m", 0.0, step=0.1))
             self.target_e = self._guard(gui.add_number("Target east m", 0.0, step=0.1))
-            self.target_psi = self._guard(gui.add_number("Target heading deg", 0.0,
-                                                         step=1.0))
-            self._action(self._guard(gui.add_button("Go to target")), lambda: cmd.SetTarget(
-                float(self.target_n.value), float(self.target_e.value),
-                float(self.target_psi.value)))
+            self.target_psi = self._guard(gui.add_number("Target heading deg", 0.0, step=1.0))
+            self._action(
+                self._guard(gui.add_button("Go to target")),
+                lambda: cmd.SetTarget(
+                    float(self.target_n.value),
+                    float(self.target_e.value),
+                    float(self.target_psi.value),
+                ),
+            )
 
     def _build_missions(self) -> None:
         gui = self.gui
@@ -137,8 +140,7 @@ class ClientPanel:
         self.mission_pick = gui.add_dropdown("Mission", names, initial_value=names[0])
         self.mission_start = self._guard(gui.add_button("Start mission"))
         self.mission_start.on_click(self._on_start_library)
-        self._action(self._guard(gui.add_button("Abort mission", color="red")),
-                     cmd.AbortMission)
+        self._action(self._guard(gui.add_button("Abort mission", color="red")), cmd.AbortMission)
         self.mission_md = gui.add_markdown("")
         with gui.add_folder("Mission builder"):
             self.setup_pick = gui.add_dropdown("Set-up from", names, initial_value=names[0])
@@ -149,28 +151,33 @@ class ClientPanel:
             self._rebuild_leg_inputs()
             self.add_leg = gui.add_button("Add leg", order=self._leg_anchor.order + 0.2)
             self.add_leg.on_click(self._on_add_leg)
-            self.leg_edit = gui.add_button_group("Legs", ("Remove last", "Clear"),
-                                                 order=self._leg_anchor.order + 0.3)
+            self.leg_edit = gui.add_button_group(
+                "Legs", ("Remove last", "Clear"), order=self._leg_anchor.order + 0.3
+            )
             self.leg_edit.on_click(self._on_leg_edit)
             self.legs_md = gui.add_markdown("*no legs yet*", order=self._leg_anchor.order + 0.4)
-            self.validate_button = gui.add_button("Validate",
-                                                  order=self._leg_anchor.order + 0.5)
+            self.validate_button = gui.add_button("Validate", order=self._leg_anchor.order + 0.5)
             self.validate_button.on_click(self._on_validate)
-            self.build_start = self._guard(gui.add_button("Start built mission",
-                                                          order=self._leg_anchor.order + 0.6))
+            self.build_start = self._guard(
+                gui.add_button("Start built mission", order=self._leg_anchor.order + 0.6)
+            )
             self.build_start.on_click(self._on_start_built)
             self.builder_md = gui.add_markdown("", order=self._leg_anchor.order + 0.7)
 
     def _build_control(self, snap: Snapshot) -> None:
         gui = self.gui
-        self.mode = self._guard(gui.add_dropdown("Mode", ("tree", "free"),
-                                                 initial_value=snap.mode))
+        self.mode = self._guard(gui.add_dropdown("Mode", ("tree", "free"), initial_value=snap.mode))
         self.mode.on_update(self._when_client(lambda: cmd.SetMode(self.mode.value)))
-        self.allocation = self._guard(gui.add_dropdown(
-            "Allocation", ("pinv", "priority", "qp"), initial_value=snap.allocation or
-            "priority"))
-        self.allocation.on_update(self._when_client(
-            lambda: cmd.SetAllocation(self.allocation.value)))
+        self.allocation = self._guard(
+            gui.add_dropdown(
+                "Allocation",
+                ("pinv", "priority", "qp"),
+                initial_value=snap.allocation or "priority",
+            )
+        )
+        self.allocation.on_update(
+            self._when_client(lambda: cmd.SetAllocation(self.allocation.value))
+        )
         self.grip = self._guard(gui.add_checkbox("Grip", bool(snap.grip)))
         self.grip.on_update(self._when_client(lambda: cmd.SetGrip(bool(self.grip.value))))
         with gui.add_folder("Gains"):
@@ -181,42 +188,67 @@ class ClientPanel:
                 row = []
                 for i, axis in enumerate(AXES):
                     hi = _slider_max(getattr(preset, term)[i], getattr(live, term)[i])
-                    slider = self._guard(gui.add_slider(
-                        f"{term} {axis}", min=0.0, max=hi, step=hi / 200.0,
-                        initial_value=float(getattr(live, term)[i])))
+                    slider = self._guard(
+                        gui.add_slider(
+                            f"{term} {axis}",
+                            min=0.0,
+                            max=hi,
+                            step=hi / 200.0,
+                            initial_value=float(getattr(live, term)[i]),
+                        )
+                    )
                     slider.on_update(self._on_gain)
                     row.append(slider)
                 self.gain_sliders[term] = row
-            self._action(self._guard(gui.add_button("Preset gains")),
-                         lambda: cmd.SetGains(self.console.loop.snapshot.scene.preset_gains))
+            self._action(
+                self._guard(gui.add_button("Preset gains")),
+                lambda: cmd.SetGains(self.console.loop.snapshot.scene.preset_gains),
+            )
         with gui.add_folder("Current"):
-            self.current_speed = self._guard(gui.add_number("Speed m/s", 0.0, min=0.0,
-                                                            max=3.0, step=0.01))
-            self.current_dir = self._guard(gui.add_number("Towards deg", 0.0, min=-360.0,
-                                                          max=360.0, step=1.0))
-            self._action(self._guard(gui.add_button("Set current")), lambda: cmd.SetCurrent(
-                float(self.current_speed.value), float(self.current_dir.value)))
+            self.current_speed = self._guard(
+                gui.add_number("Speed m/s", 0.0, min=0.0, max=3.0, step=0.01)
+            )
+            self.current_dir = self._guard(
+                gui.add_number("Towards deg", 0.0, min=-360.0, max=360.0, step=1.0)
+            )
+            self._action(
+                self._guard(gui.add_button("Set current")),
+                lambda: cmd.SetCurrent(
+                    float(self.current_speed.value), float(self.current_dir.value)
+                ),
+            )
         with gui.add_folder("Vessel (crane tip)"):
             ct = snap.crane_tip_n
-            self.vessel_n = self._guard(gui.add_number("North m", round(ct[0], 2),
-                                                       min=-1000.0, max=1000.0, step=0.1))
-            self.vessel_e = self._guard(gui.add_number("East m", round(ct[1], 2),
-                                                       min=-1000.0, max=1000.0, step=0.1))
-            self._action(self._guard(gui.add_button("Move vessel")), lambda: cmd.MoveVessel(
-                float(self.vessel_n.value), float(self.vessel_e.value), 0.5))
+            self.vessel_n = self._guard(
+                gui.add_number("North m", round(ct[0], 2), min=-1000.0, max=1000.0, step=0.1)
+            )
+            self.vessel_e = self._guard(
+                gui.add_number("East m", round(ct[1], 2), min=-1000.0, max=1000.0, step=0.1)
+            )
+            self._action(
+                self._guard(gui.add_button("Move vessel")),
+                lambda: cmd.MoveVessel(float(self.vessel_n.value), float(self.vessel_e.value), 0.5),
+            )
 
     def _build_plots(self) -> None:
         gui = self.gui
         self.plots = []
         for title, unit in (("North", "m"), ("East", "m"), ("Heading", "deg")):
             empty = np.zeros(2)
-            series = ({"label": "t [s]"},
-                      {"label": f"tree {unit}", "stroke": "#1f5fd0", "width": 2},
-                      {"label": f"reference {unit}", "stroke": "#d03030", "width": 1.5,
-                       "dash": (6, 4)})
-            self.plots.append(gui.add_uplot(
-                (empty, empty, empty), series, title=f"{title} [{unit}]", aspect=2.0,  # type: ignore[arg-type]
-                scales={"x": {"time": False}}))
+            series = (
+                {"label": "t [s]"},
+                {"label": f"tree {unit}", "stroke": "#1f5fd0", "width": 2},
+                {"label": f"reference {unit}", "stroke": "#d03030", "width": 1.5, "dash": (6, 4)},
+            )
+            self.plots.append(
+                gui.add_uplot(
+                    (empty, empty, empty),
+                    series,  # type: ignore[arg-type]
+                    title=f"{title} [{unit}]",
+                    aspect=2.0,
+                    scales={"x": {"time": False}},
+                )
+            )
 
     def _build_record(self) -> None:
         gui = self.gui
@@ -232,15 +264,15 @@ class ClientPanel:
             refresh.on_click(lambda _: self._refresh_recordings())
             self.replay_open = self._guard(gui.add_button("Open replay"))
             self.replay_open.on_click(self._on_open_replay)
-            self._action(self._guard(gui.add_button("Play replay")),
-                         lambda: cmd.PlayReplay(True))
-            self._action(self._guard(gui.add_button("Pause replay")),
-                         lambda: cmd.PlayReplay(False))
+            self._action(self._guard(gui.add_button("Play replay")), lambda: cmd.PlayReplay(True))
+            self._action(self._guard(gui.add_button("Pause replay")), lambda: cmd.PlayReplay(False))
             self._action(self._guard(gui.add_button("Close replay")), cmd.CloseReplay)
-            self.replay_time = self._guard(gui.add_slider("Replay time s", min=0.0, max=1.0,
-                                                          step=0.1, initial_value=0.0))
-            self.replay_time.on_update(self._when_client(
-                lambda: cmd.SeekReplay(float(self.replay_time.value))))
+            self.replay_time = self._guard(
+                gui.add_slider("Replay time s", min=0.0, max=1.0, step=0.1, initial_value=0.0)
+            )
+            self.replay_time.on_update(
+                self._when_client(lambda: cmd.SeekReplay(float(self.replay_time.value)))
+            )
 
     def _rebuild_leg_inputs(self) -> None:
         """Inputs for the chosen leg type, from its pydantic model's fields."""
@@ -248,8 +280,9 @@ class ClientPanel:
             self._leg_folder.remove()
         model = schema.leg_models()[self.leg_type.value]
         self._leg_inputs = {}
-        with self.gui.add_folder(f"{self.leg_type.value} leg",
-                                 order=self._leg_anchor.order + 0.1) as folder:
+        with self.gui.add_folder(
+            f"{self.leg_type.value} leg", order=self._leg_anchor.order + 0.1
+        ) as folder:
             for spec in mb.field_specs(model):
                 self._leg_inputs[spec.name] = (spec, self._leg_input(spec))
         self._leg_folder = folder
@@ -260,12 +293,15 @@ class ClientPanel:
         if spec.kind == "bool":
             return gui.add_checkbox(spec.label, bool(value), hint=hint)
         if spec.kind in ("choice", "tristate"):
-            return gui.add_dropdown(spec.label, spec.choices, initial_value=str(
-                value if value is not None else spec.choices[0]), hint=hint)
+            return gui.add_dropdown(
+                spec.label,
+                spec.choices,
+                initial_value=str(value if value is not None else spec.choices[0]),
+                hint=hint,
+            )
         if spec.kind in ("number", "integer") and not spec.optional:
             step = 1.0 if spec.kind == "integer" else _step_for(spec)
-            return gui.add_number(spec.label, value, min=spec.lo, max=spec.hi, step=step,
-                                  hint=hint)
+            return gui.add_number(spec.label, value, min=spec.lo, max=spec.hi, step=step, hint=hint)
         return gui.add_text(spec.label, mb.text_of(spec, value), hint=hint)
 
     # ================================================================== callbacks
@@ -297,9 +333,11 @@ class ClientPanel:
 
     def _when_client(self, make: Callable[[], Any]) -> Callable[[Any], None]:
         """An input callback that acts on what the operator did, not on our own updates."""
+
         def callback(event: Any) -> None:
             if event.client is not None:
                 self._run(make)
+
         return callback
 
     def _on_unlock(self, event: Any) -> None:
@@ -386,12 +424,20 @@ class ClientPanel:
     # ---------------------------------------------------------------- builder
     def _on_add_leg(self, event: Any) -> None:
         try:
-            values = {name: mb.parse_input(spec, handle.value)
-                      for name, (spec, handle) in self._leg_inputs.items()}
+            values = {
+                name: mb.parse_input(spec, handle.value)
+                for name, (spec, handle) in self._leg_inputs.items()
+            }
             leg = mb.build_leg(str(self.leg_type.value), values)
-            schema.parse_mission({"format_version": 1, "name": "check",
-                                  "setup": {"params": "full-scale", "depth_m": 100.0},
-                                  "legs": [leg]}, "<leg>")
+            schema.parse_mission(
+                {
+                    "format_version": 1,
+                    "name": "check",
+                    "setup": {"params": "full-scale", "depth_m": 100.0},
+                    "legs": [leg],
+                },
+                "<leg>",
+            )
         except ValueError as err:
             self.builder_md.content = f"**invalid leg**: {err}"
             return
@@ -433,11 +479,16 @@ class ClientPanel:
         info = snap.scene
         size = max(info.tree_dimensions_m)
         if self.camera_mode == "Top-down":
-            pose = geo.top_down_camera(info.frame.center_n, info.frame.landing_depth_m,
-                                       np.array(snap.tree_eta_n), size)
+            pose = geo.top_down_camera(
+                info.frame.center_n, info.frame.landing_depth_m, np.array(snap.tree_eta_n), size
+            )
         elif self.camera_mode == "ROV camera":
-            pose = geo.rov_camera(np.array(snap.rov_eta_n), np.array(info.rov_dimensions_m),
-                                  np.array(snap.tree_eta_n), info.tree_dimensions_m[2])
+            pose = geo.rov_camera(
+                np.array(snap.rov_eta_n),
+                np.array(info.rov_dimensions_m),
+                np.array(snap.tree_eta_n),
+                info.tree_dimensions_m[2],
+            )
         else:
             pose = geo.overview_camera(np.array(snap.tree_eta_n), size)
         cam = self.client.camera
@@ -469,21 +520,26 @@ class ClientPanel:
         leg = f"leg {m.leg_index}/{m.legs_total} {m.leg_type}" if m.leg_index else ""
         state = "paused" if snap.paused else f"running x{snap.speed:g}"
         source = f"REPLAY `{snap.replay.name}`" if snap.replay else "live"
-        text = (f"**{source}** t = {snap.t_s:8.1f} s, {state}  \n"
-                f"tree N {tree[0]:.2f} m, E {tree[1]:.2f} m, heading "
-                f"{math.degrees(tree[5]):.1f} deg, mode {snap.mode}  \n"
-                f"mission: {m.name or '-'} ({m.state}) {leg}"
-                + (f"  \n**{snap.error}**" if snap.error else "")
-                + (f"  \nrecording `{snap.recording}`" if snap.recording else ""))
+        text = (
+            f"**{source}** t = {snap.t_s:8.1f} s, {state}  \n"
+            f"tree N {tree[0]:.2f} m, E {tree[1]:.2f} m, heading "
+            f"{math.degrees(tree[5]):.1f} deg, mode {snap.mode}  \n"
+            f"mission: {m.name or '-'} ({m.state}) {leg}"
+            + (f"  \n**{snap.error}**" if snap.error else "")
+            + (f"  \nrecording `{snap.recording}`" if snap.recording else "")
+        )
         if self.status_md.content != text:
             self.status_md.content = text
         badges = "".join(
             f"<span style='display:inline-block;margin:1px;padding:1px 5px;border-radius:4px;"
             f"color:white;background:{'#c0392b' if a.active else '#27ae60'}' "
-            f"title='{a.message}'>{a.name}</span>" for a in snap.alarms)
+            f"title='{a.message}'>{a.name}</span>"
+            for a in snap.alarms
+        )
         active = "; ".join(f"{a.name}: {a.message}" for a in snap.active_alarms)
-        html = f"<div>{badges}</div>" + (f"<div style='color:#c0392b'>{active}</div>"
-                                         if active else "")
+        html = f"<div>{badges}</div>" + (
+            f"<div style='color:#c0392b'>{active}</div>" if active else ""
+        )
         if self.alarms_html.content != html:
             self.alarms_html.content = html
         self._update_thrusters(snap)
@@ -541,8 +597,11 @@ class ClientPanel:
             return
         recent = trend[trend[:, 0] >= trend[-1, 0] - PLOT_WINDOW_S]
         t = recent[:, 0]
-        data = ((t, recent[:, 1], recent[:, 4]), (t, recent[:, 2], recent[:, 5]),
-                (t, np.degrees(recent[:, 3]), np.degrees(recent[:, 6])))
+        data = (
+            (t, recent[:, 1], recent[:, 4]),
+            (t, recent[:, 2], recent[:, 5]),
+            (t, np.degrees(recent[:, 3]), np.degrees(recent[:, 6])),
+        )
         for plot, series in zip(self.plots, data, strict=True):
             plot.data = tuple(np.ascontiguousarray(a) for a in series)
 
@@ -551,9 +610,11 @@ def _mission_text(snap: Snapshot) -> str:
     m = snap.mission
     if m.result:
         r = m.result
-        return (f"**{m.name}** {m.state}: RMS N {r.get('rms_north_m', float('nan')):.3f} m, "
-                f"E {r.get('rms_east_m', float('nan')):.3f} m, heading "
-                f"{r.get('rms_heading_deg', float('nan')):.2f} deg")
+        return (
+            f"**{m.name}** {m.state}: RMS N {r.get('rms_north_m', float('nan')):.3f} m, "
+            f"E {r.get('rms_east_m', float('nan')):.3f} m, heading "
+            f"{r.get('rms_heading_deg', float('nan')):.2f} deg"
+        )
     if m.leg_index:
         return f"**{m.name}**: leg {m.leg_index}/{m.legs_total} `{m.leg_type}` {m.leg_name or ''}"
     return f"{m.name or 'no mission'} ({m.state})"

@@ -66,52 +66,89 @@ class SceneView:
         center = np.array([frame.center_n[0], frame.center_n[1], frame.landing_depth_m])
         frame_q = geo.quaternion_wxyz_from_rpy_radians(0.0, 0.0, frame.heading_rad)
         extent = 16.0 * size
-        sc.add_grid("/site/seabed", width=extent, height=extent, plane="xy",
-                    cell_size=size / 2, section_size=2 * size, cell_color=(150, 140, 100),
-                    section_color=(120, 110, 80), plane_color=SEABED_COLOR, plane_opacity=1.0,
-                    position=center + np.array([0.0, 0.0, thick + 0.01]),
-                    fade_distance=40 * size)
-        sc.add_box("/site/frame", color=FRAME_COLOR,
-                   dimensions=(float(lay.frame_size_m[0]), float(lay.frame_size_m[1]), thick),
-                   position=center + np.array([0.0, 0.0, thick / 2]), wxyz=frame_q)
+        sc.add_grid(
+            "/site/seabed",
+            width=extent,
+            height=extent,
+            plane="xy",
+            cell_size=size / 2,
+            section_size=2 * size,
+            cell_color=(150, 140, 100),
+            section_color=(120, 110, 80),
+            plane_color=SEABED_COLOR,
+            plane_opacity=1.0,
+            position=center + np.array([0.0, 0.0, thick + 0.01]),
+            fade_distance=40 * size,
+        )
+        sc.add_box(
+            "/site/frame",
+            color=FRAME_COLOR,
+            dimensions=(float(lay.frame_size_m[0]), float(lay.frame_size_m[1]), thick),
+            position=center + np.array([0.0, 0.0, thick / 2]),
+            wxyz=frame_q,
+        )
         for k, (px, py) in enumerate(lay.post_xy_m):
             pn = center[:2] + np.array([c * px - s * py, s * px + c * py])
-            sc.add_cylinder(f"/site/post_{k}", radius=float(lay.post_radius_m),
-                            height=float(lay.post_height_m), color=POST_COLOR,
-                            position=(pn[0], pn[1], center[2] - lay.post_height_m / 2))
+            sc.add_cylinder(
+                f"/site/post_{k}",
+                radius=float(lay.post_radius_m),
+                height=float(lay.post_height_m),
+                color=POST_COLOR,
+                position=(pn[0], pn[1], center[2] - lay.post_height_m / 2),
+            )
         tree = sc.add_frame("/tree", show_axes=False)
         sc.add_box("/tree/body", color=TREE_COLOR, dimensions=(length, width, height))
         funnel_h = 0.12 * height
         for k, p in enumerate(geo.funnel_points_b(lay.post_xy_m, height)):
-            sc.add_cylinder(f"/tree/funnel_{k}", radius=float(lay.funnel_mouth_radius_m),
-                            height=funnel_h, color=FUNNEL_COLOR,
-                            position=(p[0], p[1], p[2] + funnel_h / 2))
+            sc.add_cylinder(
+                f"/tree/funnel_{k}",
+                radius=float(lay.funnel_mouth_radius_m),
+                height=funnel_h,
+                color=FUNNEL_COLOR,
+                position=(p[0], p[1], p[2] + funnel_h / 2),
+            )
         for k, p in enumerate(geo.funnel_points_b(lay.post_xy_m, height)):
             # the funnels' places marked on the tree's top, to line up with the guides
-            sc.add_cylinder(f"/tree/funnel_mark_{k}", radius=float(lay.funnel_mouth_radius_m),
-                            height=0.01 * height, color=FUNNEL_COLOR,
-                            position=(p[0], p[1], -0.5 * height - 0.006 * height))
-        sc.add_icosphere("/tree/attachment", radius=0.04 * size, color=WIRE_COLOR,
-                         position=(0.0, 0.0, -info.attachment_height_m))
+            sc.add_cylinder(
+                f"/tree/funnel_mark_{k}",
+                radius=float(lay.funnel_mouth_radius_m),
+                height=0.01 * height,
+                color=FUNNEL_COLOR,
+                position=(p[0], p[1], -0.5 * height - 0.006 * height),
+            )
+        sc.add_icosphere(
+            "/tree/attachment",
+            radius=0.04 * size,
+            color=WIRE_COLOR,
+            position=(0.0, 0.0, -info.attachment_height_m),
+        )
         guide_len = 2.0 * height  # from the post tops to half a tree height over the tree
         guide_top = frame.landing_depth_m - lay.post_height_m - guide_len
         for k, (px, py) in enumerate(lay.post_xy_m):
             pn = center[:2] + np.array([c * px - s * py, s * px + c * py])
             # alignment guides: each post's axis carried up past the tree (seen from above,
             # a guide inside its funnel mark means that funnel will catch its post)
-            sc.add_cylinder(f"/site/guide_{k}", radius=0.5 * float(lay.post_radius_m),
-                            height=guide_len, color=GUIDE_COLOR, opacity=0.55,
-                            position=(pn[0], pn[1], guide_top + guide_len / 2))
+            sc.add_cylinder(
+                f"/site/guide_{k}",
+                radius=0.5 * float(lay.post_radius_m),
+                height=guide_len,
+                color=GUIDE_COLOR,
+                opacity=0.55,
+                position=(pn[0], pn[1], guide_top + guide_len / 2),
+            )
         rov = sc.add_frame("/rov", show_axes=False)
         sc.add_box("/rov/body", color=ROV_COLOR, dimensions=info.rov_dimensions_m)
         ghost = sc.add_frame("/reference", show_axes=False)
-        sc.add_box("/reference/body", color=GHOST_COLOR, dimensions=(length, width, height),
-                   opacity=0.3)
+        sc.add_box(
+            "/reference/body", color=GHOST_COLOR, dimensions=(length, width, height), opacity=0.3
+        )
         self._tree, self._rov, self._ghost = tree, rov, ghost
-        self._wire = sc.add_line_segments("/wire", np.zeros((1, 2, 3)), WIRE_COLOR,
-                                          thickness=2.0, thickness_units="screen")
-        self._track = sc.add_line_segments("/track", np.zeros((1, 2, 3)), TRACK_COLOR,
-                                           thickness=2.0, thickness_units="screen")
+        self._wire = sc.add_line_segments(
+            "/wire", np.zeros((1, 2, 3)), WIRE_COLOR, thickness=2.0, thickness_units="screen"
+        )
+        self._track = sc.add_line_segments(
+            "/track", np.zeros((1, 2, 3)), TRACK_COLOR, thickness=2.0, thickness_units="screen"
+        )
         if self._current is not None:
             self._current.remove()
         self._current = None
@@ -135,9 +172,14 @@ class SceneView:
         end = center - 2.0 * size * along - np.array([0.0, 0.0, info.tree_dimensions_m[2]])
         start = end - length * along
         self._current = self.scene.add_arrows(
-            "/current", np.array([[start, end]]), CURRENT_COLOR, shaft_radius=0.015 * size,
-            head_radius=0.05 * size, head_length=0.12 * size,
-            visible=snap.current_speed_mps > 0.0)
+            "/current",
+            np.array([[start, end]]),
+            CURRENT_COLOR,
+            shaft_radius=0.015 * size,
+            head_radius=0.05 * size,
+            head_length=0.12 * size,
+            visible=snap.current_speed_mps > 0.0,
+        )
 
     # ----------------------------------------------------------------- per frame
     def update(self, snap: Snapshot) -> None:
@@ -149,17 +191,29 @@ class SceneView:
         self._draw_current(snap, max(info.tree_dimensions_m))
         self._update_track(snap, tree_eta[2])
         ref = snap.eta_ref
-        pose = np.concatenate([tree_eta, snap.rov_eta_n, ref, snap.crane_tip_n,
-                               [snap.wire_length_m, snap.wire_drag_newton_per_m]])
+        pose = np.concatenate(
+            [
+                tree_eta,
+                snap.rov_eta_n,
+                ref,
+                snap.crane_tip_n,
+                [snap.wire_length_m, snap.wire_drag_newton_per_m],
+            ]
+        )
         if self._last_pose is not None and np.all(np.abs(pose - self._last_pose) < POSE_EPS):
             return
         self._last_pose = pose
         wire = geo.loaded_wire_points_n(
-            np.array(snap.crane_tip_n), geo.attachment_point_n(tree_eta,
-                                                               info.attachment_height_m),
-            snap.wire_length_m, info.wire_weight_newton_per_m, info.tree_weight_newton,
-            snap.wire_drag_newton_per_m * np.array([math.cos(snap.current_direction_rad),
-                                               math.sin(snap.current_direction_rad)]))
+            np.array(snap.crane_tip_n),
+            geo.attachment_point_n(tree_eta, info.attachment_height_m),
+            snap.wire_length_m,
+            info.wire_weight_newton_per_m,
+            info.tree_weight_newton,
+            snap.wire_drag_newton_per_m
+            * np.array(
+                [math.cos(snap.current_direction_rad), math.sin(snap.current_direction_rad)]
+            ),
+        )
         with self.server.atomic():
             self._tree.position = tree_eta[0:3]
             self._tree.wxyz = geo.quaternion_wxyz_from_rpy_radians(*tree_eta[3:6])
@@ -174,8 +228,13 @@ class SceneView:
         if now - self._track_wall < TRACK_EVERY_S or len(snap.trend) < 2:
             return
         self._track_wall = now
-        pts = np.column_stack([snap.trend[-1200:, 1], snap.trend[-1200:, 2],
-                               np.full(min(len(snap.trend), 1200), depth_m)])
+        pts = np.column_stack(
+            [
+                snap.trend[-1200:, 1],
+                snap.trend[-1200:, 2],
+                np.full(min(len(snap.trend), 1200), depth_m),
+            ]
+        )
         self._track.points = geo.polyline_segments(pts)
 
 

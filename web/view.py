@@ -30,10 +30,13 @@ class ConsoleView:
 
     def __init__(self, console: Console, host: str, port: int) -> None:
         self.console = console
-        self.server = viser.ViserServer(host=host, port=port, label="ROV console",
-                                        verbose=False)
-        self.server.gui.configure_theme(show_share_button=False, control_width="large",
-                                        dark_mode=False, brand_color=(20, 90, 160))
+        self.server = viser.ViserServer(host=host, port=port, label="ROV console", verbose=False)
+        self.server.gui.configure_theme(
+            show_share_button=False,
+            control_width="large",
+            dark_mode=False,
+            brand_color=(20, 90, 160),
+        )
         self.scene = SceneView(self.server)
         self._panels: dict[int, ClientPanel] = {}
         self._lock = threading.Lock()
@@ -43,8 +46,7 @@ class ConsoleView:
         self.server.on_client_disconnect(self._disconnect)
         self._set_initial_camera()
         self.scene.update(console.loop.snapshot)
-        self._thread = threading.Thread(target=self._publish, name="console-view",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._publish, name="console-view", daemon=True)
         self._thread.start()
 
     @property
@@ -58,8 +60,7 @@ class ConsoleView:
 
     def _set_initial_camera(self) -> None:
         snap = self.console.loop.snapshot
-        pose = geo.overview_camera(np.array(snap.tree_eta_n),
-                                   max(snap.scene.tree_dimensions_m))
+        pose = geo.overview_camera(np.array(snap.tree_eta_n), max(snap.scene.tree_dimensions_m))
         cam = self.server.initial_camera
         cam.position = pose.position_n
         cam.look_at = pose.look_at_n

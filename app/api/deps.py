@@ -29,15 +29,18 @@ def get_snapshot(console: ConsoleDep) -> Snapshot:
 SnapshotDep = Annotated[Snapshot, Depends(get_snapshot)]
 
 
-def require_token(console: ConsoleDep,
-                  credentials: Annotated[HTTPAuthorizationCredentials | None,
-                                         Depends(_bearer)]) -> None:
+def require_token(
+    console: ConsoleDep,
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
+) -> None:
     """Actions that change the run need the token; watching does not."""
     if credentials is None or not console.is_token(credentials.credentials):
-        raise HTTPException(status.HTTP_401_UNAUTHORIZED,
-                            "this action needs the console token: send the header "
-                            "'Authorization: Bearer <token>' (printed at start-up)",
-                            headers={"WWW-Authenticate": "Bearer"})
+        raise HTTPException(
+            status.HTTP_401_UNAUTHORIZED,
+            "this action needs the console token: send the header "
+            "'Authorization: Bearer <token>' (printed at start-up)",
+            headers={"WWW-Authenticate": "Bearer"},
+        )
 
 
 TokenDep = Annotated[None, Depends(require_token)]
@@ -54,5 +57,6 @@ async def run_command(console: Console, command: Command) -> object:
     except ValueError as err:
         raise HTTPException(UNPROCESSABLE, str(err)) from None
     except TimeoutError:
-        raise HTTPException(status.HTTP_503_SERVICE_UNAVAILABLE,
-                            "the simulation loop did not answer in time") from None
+        raise HTTPException(
+            status.HTTP_503_SERVICE_UNAVAILABLE, "the simulation loop did not answer in time"
+        ) from None

@@ -16,21 +16,27 @@ router = APIRouter(prefix="/api/environment", tags=["environment"])
 @router.get("", response_model=EnvironmentOut)
 def get_environment(snapshot: SnapshotDep) -> EnvironmentOut:
     return EnvironmentOut(
-        current=CurrentOut(speed_mps=snapshot.current_speed_mps,
-                           direction_deg=math.degrees(snapshot.current_direction_rad)),
-        crane_tip_n=list(snapshot.crane_tip_n), wire_length_m=snapshot.wire_length_m,
-        wire_tension_newton=snapshot.wire_tension_newton)
+        current=CurrentOut(
+            speed_mps=snapshot.current_speed_mps,
+            direction_deg=math.degrees(snapshot.current_direction_rad),
+        ),
+        crane_tip_n=list(snapshot.crane_tip_n),
+        wire_length_m=snapshot.wire_length_m,
+        wire_tension_newton=snapshot.wire_tension_newton,
+    )
 
 
 @router.put("/current", response_model=CommandOut)
 async def set_current(body: CurrentIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
     """A steady, uniform current."""
-    return CommandOut(result=await run_command(
-        console, SetCurrent(body.speed_mps, body.direction_deg)))
+    return CommandOut(
+        result=await run_command(console, SetCurrent(body.speed_mps, body.direction_deg))
+    )
 
 
 @router.put("/vessel", response_model=CommandOut)
 async def move_vessel(body: VesselIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
     """Move the vessel (and the crane tip) to a position at a speed."""
-    return CommandOut(result=await run_command(
-        console, MoveVessel(body.north_m, body.east_m, body.speed_mps)))
+    return CommandOut(
+        result=await run_command(console, MoveVessel(body.north_m, body.east_m, body.speed_mps))
+    )

@@ -10,5 +10,4 @@ router = APIRouter(prefix="/api/health", tags=["health"])
 
 @router.get("", response_model=HealthOut)
 def health(console: ConsoleDep) -> HealthOut:
-    return HealthOut(status="ok", t_s=console.loop.snapshot.t_s,
-                     loop_running=console.loop.running)
+    return HealthOut(status="ok", t_s=console.loop.snapshot.t_s, loop_running=console.loop.running)

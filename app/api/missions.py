@@ -27,8 +27,13 @@ router = APIRouter(prefix="/api/missions", tags=["missions"])
 
 
 def _summary(m: schema.Mission, source: str) -> MissionSummaryOut:
-    return MissionSummaryOut(name=m.name, description=m.description, legs=len(m.legs),
-                             params=m.setup.params, source=source)
+    return MissionSummaryOut(
+        name=m.name,
+        description=m.description,
+        legs=len(m.legs),
+        params=m.setup.params,
+        source=source,
+    )
 
 
 def parse_text(body: MissionTextIn) -> schema.Mission:
@@ -50,7 +55,8 @@ def list_missions(console: ConsoleDep) -> MissionListOut:
     return MissionListOut(
         library=[_summary(schema.load_mission(n), "library") for n in library],
         uploaded=[_summary(console.find_mission(n), "upload") for n in uploaded],
-        leg_types=list(schema.leg_models()))
+        leg_types=list(schema.leg_models()),
+    )
 
 
 @router.get("/current", response_model=MissionStatusOut)
@@ -71,8 +77,7 @@ def get_mission(name: str, console: ConsoleDep) -> MissionOut:
         m = console.find_mission(name)
     except KeyError:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no mission named {name!r}") from None
-    return MissionOut(name=m.name, mission=m.model_dump(mode="json"),
-                      toml=schema.dump_mission(m))
+    return MissionOut(name=m.name, mission=m.model_dump(mode="json"), toml=schema.dump_mission(m))
 
 
 @router.post("/validate", response_model=ValidationOut)
@@ -104,8 +109,9 @@ async def start(body: StartMissionIn, console: ConsoleDep, _: TokenDep) -> Comma
     try:
         mission = console.find_mission(body.name)
     except KeyError:
-        raise HTTPException(status.HTTP_404_NOT_FOUND,
-                            f"name: no mission named {body.name!r}") from None
+        raise HTTPException(
+            status.HTTP_404_NOT_FOUND, f"name: no mission named {body.name!r}"
+        ) from None
     try:
         run = await asyncio.to_thread(prepare_run, mission, body.run_legs)
     except ValueError as err:

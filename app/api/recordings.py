@@ -16,9 +16,11 @@ router = APIRouter(prefix="/api/recordings", tags=["recordings"])
 @router.get("", response_model=RecordingListOut)
 def get_recordings(console: ConsoleDep, snapshot: SnapshotDep) -> RecordingListOut:
     return RecordingListOut(
-        recordings=[RecordingInfoOut(**r) for r in
-                    list_recordings(console.settings.recordings_dir)],
-        recording=snapshot.recording)
+        recordings=[
+            RecordingInfoOut(**r) for r in list_recordings(console.settings.recordings_dir)
+        ],
+        recording=snapshot.recording,
+    )
 
 
 @router.post("/start", response_model=RecordingOut)
@@ -33,8 +35,11 @@ async def stop(console: ConsoleDep, _: TokenDep) -> RecordingOut:
     return RecordingOut(name=result["name"])  # type: ignore[index]
 
 
-@router.get("/{name}", response_class=FileResponse,
-            responses={200: {"content": {"application/octet-stream": {}}}})
+@router.get(
+    "/{name}",
+    response_class=FileResponse,
+    responses={200: {"content": {"application/octet-stream": {}}}},
+)
 def download(name: str, console: ConsoleDep, snapshot: SnapshotDep) -> FileResponse:
     """The MCAP file (not while it is being written)."""
     try:
@@ -44,6 +49,7 @@ def download(name: str, console: ConsoleDep, snapshot: SnapshotDep) -> FileRespo
     if not path.is_file():
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no recording named {name!r}")
     if name == snapshot.recording:
-        raise HTTPException(status.HTTP_409_CONFLICT,
-                            f"{name} is being written; stop the recording first")
+        raise HTTPException(
+            status.HTTP_409_CONFLICT, f"{name} is being written; stop the recording first"
+        )
     return FileResponse(path, media_type="application/octet-stream", filename=name)

@@ -33,8 +33,7 @@ async def open_replay(body: ReplayOpenIn, console: ConsoleDep, _: TokenDep) -> R
     except ConsoleError as err:
         raise HTTPException(UNPROCESSABLE, f"name: {err}") from None
     except Exception as err:
-        raise HTTPException(UNPROCESSABLE,
-                            f"name: cannot read {body.name}: {err}") from None
+        raise HTTPException(UNPROCESSABLE, f"name: cannot read {body.name}: {err}") from None
     return _out(await run_command(console, OpenReplay(body.name, data)))
 
 

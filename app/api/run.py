@@ -43,14 +43,16 @@ async def speed(body: SpeedIn, console: ConsoleDep, _: TokenDep) -> CommandOut:
 
 
 @router.post("/reset", response_model=CommandOut)
-async def reset(body: ResetIn, console: ConsoleDep, snapshot: SnapshotDep,
-                _: TokenDep) -> CommandOut:
+async def reset(
+    body: ResetIn, console: ConsoleDep, snapshot: SnapshotDep, _: TokenDep
+) -> CommandOut:
     """Start again from a station-keeping set-up (a preset parameter set, a depth)."""
     params = body.params or snapshot.scene.params_name
     if params not in params_mod.available_presets():
-        raise HTTPException(UNPROCESSABLE,
-                            f"params must be one of {', '.join(params_mod.available_presets())}"
-                            f", got {params!r}")
+        raise HTTPException(
+            UNPROCESSABLE,
+            f"params must be one of {', '.join(params_mod.available_presets())}, got {params!r}",
+        )
     depth = body.depth_m or console.settings.depth_m
     run = await asyncio.to_thread(prepare_run, station_keeping_mission(params, depth), False)
     return CommandOut(result=await run_command(console, StartRun(run)))

@@ -41,8 +41,14 @@ class EtaOut(BaseModel):
     @staticmethod
     def of(eta: tuple[float, ...]) -> EtaOut:
         deg = [math.degrees(ssa(a)) for a in eta[3:6]]
-        return EtaOut(north_m=eta[0], east_m=eta[1], down_m=eta[2], roll_deg=deg[0],
-                      pitch_deg=deg[1], heading_deg=deg[2])
+        return EtaOut(
+            north_m=eta[0],
+            east_m=eta[1],
+            down_m=eta[2],
+            roll_deg=deg[0],
+            pitch_deg=deg[1],
+            heading_deg=deg[2],
+        )
 
 
 class PoseOut(BaseModel):
@@ -148,24 +154,50 @@ class StateOut(BaseModel):
         from app.console import SATURATED
 
         return StateOut(
-            seq=s.seq, source=s.source, t_s=s.t_s,
-            tree_eta_n=EtaOut.of(s.tree_eta_n), rov_eta_n=EtaOut.of(s.rov_eta_n),
-            reference=PoseOut.of(s.eta_ref), estimate=PoseOut.of(s.eta_hat), mode=s.mode,
-            allocation=s.allocation, grip=s.grip, mission=MissionStatusOut.of(s.mission),
-            thrusters=[ThrusterOut(index=i + 1, utilisation=u, force_newton=f,
-                                   saturated=u >= SATURATED)
-                       for i, (u, f) in enumerate(zip(s.thruster_utilisation,
-                                                      s.thruster_force_newton, strict=True))],
-            alarms=[AlarmOut.of(a) for a in s.alarms], crane_tip_n=list(s.crane_tip_n),
-            wire_length_m=s.wire_length_m, wire_tension_newton=s.wire_tension_newton,
-            current=CurrentOut(speed_mps=s.current_speed_mps,
-                               direction_deg=math.degrees(s.current_direction_rad)),
-            recording=s.recording, replay=ReplayOut.of(s.replay) if s.replay else None,
-            loop=LoopOut(paused=s.paused, speed=s.speed, **{
-                k: getattr(s.stats, k) for k in ("period_s", "jitter_median_ms",
-                                                 "jitter_p99_ms", "ticks", "overruns",
-                                                 "step_ms_p99")}),
-            warnings=list(s.warnings), error=s.error)
+            seq=s.seq,
+            source=s.source,
+            t_s=s.t_s,
+            tree_eta_n=EtaOut.of(s.tree_eta_n),
+            rov_eta_n=EtaOut.of(s.rov_eta_n),
+            reference=PoseOut.of(s.eta_ref),
+            estimate=PoseOut.of(s.eta_hat),
+            mode=s.mode,
+            allocation=s.allocation,
+            grip=s.grip,
+            mission=MissionStatusOut.of(s.mission),
+            thrusters=[
+                ThrusterOut(index=i + 1, utilisation=u, force_newton=f, saturated=u >= SATURATED)
+                for i, (u, f) in enumerate(
+                    zip(s.thruster_utilisation, s.thruster_force_newton, strict=True)
+                )
+            ],
+            alarms=[AlarmOut.of(a) for a in s.alarms],
+            crane_tip_n=list(s.crane_tip_n),
+            wire_length_m=s.wire_length_m,
+            wire_tension_newton=s.wire_tension_newton,
+            current=CurrentOut(
+                speed_mps=s.current_speed_mps, direction_deg=math.degrees(s.current_direction_rad)
+            ),
+            recording=s.recording,
+            replay=ReplayOut.of(s.replay) if s.replay else None,
+            loop=LoopOut(
+                paused=s.paused,
+                speed=s.speed,
+                **{
+                    k: getattr(s.stats, k)
+                    for k in (
+                        "period_s",
+                        "jitter_median_ms",
+                        "jitter_p99_ms",
+                        "ticks",
+                        "overruns",
+                        "step_ms_p99",
+                    )
+                },
+            ),
+            warnings=list(s.warnings),
+            error=s.error,
+        )
 
 
 # ------------------------------------------------------------------ run
@@ -178,8 +210,9 @@ class StepIn(_In):
 
 
 class ResetIn(_In):
-    params: str | None = Field(default=None, max_length=100,
-                               description="parameter set (default: the running one)")
+    params: str | None = Field(
+        default=None, max_length=100, description="parameter set (default: the running one)"
+    )
     depth_m: float | None = Field(default=None, gt=5.0, le=4000.0)
 
 
@@ -190,8 +223,10 @@ class CommandOut(BaseModel):
 
 # ------------------------------------------------------------------ gains
 def _gain_list(limit: float) -> Any:
-    return Annotated[list[Annotated[float, Field(ge=0.0, le=limit, allow_inf_nan=False)]],
-                     Field(min_length=3, max_length=3, description="[surge, sway, yaw]")]
+    return Annotated[
+        list[Annotated[float, Field(ge=0.0, le=limit, allow_inf_nan=False)]],
+        Field(min_length=3, max_length=3, description="[surge, sway, yaw]"),
+    ]
 
 
 class GainsIn(_In):
@@ -232,8 +267,9 @@ class GripIn(_In):
 class TargetIn(_In):
     north_m: float = Field(ge=-10_000.0, le=10_000.0, allow_inf_nan=False)
     east_m: float = Field(ge=-10_000.0, le=10_000.0, allow_inf_nan=False)
-    heading_deg: float = Field(ge=-3600.0, le=3600.0, allow_inf_nan=False,
-                               description="reached the short way round")
+    heading_deg: float = Field(
+        ge=-3600.0, le=3600.0, allow_inf_nan=False, description="reached the short way round"
+    )
 
 
 # ------------------------------------------------------------------ environment
@@ -246,16 +282,23 @@ class EnvironmentOut(BaseModel):
 
 class CurrentIn(_In):
     speed_mps: float = Field(ge=0.0, le=3.0, allow_inf_nan=False)
-    direction_deg: float = Field(ge=-360.0, le=360.0, allow_inf_nan=False,
-                                 description="direction the water flows towards")
+    direction_deg: float = Field(
+        ge=-360.0, le=360.0, allow_inf_nan=False, description="direction the water flows towards"
+    )
 
 
 class VesselIn(_In):
-    north_m: float = Field(ge=-1000.0, le=1000.0, allow_inf_nan=False,
-                           description="crane tip north [m]")
+    north_m: float = Field(
+        ge=-1000.0, le=1000.0, allow_inf_nan=False, description="crane tip north [m]"
+    )
     east_m: float = Field(ge=-1000.0, le=1000.0, allow_inf_nan=False)
-    speed_mps: float = Field(default=0.5, gt=0.0, le=5.0, allow_inf_nan=False,
-                             description="vessel speed on the way [m/s]")
+    speed_mps: float = Field(
+        default=0.5,
+        gt=0.0,
+        le=5.0,
+        allow_inf_nan=False,
+        description="vessel speed on the way [m/s]",
+    )
 
 
 # ------------------------------------------------------------------ missions

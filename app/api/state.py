@@ -38,8 +38,9 @@ class StateJsonCache:
 
 
 @router.websocket("/telemetry")
-async def telemetry(websocket: WebSocket,
-                    rate_hz: float = Query(default=20.0, ge=0.5, le=100.0)) -> None:
+async def telemetry(
+    websocket: WebSocket, rate_hz: float = Query(default=20.0, ge=0.5, le=100.0)
+) -> None:
     """Stream of state messages (the body of GET /api/state) at up to ``rate_hz``. Each client
     gets the newest state when it is ready for one: a slow client skips states, it never
     holds up the loop or the other clients."""

@@ -106,12 +106,17 @@ class AlarmMonitor:
         if len(rows) == 0:
             return self.state
         self._t_s = float(rows.t_s[-1])
-        self.state = (self._saturation(rows), self._position(rows), self._slack(tension_newton),
-                      self._innovation(rows), self._dropout(rows))
+        self.state = (
+            self._saturation(rows),
+            self._position(rows),
+            self._slack(tension_newton),
+            self._innovation(rows),
+            self._dropout(rows),
+        )
         return self.state
 
     def _saturation(self, rows: LogRows) -> Alarm:
-        util = rows["thruster_utilisation"][:, :self.n_thrusters]
+        util = rows["thruster_utilisation"][:, : self.n_thrusters]
         t = rows.t_s
         for i in range(self.n_thrusters):
             below = np.flatnonzero(util[:, i] < SATURATED)
@@ -126,8 +131,9 @@ class AlarmMonitor:
         held = self._t_s - self._sat_since
         worst = int(np.nanargmax(held)) if np.any(np.isfinite(held)) else -1
         if worst >= 0 and held[worst] > self.limits.saturation_s:
-            return Alarm("saturation", True, f"thruster {worst + 1} saturated for "
-                                             f"{held[worst]:.1f} s")
+            return Alarm(
+                "saturation", True, f"thruster {worst + 1} saturated for {held[worst]:.1f} s"
+            )
         return Alarm("saturation", False, "")
 
     def _position(self, rows: LogRows) -> Alarm:
@@ -135,8 +141,9 @@ class AlarmMonitor:
         err_m = math.hypot(tree[0] - ref[0], tree[1] - ref[1])
         err_deg = abs(math.degrees(ssa(float(tree[5] - ref[2]))))
         if err_m > self.limits.position_error_m or err_deg > self.limits.heading_error_deg:
-            return Alarm("position_error", True,
-                         f"tree {err_m:.2f} m / {err_deg:.1f} deg off the reference")
+            return Alarm(
+                "position_error", True, f"tree {err_m:.2f} m / {err_deg:.1f} deg off the reference"
+            )
         return Alarm("position_error", False, "")
 
     def _slack(self, tension_newton: float | None) -> Alarm:
@@ -155,8 +162,9 @@ class AlarmMonitor:
         self._nis[1].extend(nis[psi, 2])
         for label, window in zip(("position", "heading"), self._nis, strict=True):
             if len(window) == window.maxlen and np.mean(window) > self.limits.nis_limit:
-                return Alarm("innovation", True, f"{label} innovation {np.mean(window):.1f} "
-                                                 f"x expected")
+                return Alarm(
+                    "innovation", True, f"{label} innovation {np.mean(window):.1f} x expected"
+                )
         return Alarm("innovation", False, "")
 
     def _dropout(self, rows: LogRows) -> Alarm:
@@ -171,8 +179,10 @@ class AlarmMonitor:
             elif math.isnan(self._last_accept[k]):
                 self._last_accept[k] = t[0]
         for k, name in enumerate(SENSOR_NAMES):
-            limit = max(self.limits.dropout_periods * self.limits.sample_period_s[k],
-                        self.limits.dropout_min_s)
+            limit = max(
+                self.limits.dropout_periods * self.limits.sample_period_s[k],
+                self.limits.dropout_min_s,
+            )
             gap = self._t_s - self._last_accept[k]
             if gap > limit:
                 return Alarm("dropout", True, f"no {name} sample for {gap:.1f} s")

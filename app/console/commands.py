@@ -78,8 +78,11 @@ class StartRun:
 
     def apply(self, console: PacedLoop) -> object:
         console.session.replace_run(self.run)
-        console.session.note("command", f"start {self.run.mission.name}",
-                            {"mission": self.run.mission.name, "legs": self.run.run_legs})
+        console.session.note(
+            "command",
+            f"start {self.run.mission.name}",
+            {"mission": self.run.mission.name, "legs": self.run.run_legs},
+        )
         return {"mission": self.run.mission.name, "running_legs": self.run.run_legs}
 
 
@@ -102,8 +105,11 @@ class SetTarget:
         eng.require_live("target")
         eng.require_no_mission("target")
         eng.sim.set_target(self.north_m, self.east_m, math.radians(self.heading_deg))
-        eng.note("command", "target", {"north_m": self.north_m, "east_m": self.east_m,
-                                       "heading_deg": self.heading_deg})
+        eng.note(
+            "command",
+            "target",
+            {"north_m": self.north_m, "east_m": self.east_m, "heading_deg": self.heading_deg},
+        )
         return {"target": [self.north_m, self.east_m, self.heading_deg]}
 
 
@@ -114,8 +120,9 @@ class SetGains:
     def apply(self, console: PacedLoop) -> object:
         console.session.sim.set_gains(self.gains)
         g = self.gains
-        console.session.note("command", "gains", {"kp": list(g.kp), "ki": list(g.ki),
-                                                 "kd": list(g.kd)})
+        console.session.note(
+            "command", "gains", {"kp": list(g.kp), "ki": list(g.ki), "kd": list(g.kd)}
+        )
         return g
 
 
@@ -145,8 +152,9 @@ class SetAllocation:
 
     def apply(self, console: PacedLoop) -> object:
         console.session.sim.set_allocation(self.allocation)
-        console.session.note("command", f"allocation {self.allocation}",
-                            {"allocation": self.allocation})
+        console.session.note(
+            "command", f"allocation {self.allocation}", {"allocation": self.allocation}
+        )
         return {"allocation": self.allocation}
 
 
@@ -158,8 +166,9 @@ class SetCurrent:
 
     def apply(self, console: PacedLoop) -> object:
         console.session.set_current(self.speed_mps, self.direction_deg)
-        console.session.note("command", "current", {"speed_mps": self.speed_mps,
-                                                   "direction_deg": self.direction_deg})
+        console.session.note(
+            "command", "current", {"speed_mps": self.speed_mps, "direction_deg": self.direction_deg}
+        )
         return {"speed_mps": self.speed_mps, "direction_deg": self.direction_deg}
 
 
@@ -171,9 +180,11 @@ class MoveVessel:
 
     def apply(self, console: PacedLoop) -> object:
         console.session.move_vessel(self.north_m, self.east_m, self.speed_mps)
-        console.session.note("command", "vessel", {"north_m": self.north_m,
-                                                  "east_m": self.east_m,
-                                                  "speed_mps": self.speed_mps})
+        console.session.note(
+            "command",
+            "vessel",
+            {"north_m": self.north_m, "east_m": self.east_m, "speed_mps": self.speed_mps},
+        )
         return {"north_m": self.north_m, "east_m": self.east_m}
 
 

@@ -42,8 +42,9 @@ class Console:
         return Console(settings, loop, token)
 
     def is_token(self, candidate: str | None) -> bool:
-        return candidate is not None and secrets.compare_digest(candidate.encode(),
-                                                                self.token.encode())
+        return candidate is not None and secrets.compare_digest(
+            candidate.encode(), self.token.encode()
+        )
 
     # ----------------------------------------------------------- missions
     def mission_names(self) -> tuple[list[str], list[str]]:
@@ -62,8 +63,9 @@ class Console:
 
     def add_upload(self, mission: schema.Mission) -> str:
         if mission.name in schema.library_names():
-            raise ValueError(f"name: {mission.name!r} is a library mission; give the upload "
-                             f"another name")
+            raise ValueError(
+                f"name: {mission.name!r} is a library mission; give the upload another name"
+            )
         with self._uploads_lock:
             self.uploads.pop(mission.name, None)
             self.uploads[mission.name] = mission
@@ -75,5 +77,4 @@ class Console:
 def initial_run(settings: ConsoleSettings) -> PreparedRun:
     if settings.mission is not None:
         return prepare_run(schema.load_mission(settings.mission), run_legs=True)
-    return prepare_run(station_keeping_mission(settings.params, settings.depth_m),
-                       run_legs=False)
+    return prepare_run(station_keeping_mission(settings.params, settings.depth_m), run_legs=False)

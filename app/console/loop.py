@@ -42,14 +42,14 @@ HISTORY_TICKS = 120_000
 class PacedLoop:
     """Owns the session; paces it; the only place commands are applied."""
 
-    def __init__(self, session: Session, *, speed: float = 1.0,
-                 paused: bool = False) -> None:
+    def __init__(self, session: Session, *, speed: float = 1.0, paused: bool = False) -> None:
         self.session = session
         self.speed = speed
         self.paused = paused
         self.period_s = session.sim.dt_s
-        self._queue: queue.SimpleQueue[tuple[Command, concurrent.futures.Future]] = \
+        self._queue: queue.SimpleQueue[tuple[Command, concurrent.futures.Future]] = (
             queue.SimpleQueue()
+        )
         self._stop = False
         self._seq = 0
         self._ticks = 0
@@ -168,7 +168,12 @@ class PacedLoop:
             return self._stats
         idx = (self._ticks - 1 - np.arange(n)) % HISTORY_TICKS
         late_ms = self._lateness[idx] * 1e3
-        work_ms = self._work[:min(self._ticks, JITTER_WINDOW)] * 1e3
-        return LoopStats(self.period_s, float(np.median(late_ms)),
-                         float(np.percentile(late_ms, 99)), self._ticks, self._overruns,
-                         float(np.percentile(work_ms, 99)))
+        work_ms = self._work[: min(self._ticks, JITTER_WINDOW)] * 1e3
+        return LoopStats(
+            self.period_s,
+            float(np.median(late_ms)),
+            float(np.percentile(late_ms, 99)),
+            self._ticks,
+            self._overruns,
+            float(np.percentile(work_ms, 99)),
+        )

@@ -45,9 +45,14 @@ def list_recordings(directory: Path) -> list[dict]:
         return []
     files = [p for p in directory.glob("*.mcap") if RECORDING_NAME.match(p.name)]
     files.sort(key=lambda p: p.stat().st_mtime, reverse=True)
-    return [{"name": p.name, "size_bytes": p.stat().st_size,
-             "modified": datetime.fromtimestamp(p.stat().st_mtime, UTC).isoformat()}
-            for p in files]
+    return [
+        {
+            "name": p.name,
+            "size_bytes": p.stat().st_size,
+            "modified": datetime.fromtimestamp(p.stat().st_mtime, UTC).isoformat(),
+        }
+        for p in files
+    ]
 
 
 class Replay:
@@ -97,15 +102,23 @@ class Replay:
         if not self.log.layout.has("crane_tip_ne"):
             return (math.nan, math.nan, 0.0), math.nan, math.nan
         tip = self.log["crane_tip_ne"][self.index]
-        return ((float(tip[0]), float(tip[1]), 0.0),
-                float(self.log["wire_rest_length"][self.index]), self._tension(self.index))
+        return (
+            (float(tip[0]), float(tip[1]), 0.0),
+            float(self.log["wire_rest_length"][self.index]),
+            self._tension(self.index),
+        )
 
     def _new_monitor(self) -> AlarmMonitor:
-        limits = AlarmLimits(position_error_m=self.scene.layout.tolerance_m,
-                             sample_period_s=(1.0,) * 5)
-        return AlarmMonitor(limits, self.scene.n_thrusters, self.scene.tree_weight_newton,
-                            uses_sensors=self.log.layout.has("accepted") and
-                            bool(np.any(self.log["accepted"] > 0.5)))
+        limits = AlarmLimits(
+            position_error_m=self.scene.layout.tolerance_m, sample_period_s=(1.0,) * 5
+        )
+        return AlarmMonitor(
+            limits,
+            self.scene.n_thrusters,
+            self.scene.tree_weight_newton,
+            uses_sensors=self.log.layout.has("accepted")
+            and bool(np.any(self.log["accepted"] > 0.5)),
+        )
 
     @property
     def t_s(self) -> float:
@@ -150,8 +163,9 @@ class Replay:
 
     def trend(self) -> FloatArray:
         k = self.index + 1
-        return self.trend_all[max(0, k - 3000):k]
+        return self.trend_all[max(0, k - 3000) : k]
 
     def status(self) -> ReplayStatus:
-        return ReplayStatus(self.name, self.t_s, self.start_s, self.end_s, self.playing,
-                            bool(self.data.complete))
+        return ReplayStatus(
+            self.name, self.t_s, self.start_s, self.end_s, self.playing, bool(self.data.complete)
+        )

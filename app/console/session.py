@@ -68,11 +68,16 @@ class PreparedRun:
 
 def station_keeping_mission(params: str, depth_m: float) -> schema.Mission:
     """A set-up with nothing to do: the console's start when no mission is given."""
-    return schema.parse_mission({
-        "format_version": 1, "name": "station keeping",
-        "description": "hold the tree where it hangs",
-        "setup": {"params": params, "depth_m": depth_m},
-        "legs": [{"type": "hold", "duration_s": 1.0}]}, "<console>")
+    return schema.parse_mission(
+        {
+            "format_version": 1,
+            "name": "station keeping",
+            "description": "hold the tree where it hangs",
+            "setup": {"params": params, "depth_m": depth_m},
+            "legs": [{"type": "hold", "duration_s": 1.0}],
+        },
+        "<console>",
+    )
 
 
 def prepare_run(mission: schema.Mission, run_legs: bool = True) -> PreparedRun:
@@ -103,17 +108,23 @@ class Session:
         self.driver = MissionDriver(run.mission, run.sim) if run.run_legs else None
         self._result: Future | None = None
         name = run.mission.name if run.run_legs else None
-        self.mission_status = MissionStatus(name=name, state="running" if run.run_legs else
-                                            "idle", legs_total=len(run.mission.legs)
-                                            if run.run_legs else 0)
+        self.mission_status = MissionStatus(
+            name=name,
+            state="running" if run.run_legs else "idle",
+            legs_total=len(run.mission.legs) if run.run_legs else 0,
+        )
         sim = self.sim
         frame = sim.docking_frame or default_docking_frame(
-            sim.ps, sim.crane_tip_n[0:2], float(sim.tree_eta_n[5]), float(sim.tree_eta_n[2]))
+            sim.ps, sim.crane_tip_n[0:2], float(sim.tree_eta_n[5]), float(sim.tree_eta_n[2])
+        )
         self._scene_version += 1
         self.scene = scene_info(sim.ps, frame, self._scene_version)
-        self.monitor = AlarmMonitor(AlarmLimits.for_params(sim.ps), self.scene.n_thrusters,
-                                    self.scene.tree_weight_newton,
-                                    uses_sensors=sim.settings.feedback == "ekf")
+        self.monitor = AlarmMonitor(
+            AlarmLimits.for_params(sim.ps),
+            self.scene.n_thrusters,
+            self.scene.tree_weight_newton,
+            uses_sensors=sim.settings.feedback == "ekf",
+        )
         self.trend = TrendBuffer(sim.dt_s)
         self.last_row = sim.present_row()
         self.tension_newton: float | None = sim.wire_tension_newton()
@@ -176,10 +187,12 @@ class Session:
         status = self.mission_status
         index = self.driver.leg_index + 1
         if leg is not None and status.leg_index != index:
-            self.mission_status = MissionStatus(status.name, "running", index,
-                                                status.legs_total, leg.type, leg.name or None)
-            self.note("mission", f"leg {index} ({leg.type}) started",
-                      {"leg": index, "type": leg.type})
+            self.mission_status = MissionStatus(
+                status.name, "running", index, status.legs_total, leg.type, leg.name or None
+            )
+            self.note(
+                "mission", f"leg {index} ({leg.type}) started", {"leg": index, "type": leg.type}
+            )
 
     def _finish_mission(self, state: str) -> None:
         driver = self.driver
@@ -188,8 +201,9 @@ class Session:
         if state == "aborted":
             driver.abort()
         s = self.mission_status
-        self.mission_status = MissionStatus(s.name, state, s.leg_index, s.legs_total,
-                                            s.leg_type, s.leg_name)
+        self.mission_status = MissionStatus(
+            s.name, state, s.leg_index, s.legs_total, s.leg_type, s.leg_name
+        )
         self._result = self._workers.submit(lambda: driver.result().summary())
         self.note("mission", f"mission {s.name} {state}", {"state": state})
 
@@ -214,9 +228,12 @@ class Session:
         before = {a.name: a.active for a in self.monitor.state}
         for alarm in self.monitor.update(rows, self.tension_newton):
             if alarm.active != before.get(alarm.name):
-                self.note("alarm", f"{alarm.name} {'on' if alarm.active else 'off'}"
-                          f"{': ' + alarm.message if alarm.message else ''}",
-                          {"name": alarm.name, "active": alarm.active})
+                self.note(
+                    "alarm",
+                    f"{alarm.name} {'on' if alarm.active else 'off'}"
+                    f"{': ' + alarm.message if alarm.message else ''}",
+                    {"name": alarm.name, "active": alarm.active},
+                )
         if self.recorder is not None:
             self._rec_rows.append(rows.data)
             if sum(len(r) for r in self._rec_rows) >= RECORD_FLUSH_ROWS:
@@ -229,8 +246,9 @@ class Session:
 
     def require_no_mission(self, what: str) -> None:
         if self._mission_running:
-            raise ConsoleError(f"{what}: mission {self.mission_status.name!r} is running; "
-                               f"abort it first")
+            raise ConsoleError(
+                f"{what}: mission {self.mission_status.name!r} is running; abort it first"
+            )
 
     def abort_mission(self) -> None:
         if not self._mission_running:
@@ -261,8 +279,9 @@ class Session:
         if self.recorder is not None:
             raise ConsoleError(f"already recording to {self.recording_name}")
         if not LABEL.match(label):
-            raise ConsoleError(f"label may hold letters, digits, '.', '_' and '-' (at most 60), "
-                               f"got {label!r}")
+            raise ConsoleError(
+                f"label may hold letters, digits, '.', '_' and '-' (at most 60), got {label!r}"
+            )
         self.recordings_dir.mkdir(parents=True, exist_ok=True)
         stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
         base = f"{stamp}-{label or self.mission.name.replace(' ', '-')}"
@@ -272,11 +291,13 @@ class Session:
         while (self.recordings_dir / name).exists():
             k += 1
             name = f"{base}-{k}.mcap"
-        metadata = session_metadata(self.sim, self.mission, label=label,
-                                    docking=self.scene.frame)
-        self.recorder = SessionRecorder(recording_path(self.recordings_dir, name),
-                                        metadata=metadata, params=self.sim.ps,
-                                        n_thrusters=self.scene.n_thrusters)
+        metadata = session_metadata(self.sim, self.mission, label=label, docking=self.scene.frame)
+        self.recorder = SessionRecorder(
+            recording_path(self.recordings_dir, name),
+            metadata=metadata,
+            params=self.sim.ps,
+            n_thrusters=self.scene.n_thrusters,
+        )
         self.recording_name = name
         self._recording_label = label
         self._rec_rows = []
@@ -288,9 +309,12 @@ class Session:
         rows = np.vstack(self._rec_rows)
         self._rec_rows = []
         try:
-            self.recorder.write_log(rows, crane_tip_n=self.sim.crane_tip_n.copy(),
-                                    wire_length_m=float(self.sim.wire_length_m),
-                                    docking=self.scene.frame)
+            self.recorder.write_log(
+                rows,
+                crane_tip_n=self.sim.crane_tip_n.copy(),
+                wire_length_m=float(self.sim.wire_length_m),
+                docking=self.scene.frame,
+            )
         except Exception as err:
             self._recording_failed(err)
 
@@ -356,8 +380,9 @@ class Session:
                 result = self._result.result()
             except Exception as err:
                 result = {"error": str(err)}
-            self.mission_status = MissionStatus(s.name, s.state, s.leg_index, s.legs_total,
-                                                s.leg_type, s.leg_name, result)
+            self.mission_status = MissionStatus(
+                s.name, s.state, s.leg_index, s.legs_total, s.leg_type, s.leg_name, result
+            )
             self._result = None
         return self.mission_status
 
@@ -375,39 +400,73 @@ class Session:
         sim = self.sim
         v: RowView = row_view(self.last_row, self.scene.n_thrusters)
         return Snapshot(
-            seq=seq, source="live", t_s=v.t_s, paused=paused, speed=speed,
-            tree_eta_n=v.tree_eta_n, rov_eta_n=v.rov_eta_n, eta_ref=v.eta_ref,
-            eta_hat=v.eta_hat, thruster_utilisation=v.utilisation,
+            seq=seq,
+            source="live",
+            t_s=v.t_s,
+            paused=paused,
+            speed=speed,
+            tree_eta_n=v.tree_eta_n,
+            rov_eta_n=v.rov_eta_n,
+            eta_ref=v.eta_ref,
+            eta_hat=v.eta_hat,
+            thruster_utilisation=v.utilisation,
             thruster_force_newton=v.force_newton,
-            mode=v.mode, allocation=sim.settings.allocation, grip=bool(sim.gripping),
-            gains=sim.gains, crane_tip_n=tuple(float(c) for c in sim.crane_tip_n),  # type: ignore[arg-type]
-            wire_length_m=float(sim.wire_length_m), wire_tension_newton=self.tension_newton,
+            mode=v.mode,
+            allocation=sim.settings.allocation,
+            grip=bool(sim.gripping),
+            gains=sim.gains,
+            crane_tip_n=tuple(float(c) for c in sim.crane_tip_n),  # type: ignore[arg-type]
+            wire_length_m=float(sim.wire_length_m),
+            wire_tension_newton=self.tension_newton,
             current_speed_mps=sim.current_speed_mps,
             current_direction_rad=sim.current_direction_rad,
             wire_drag_newton_per_m=float(sim.ps.wire.drag_per_length(sim.current_speed_mps)),
-            mission=self._mission_result(), alarms=self.monitor.state,
-            recording=self.recording_name, replay=None, scene=self.scene, stats=stats,
-            warnings=(*sim.startup.warnings, *self.notices), error=self.error,
-            trend=self._trend())
+            mission=self._mission_result(),
+            alarms=self.monitor.state,
+            recording=self.recording_name,
+            replay=None,
+            scene=self.scene,
+            stats=stats,
+            warnings=(*sim.startup.warnings, *self.notices),
+            error=self.error,
+            trend=self._trend(),
+        )
 
-    def _replay_snapshot(self, seq: int, paused: bool, speed: float,
-                         stats: LoopStats) -> Snapshot:
+    def _replay_snapshot(self, seq: int, paused: bool, speed: float, stats: LoopStats) -> Snapshot:
         rp = self.replay
         assert rp is not None
         v = row_view(rp.row(), rp.scene.n_thrusters)
         crane_tip_n, wire_length_m, tension_newton = rp.site()
         return Snapshot(
-            seq=seq, source="replay", t_s=v.t_s, paused=not rp.playing, speed=speed,
-            tree_eta_n=v.tree_eta_n, rov_eta_n=v.rov_eta_n, eta_ref=v.eta_ref,
-            eta_hat=v.eta_hat, thruster_utilisation=v.utilisation,
+            seq=seq,
+            source="replay",
+            t_s=v.t_s,
+            paused=not rp.playing,
+            speed=speed,
+            tree_eta_n=v.tree_eta_n,
+            rov_eta_n=v.rov_eta_n,
+            eta_ref=v.eta_ref,
+            eta_hat=v.eta_hat,
+            thruster_utilisation=v.utilisation,
             thruster_force_newton=v.force_newton,
-            mode=v.mode, allocation=None, grip=None, gains=None,
+            mode=v.mode,
+            allocation=None,
+            grip=None,
+            gains=None,
             crane_tip_n=crane_tip_n,
-            wire_length_m=wire_length_m, wire_tension_newton=tension_newton,
-            current_speed_mps=0.0, current_direction_rad=0.0, wire_drag_newton_per_m=0.0,
+            wire_length_m=wire_length_m,
+            wire_tension_newton=tension_newton,
+            current_speed_mps=0.0,
+            current_direction_rad=0.0,
+            wire_drag_newton_per_m=0.0,
             mission=MissionStatus(name=rp.mission, state="replay"),
-            alarms=rp.monitor.state, recording=self.recording_name, replay=rp.status(),
-            scene=rp.scene, stats=stats, trend=rp.trend())
+            alarms=rp.monitor.state,
+            recording=self.recording_name,
+            replay=rp.status(),
+            scene=rp.scene,
+            stats=stats,
+            trend=rp.trend(),
+        )
 
     def close(self) -> None:
         """Close the recording and the scoring worker (at shutdown)."""

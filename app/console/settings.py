@@ -43,9 +43,11 @@ class ConsoleSettings:
 
     def __post_init__(self) -> None:
         if not is_loopback(self.host) and not self.allow_remote:
-            raise ValueError(f"host {self.host!r} is not a loopback address: binding to it "
-                             f"exposes the console to the network; pass allow_remote "
-                             f"(--allow-remote) to do it on purpose")
+            raise ValueError(
+                f"host {self.host!r} is not a loopback address: binding to it "
+                f"exposes the console to the network; pass allow_remote "
+                f"(--allow-remote) to do it on purpose"
+            )
         for name in ("port", "viser_port"):
             value = getattr(self, name)
             if not 0 <= value <= 65535:

@@ -24,8 +24,7 @@ FloatArray = NDArray[np.float64]
 Vec3 = tuple[float, float, float]
 Vec6 = tuple[float, float, float, float, float, float]
 
-TREND_COLUMNS = ("t_s", "north_m", "east_m", "psi_rad", "north_ref_m", "east_ref_m",
-                 "psi_ref_rad")
+TREND_COLUMNS = ("t_s", "north_m", "east_m", "psi_rad", "north_ref_m", "east_ref_m", "psi_ref_rad")
 """Columns of ``Snapshot.trend``: the tree against the reference, one row per 0.1 s."""
 TREND_DECIMATION = 10
 """Plant steps per trend row (10 steps of 0.01 s = 0.1 s at the plant's 100 Hz)."""
@@ -151,8 +150,9 @@ def frozen_copy(a: FloatArray) -> FloatArray:
     return _frozen(np.array(a, dtype=float, copy=True))
 
 
-def default_docking_frame(ps: ParameterSet, center_ne: FloatArray, heading_rad: float,
-                          tree_depth_m: float) -> DockingFrame:
+def default_docking_frame(
+    ps: ParameterSet, center_ne: FloatArray, heading_rad: float, tree_depth_m: float
+) -> DockingFrame:
     """The frame under the tree's start: post tops half a tree height below its bottom.
 
     Used until a mission's set-up places the frame (the thesis's chapter 5 frame stands under
@@ -166,15 +166,18 @@ def default_docking_frame(ps: ParameterSet, center_ne: FloatArray, heading_rad: 
 def scene_info(ps: ParameterSet, frame: DockingFrame, version: int) -> SceneInfo:
     dims = ps.tree.dimensions_m
     return SceneInfo(
-        version=version, params_name=ps.name,
+        version=version,
+        params_name=ps.name,
         tree_dimensions_m=(float(dims[0]), float(dims[1]), float(dims[2])),
         attachment_height_m=float(ps.tree.attachment_height_m),
         rov_dimensions_m=tuple(float(v) for v in rov_drawing_box_m(ps)),  # type: ignore[arg-type]
         layout=ps.spec.docking.to_numeric(),
-        frame=frame, n_thrusters=int(ps.rov.thrusters.T.shape[1]),
+        frame=frame,
+        n_thrusters=int(ps.rov.thrusters.T.shape[1]),
         wire_weight_newton_per_m=float(ps.wire.submerged_weight_per_length()),
         tree_weight_newton=float(ps.tree.submerged_weight_newton),
-        preset_gains=Gains.of(ps.gains.kp, ps.gains.ki, ps.gains.kd))
+        preset_gains=Gains.of(ps.gains.kp, ps.gains.ki, ps.gains.kd),
+    )
 
 
 @dataclass(frozen=True)
@@ -201,11 +204,15 @@ def row_view(row: FloatArray, n_thrusters: int) -> RowView:
     mode = float(v["mode"][0])
     mode_code = int(mode) if math.isfinite(mode) else 0
     return RowView(
-        t_s=float(v.t_s[0]), tree_eta_n=seq("tree_eta_n"),  # type: ignore[arg-type]
+        t_s=float(v.t_s[0]),
+        tree_eta_n=seq("tree_eta_n"),  # type: ignore[arg-type]
         rov_eta_n=seq("rov_eta_n"),  # type: ignore[arg-type]
-        eta_ref=seq("eta_ref_n"), eta_hat=seq("eta_hat_n"),  # type: ignore[arg-type]
-        utilisation=seq("thruster_utilisation"), force_newton=seq("thruster_force"),
-        mode=MODES[mode_code] if 0 <= mode_code < len(MODES) else "tree")
+        eta_ref=seq("eta_ref_n"),  # type: ignore[arg-type]
+        eta_hat=seq("eta_hat_n"),  # type: ignore[arg-type]
+        utilisation=seq("thruster_utilisation"),
+        force_newton=seq("thruster_force"),
+        mode=MODES[mode_code] if 0 <= mode_code < len(MODES) else "tree",
+    )
 
 
 def trend_rows(rows: LogRows) -> FloatArray:
@@ -235,8 +242,9 @@ class TrendBuffer:
         if len(rows) == 0:
             return
         steps = np.rint(rows.t_s / self.dt_s).astype(np.int64)
-        picked = LogRows(rows.data[steps % TREND_DECIMATION == 0], rows.n_thrusters,
-                         layout=rows.layout)
+        picked = LogRows(
+            rows.data[steps % TREND_DECIMATION == 0], rows.n_thrusters, layout=rows.layout
+        )
         cap = len(self._data)
         for r in trend_rows(picked)[-cap:]:
             self._data[self._count % cap] = r
@@ -246,6 +254,6 @@ class TrendBuffer:
         """Read-only copy, oldest first."""
         cap = len(self._data)
         if self._count <= cap:
-            return frozen_copy(self._data[:self._count])
+            return frozen_copy(self._data[: self._count])
         i = self._count % cap
         return frozen_copy(np.vstack([self._data[i:], self._data[:i]]))

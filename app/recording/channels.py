@@ -66,8 +66,10 @@ class PlotField:
         for block, index in ((self.block, self.index), *([self.minus] if self.minus else [])):
             width = LAYOUT.widths.get(block)
             if width is None or not 0 <= index < width:
-                raise ValueError(f"plot field {self.name!r}: element {index} of log block "
-                                 f"{block!r} does not exist")
+                raise ValueError(
+                    f"plot field {self.name!r}: element {index} of log block "
+                    f"{block!r} does not exist"
+                )
 
     def columns(self, layout: Layout = LAYOUT) -> tuple[int, int | None]:
         """Where the field's element, and the one it subtracts (None: none), sit in a row."""
@@ -107,8 +109,14 @@ class PlotChannel:
 
 
 _AXES3 = ("surge_newton", "sway_newton", "yaw_newton_m")
-_AXES6 = ("surge_newton", "sway_newton", "heave_newton", "roll_newton_m", "pitch_newton_m",
-          "yaw_newton_m")
+_AXES6 = (
+    "surge_newton",
+    "sway_newton",
+    "heave_newton",
+    "roll_newton_m",
+    "pitch_newton_m",
+    "yaw_newton_m",
+)
 _POSE = ("north_m", "east_m", "down_m", "roll_deg", "pitch_deg", "yaw_deg")
 _TERMS = tuple(f"{p}_{a}" for p in ("p", "i", "d", "ff") for a in _AXES3)
 
@@ -129,73 +137,107 @@ def _pose(block: str) -> tuple[PlotField, ...]:
 
 
 def _estimate_fields() -> tuple[PlotField, ...]:
-    return (PlotField("north_m", "eta_hat_n", 0), PlotField("east_m", "eta_hat_n", 1),
-            PlotField("yaw_deg", "eta_hat_n", 2, DEG), PlotField("u_mps", "nu_hat_tree", 0),
-            PlotField("v_mps", "nu_hat_tree", 1), PlotField("r_deg_s", "nu_hat_tree", 2, DEG),
-            *_named("bias_", "bias_tree", _AXES3),
-            *_named("nis_", "nis", ("north", "east", "heading")))
+    return (
+        PlotField("north_m", "eta_hat_n", 0),
+        PlotField("east_m", "eta_hat_n", 1),
+        PlotField("yaw_deg", "eta_hat_n", 2, DEG),
+        PlotField("u_mps", "nu_hat_tree", 0),
+        PlotField("v_mps", "nu_hat_tree", 1),
+        PlotField("r_deg_s", "nu_hat_tree", 2, DEG),
+        *_named("bias_", "bias_tree", _AXES3),
+        *_named("nis_", "nis", ("north", "east", "heading")),
+    )
 
 
 def _reference_fields() -> tuple[PlotField, ...]:
     """Reference pose and rate, and the error = true tree minus reference."""
-    return (PlotField("north_m", "eta_ref_n", 0), PlotField("east_m", "eta_ref_n", 1),
-            PlotField("yaw_deg", "eta_ref_n", 2, DEG),
-            PlotField("north_rate_mps", "eta_ref_rate_n", 0),
-            PlotField("east_rate_mps", "eta_ref_rate_n", 1),
-            PlotField("yaw_rate_deg_s", "eta_ref_rate_n", 2, DEG),
-            PlotField("error_north_m", "tree_eta_n", 0, 1.0, ("eta_ref_n", 0)),
-            PlotField("error_east_m", "tree_eta_n", 1, 1.0, ("eta_ref_n", 1)),
-            PlotField("error_yaw_deg", "tree_eta_n", 5, DEG, ("eta_ref_n", 2)))
+    return (
+        PlotField("north_m", "eta_ref_n", 0),
+        PlotField("east_m", "eta_ref_n", 1),
+        PlotField("yaw_deg", "eta_ref_n", 2, DEG),
+        PlotField("north_rate_mps", "eta_ref_rate_n", 0),
+        PlotField("east_rate_mps", "eta_ref_rate_n", 1),
+        PlotField("yaw_rate_deg_s", "eta_ref_rate_n", 2, DEG),
+        PlotField("error_north_m", "tree_eta_n", 0, 1.0, ("eta_ref_n", 0)),
+        PlotField("error_east_m", "tree_eta_n", 1, 1.0, ("eta_ref_n", 1)),
+        PlotField("error_yaw_deg", "tree_eta_n", 5, DEG, ("eta_ref_n", 2)),
+    )
 
 
 def _measurement_fields() -> tuple[PlotField, ...]:
     """Held sensor values (angles in degrees) and the accepted-sample flags."""
-    held = tuple(PlotField(e.removeprefix("y_").replace("_rad", "_deg"), "y", i,
-                           DEG if "_rad" in e else 1.0)
-                 for i, e in enumerate(_elements("y")))
+    held = tuple(
+        PlotField(e.removeprefix("y_").replace("_rad", "_deg"), "y", i, DEG if "_rad" in e else 1.0)
+        for i, e in enumerate(_elements("y"))
+    )
     return held + _named("", "accepted", _elements("accepted"))
 
 
 def _thruster_fields(n_thrusters: int) -> tuple[PlotField, ...]:
     out: list[PlotField] = []
     for i in range(n_thrusters):
-        out += [PlotField(f"thruster{i + 1}_force_newton", "thruster_force", i),
-                PlotField(f"thruster{i + 1}_speed_rpm", "thruster_speed", i, RPM),
-                PlotField(f"thruster{i + 1}_utilisation", "thruster_utilisation", i)]
+        out += [
+            PlotField(f"thruster{i + 1}_force_newton", "thruster_force", i),
+            PlotField(f"thruster{i + 1}_speed_rpm", "thruster_speed", i, RPM),
+            PlotField(f"thruster{i + 1}_utilisation", "thruster_utilisation", i),
+        ]
     return tuple(out)
 
 
 def plot_channels(n_thrusters: int) -> tuple[PlotChannel, ...]:
     """The plot channels for an ROV with ``n_thrusters`` thrusters."""
-    forces = (*_named("tree_", "tau_tree_cmd", _AXES3),
-              *_named("rov_cmd_", "tau_rov_cmd_b", _AXES6),
-              *_named("rov_ach_", "tau_rov_ach_b", _AXES6), PlotField("mode", "mode"))
+    forces = (
+        *_named("tree_", "tau_tree_cmd", _AXES3),
+        *_named("rov_cmd_", "tau_rov_cmd_b", _AXES6),
+        *_named("rov_ach_", "tau_rov_ach_b", _AXES6),
+        PlotField("mode", "mode"),
+    )
     return (
-        PlotChannel("/tree/state", "rov_console.TreeState", "true tree pose (NED)",
-                    _pose("tree_eta_n")),
-        PlotChannel("/rov/state", "rov_console.RovState", "true ROV pose (NED)",
-                    _pose("rov_eta_n")),
-        PlotChannel("/tree/estimate", "rov_console.TreeEstimate",
-                    "what the controller believes of the tree: pose, body rates, bias, NIS",
-                    _estimate_fields()),
-        PlotChannel("/reference", "rov_console.Reference",
-                    "reference pose and rate; error = true tree minus reference",
-                    _reference_fields()),
-        PlotChannel("/measurements", "rov_console.Measurements",
-                    "held sensor values (sim.sensors) and accepted-sample flags",
-                    _measurement_fields()),
-        PlotChannel("/control/forces", "rov_console.ControlForces",
-                    "commanded force on the tree (tree axes), commanded and achieved ROV "
-                    "wrench (ROV axes), supervisor mode (0 tree, 1 free)", forces),
-        PlotChannel("/thrusters", "rov_console.Thrusters",
-                    "per-thruster force, propeller speed and utilisation",
-                    _thruster_fields(n_thrusters)),
-        PlotChannel("/control/terms", "rov_console.ControlTerms",
-                    "P, I, D and feedforward parts of the tree force (tree axes)",
-                    _named("", "control_terms", _TERMS)),
+        PlotChannel(
+            "/tree/state", "rov_console.TreeState", "true tree pose (NED)", _pose("tree_eta_n")
+        ),
+        PlotChannel(
+            "/rov/state", "rov_console.RovState", "true ROV pose (NED)", _pose("rov_eta_n")
+        ),
+        PlotChannel(
+            "/tree/estimate",
+            "rov_console.TreeEstimate",
+            "what the controller believes of the tree: pose, body rates, bias, NIS",
+            _estimate_fields(),
+        ),
+        PlotChannel(
+            "/reference",
+            "rov_console.Reference",
+            "reference pose and rate; error = true tree minus reference",
+            _reference_fields(),
+        ),
+        PlotChannel(
+            "/measurements",
+            "rov_console.Measurements",
+            "held sensor values (sim.sensors) and accepted-sample flags",
+            _measurement_fields(),
+        ),
+        PlotChannel(
+            "/control/forces",
+            "rov_console.ControlForces",
+            "commanded force on the tree (tree axes), commanded and achieved ROV "
+            "wrench (ROV axes), supervisor mode (0 tree, 1 free)",
+            forces,
+        ),
+        PlotChannel(
+            "/thrusters",
+            "rov_console.Thrusters",
+            "per-thruster force, propeller speed and utilisation",
+            _thruster_fields(n_thrusters),
+        ),
+        PlotChannel(
+            "/control/terms",
+            "rov_console.ControlTerms",
+            "P, I, D and feedforward parts of the tree force (tree axes)",
+            _named("", "control_terms", _TERMS),
+        ),
     )
 
 
-WIRE_FIELDS = ("crane_tip_north_m", "crane_tip_east_m", "wire_length_m",
-               "tree_offset_from_tip_m")
+WIRE_FIELDS = ("crane_tip_north_m", "crane_tip_east_m", "wire_length_m", "tree_offset_from_tip_m")
 """Fields of ``/wire`` (besides t_s)."""

@@ -43,17 +43,32 @@ def export_csv(path: str | Path, out_dir: str | Path, *, overwrite: bool = False
     if not overwrite:
         existing = [n for n in names if (out / n).exists()]
         if existing:
-            raise FileExistsError(f"{out}: would replace {', '.join(existing)} "
-                                  "(choose another folder or allow overwriting)")
+            raise FileExistsError(
+                f"{out}: would replace {', '.join(existing)} "
+                "(choose another folder or allow overwriting)"
+            )
     out.mkdir(parents=True, exist_ok=True)
-    written = [_write_csv(out / names[0], data.columns,
-                          ([_csv_value(float(v)) for v in r] for r in data.rows))]
+    written = [
+        _write_csv(
+            out / names[0], data.columns, ([_csv_value(float(v)) for v in r] for r in data.rows)
+        )
+    ]
     for topic, name in zip(topics, names[1:-1], strict=True):
         decoded = [json.loads(m.data) for m in scan.messages.get(topic, [])]
         header = list(decoded[0]) if decoded else []
-        written.append(_write_csv(out / name, header,
-                                  ([_csv_value(d.get(k)) for k in header] for d in decoded)))
-    written.append(_write_csv(out / names[-1], ["t_s", "kind", "text", "data"], (
-        [_csv_value(e["t_s"]), e["kind"], e["text"], json.dumps(e.get("data", {}))]
-        for e in data.events)))
+        written.append(
+            _write_csv(
+                out / name, header, ([_csv_value(d.get(k)) for k in header] for d in decoded)
+            )
+        )
+    written.append(
+        _write_csv(
+            out / names[-1],
+            ["t_s", "kind", "text", "data"],
+            (
+                [_csv_value(e["t_s"]), e["kind"], e["text"], json.dumps(e.get("data", {}))]
+                for e in data.events
+            ),
+        )
+    )
     return written

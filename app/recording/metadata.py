@@ -37,14 +37,22 @@ def docking_frame_metadata(frame: DockingFrame | None) -> dict[str, Any] | None:
     """A docking frame as metadata (None stays None)."""
     if frame is None:
         return None
-    return {"center_n": [float(v) for v in frame.center_n],
-            "heading_rad": float(frame.heading_rad),
-            "landing_depth_m": float(frame.landing_depth_m)}
+    return {
+        "center_n": [float(v) for v in frame.center_n],
+        "heading_rad": float(frame.heading_rad),
+        "landing_depth_m": float(frame.landing_depth_m),
+    }
 
 
-def session_metadata(sim: Simulation, mission: Mission, *, seed: int | None = None,
-                     label: str = "", docking: DockingFrame | None = None,
-                     started_utc: datetime | None = None) -> dict[str, Any]:
+def session_metadata(
+    sim: Simulation,
+    mission: Mission,
+    *,
+    seed: int | None = None,
+    label: str = "",
+    docking: DockingFrame | None = None,
+    started_utc: datetime | None = None,
+) -> dict[str, Any]:
     """The setup metadata of a recording of ``sim`` running ``mission`` (see the module
     docstring). ``seed``: the seed ``sim`` was built with (default: the mission's);
     ``docking``: the docking frame drawn (default: the simulation's); ``started_utc``: default

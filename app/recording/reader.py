@@ -111,8 +111,9 @@ def _record_spans(buf: bytes) -> Iterator[tuple[int, int, int]]:
 
 def _parse_record(buf: bytes, start: int, end: int) -> list:
     """The record at buf[start:end], a chunk broken up into its records (CRC checked)."""
-    reader = StreamReader(io.BytesIO(buf[start:end]), skip_magic=True, emit_chunks=True,
-                          validate_crcs=True)
+    reader = StreamReader(
+        io.BytesIO(buf[start:end]), skip_magic=True, emit_chunks=True, validate_crcs=True
+    )
     record = next(iter(reader.records))
     if isinstance(record, Chunk):
         return breakup_chunk(record, validate_crc=True)
@@ -143,14 +144,16 @@ def _scan_file(path: Path) -> FileScan:
         buf = path.read_bytes()
     except OSError as err:
         raise ValueError(f"{path}: cannot read: {err.strerror or err}") from None
-    if buf[:len(MCAP_MAGIC)] != MCAP_MAGIC:
+    if buf[: len(MCAP_MAGIC)] != MCAP_MAGIC:
         what = "empty" if not buf else "does not start with the MCAP magic bytes"
         raise ValueError(f"{path}: not an MCAP file ({what})")
     scan = FileScan(file_bytes=len(buf))
     _scan_records(buf, scan)
     if scan.header is None:
-        raise ValueError(f"{path}: MCAP file without a readable header record "
-                         f"({len(buf)} bytes): {scan.problem or 'nothing to read'}")
+        raise ValueError(
+            f"{path}: MCAP file without a readable header record "
+            f"({len(buf)} bytes): {scan.problem or 'nothing to read'}"
+        )
     return scan
 
 
@@ -175,8 +178,10 @@ def _scan_records(buf: bytes, scan: FileScan) -> None:
             else:
                 scan.problem = f"footer at byte {start} is not followed by the closing magic"
             return
-    scan.problem = (f"cut off at byte {scan.intact_bytes} of {len(buf)}: no footer "
-                    "(the writer did not finish: killed or still writing)")
+    scan.problem = (
+        f"cut off at byte {scan.intact_bytes} of {len(buf)}: no footer "
+        "(the writer did not finish: killed or still writing)"
+    )
 
 
 def _check_statistics(scan: FileScan) -> None:
@@ -187,8 +192,9 @@ def _check_statistics(scan: FileScan) -> None:
         topic = scan.channels[cid].topic if cid in scan.channels else f"#{cid}"
         if len(scan.messages.get(topic, [])) != n:
             scan.complete = False
-            scan.problem = (f"statistics say {n} messages on {topic}, "
-                            f"found {len(scan.messages.get(topic, []))}")
+            scan.problem = (
+                f"statistics say {n} messages on {topic}, found {len(scan.messages.get(topic, []))}"
+            )
 
 
 def _decode_setup(scan: FileScan) -> dict:
@@ -214,8 +220,9 @@ def _rows(messages: list[Message], width: int) -> FloatArray:
     for i, m in enumerate(messages):
         values = json.loads(m.data)["row"]
         if len(values) != width:
-            raise ValueError(f"{SESSION_TOPIC} message {i} has {len(values)} values for "
-                             f"{width} columns")
+            raise ValueError(
+                f"{SESSION_TOPIC} message {i} has {len(values)} values for {width} columns"
+            )
         rows[i] = [math.nan if v is None else v for v in values]
     return rows
 
@@ -233,11 +240,18 @@ def read_scan(path: str | Path) -> tuple[FileScan, SessionData]:
     events = [json.loads(m.data) for m in scan.messages.get(EVENTS_TOPIC, [])]
     ends = [m.log_time for msgs in scan.messages.values() for m in msgs]
     data = SessionData(
-        metadata=setup, columns=columns, t_s=layout.take(rows, "t_s").copy(), rows=rows,
-        events=events, complete=scan.complete,
+        metadata=setup,
+        columns=columns,
+        t_s=layout.take(rows, "t_s").copy(),
+        rows=rows,
+        events=events,
+        complete=scan.complete,
         message_counts={t: len(m) for t, m in sorted(scan.messages.items())},
-        end_time_s=max(ends) / 1e9 if ends else math.nan, file_bytes=scan.file_bytes,
-        intact_bytes=scan.intact_bytes, problem=scan.problem)
+        end_time_s=max(ends) / 1e9 if ends else math.nan,
+        file_bytes=scan.file_bytes,
+        intact_bytes=scan.intact_bytes,
+        problem=scan.problem,
+    )
     return scan, data
 
 
@@ -251,10 +265,14 @@ def load_session(path: str | Path) -> SessionData:
 def _channel_report(scan: FileScan, ch: Channel) -> dict:
     msgs = scan.messages.get(ch.topic, [])
     schema = scan.schemas.get(ch.schema_id)
-    return {"topic": ch.topic, "schema": schema.name if schema else "",
-            "encoding": ch.message_encoding, "messages": len(msgs),
-            "first_s": min(m.log_time for m in msgs) / 1e9 if msgs else None,
-            "last_s": max(m.log_time for m in msgs) / 1e9 if msgs else None}
+    return {
+        "topic": ch.topic,
+        "schema": schema.name if schema else "",
+        "encoding": ch.message_encoding,
+        "messages": len(msgs),
+        "first_s": min(m.log_time for m in msgs) / 1e9 if msgs else None,
+        "last_s": max(m.log_time for m in msgs) / 1e9 if msgs else None,
+    }
 
 
 def check_session(path: str | Path) -> dict:
@@ -265,11 +283,17 @@ def check_session(path: str | Path) -> dict:
     channels = [_channel_report(scan, ch) for ch in scan.channels_in_order()]
     starts = [c["first_s"] for c in channels if c["first_s"] is not None]
     return {
-        "file": str(path), "status": "complete" if data.complete else "truncated",
-        "complete": data.complete, "problem": data.problem, "file_bytes": data.file_bytes,
-        "intact_bytes": data.intact_bytes, "writer": scan.header.library if scan.header else "",
+        "file": str(path),
+        "status": "complete" if data.complete else "truncated",
+        "complete": data.complete,
+        "problem": data.problem,
+        "file_bytes": data.file_bytes,
+        "intact_bytes": data.intact_bytes,
+        "writer": scan.header.library if scan.header else "",
         "time_range_s": [min(starts), data.end_time_s] if starts else None,
-        "rows": len(data.rows), "events": len(data.events),
+        "rows": len(data.rows),
+        "events": len(data.events),
         "metadata_records": sorted(scan.metadata),
-        "metadata_keys": sorted(data.metadata), "channels": channels,
+        "metadata_keys": sorted(data.metadata),
+        "channels": channels,
     }

@@ -110,8 +110,10 @@ def _log_rows(data: FloatArray | LogRows) -> FloatArray:
     """(n, N_LOG) rows in this software's layout, else ValueError."""
     if isinstance(data, LogRows):
         if data.layout.names != COLUMN_NAMES:
-            raise ValueError("log rows must be in this software's layout (control.columns), "
-                             "not a recorded file's")
+            raise ValueError(
+                "log rows must be in this software's layout (control.columns), "
+                "not a recorded file's"
+            )
         data = data.data
     rows = np.asarray(data, dtype=float)
     if rows.ndim != 2 or rows.shape[1] != N_LOG:
@@ -119,20 +121,26 @@ def _log_rows(data: FloatArray | LogRows) -> FloatArray:
     return rows
 
 
-def _setup_record(metadata: Mapping[str, Any], ps: ParameterSet, n_thrusters: int,
-                  rates: dict[str, float]) -> dict[str, str]:
+def _setup_record(
+    metadata: Mapping[str, Any], ps: ParameterSet, n_thrusters: int, rates: dict[str, float]
+) -> dict[str, str]:
     """The metadata record: every value JSON-encoded (strings too, so reading is exact).
 
     A caller's value for a key the recorder writes itself must be the recorder's value."""
-    recorder = {"format_version": FORMAT_VERSION, "software_version": software_version(),
-                "mcap_python": importlib_metadata.version("mcap"),
-                "n_thrusters": n_thrusters, "frames": "world = [north, west, up] (z up); "
-                "ned = [north, east, down]; tree, rov, reference: children of ned"} | rates
+    recorder = {
+        "format_version": FORMAT_VERSION,
+        "software_version": software_version(),
+        "mcap_python": importlib_metadata.version("mcap"),
+        "n_thrusters": n_thrusters,
+        "frames": "world = [north, west, up] (z up); "
+        "ned = [north, east, down]; tree, rov, reference: children of ned",
+    } | rates
     own = {"params": ps.spec.model_dump(mode="json"), "columns": COLUMNS, "recorder": recorder}
     clash = sorted(k for k in RESERVED_SETUP_KEYS if k in metadata and metadata[k] != own[k])
     if clash:
-        raise ValueError(f"metadata keys {clash} are written by the recorder itself "
-                         "(leave them out)")
+        raise ValueError(
+            f"metadata keys {clash} are written by the recorder itself (leave them out)"
+        )
     out = {}
     for key, value in {**metadata, **own}.items():
         try:
@@ -151,19 +159,31 @@ def _check_rates(**rates: float) -> None:
 class SessionRecorder:
     """Writes one session to an MCAP file (see the module docstring)."""
 
-    def __init__(self, path: str | Path, *, metadata: Mapping[str, Any], params: ParameterSet,
-                 n_thrusters: int, flush_interval_s: float = 0.5,
-                 numeric_rate_hz: float = 20.0, scene_rate_hz: float = 5.0,
-                 clock: Callable[[], float] = time.monotonic, overwrite: bool = False,
-                 docking: DockingFrame | None = None) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        metadata: Mapping[str, Any],
+        params: ParameterSet,
+        n_thrusters: int,
+        flush_interval_s: float = 0.5,
+        numeric_rate_hz: float = 20.0,
+        scene_rate_hz: float = 5.0,
+        clock: Callable[[], float] = time.monotonic,
+        overwrite: bool = False,
+        docking: DockingFrame | None = None,
+    ) -> None:
         """Create ``path`` (refuses an existing file unless ``overwrite``), write the header,
         schemas, channels and the ``setup`` metadata record (``metadata``, e.g. from
         ``session_metadata``), and start the flush thread. ``docking``: the docking frame to
         draw from the start (``write_log`` can change it)."""
         if not 1 <= n_thrusters <= M_MAX:
             raise ValueError(f"n_thrusters must be in [1, {M_MAX}], got {n_thrusters}")
-        rates = {"numeric_rate_hz": numeric_rate_hz, "scene_rate_hz": scene_rate_hz,
-                 "flush_interval_s": flush_interval_s}
+        rates = {
+            "numeric_rate_hz": numeric_rate_hz,
+            "scene_rate_hz": scene_rate_hz,
+            "flush_interval_s": flush_interval_s,
+        }
         _check_rates(**rates)
         setup = _setup_record(metadata, params, n_thrusters, rates)
         self._plots = plot_channels(n_thrusters)
@@ -206,8 +226,11 @@ class SessionRecorder:
             channels[topic] = w.register_channel(topic, "json", sid, meta or {})
 
         channels: dict[str, int] = {}
-        add(SESSION_TOPIC, schemas.session_log_schema(),
-            {"kind": "table", "columns": json.dumps(COLUMNS)})
+        add(
+            SESSION_TOPIC,
+            schemas.session_log_schema(),
+            {"kind": "table", "columns": json.dumps(COLUMNS)},
+        )
         add(TF_TOPIC, schemas.frame_transforms_schema())
         add(SCENE_TOPIC, schemas.scene_update_schema())
         for ch in self._plots:
@@ -221,17 +244,26 @@ class SessionRecorder:
     def _add(self, topic: str, t_ns: int, message: dict) -> None:
         cid = self._channels[topic]
         self._sequence[topic] += 1
-        self._writer.add_message(cid, log_time=t_ns, publish_time=t_ns,
-                                 data=json_bytes(message), sequence=self._sequence[topic])
+        self._writer.add_message(
+            cid,
+            log_time=t_ns,
+            publish_time=t_ns,
+            data=json_bytes(message),
+            sequence=self._sequence[topic],
+        )
         self._dirty = True
 
     def _check_open(self) -> None:
         if self._closed:
             raise RecordingError(f"{self.path}: the recorder is closed")
 
-    def write_log(self, data: FloatArray | LogRows,
-                  crane_tip_n: Sequence[float] | FloatArray | None = None,
-                  wire_length_m: float | None = None, docking: DockingFrame | None = None) -> None:
+    def write_log(
+        self,
+        data: FloatArray | LogRows,
+        crane_tip_n: Sequence[float] | FloatArray | None = None,
+        wire_length_m: float | None = None,
+        docking: DockingFrame | None = None,
+    ) -> None:
         """Record log rows (``LogRows`` or an (n, N_LOG) array in ``control.columns`` layout),
         later than every row recorded so far and in time order (else ValueError: a restarted
         simulation needs a new recorder).
@@ -243,8 +275,10 @@ class SessionRecorder:
         with self._lock:
             self._check_open()
             if len(t) and not (t[0] > self._last_t_s and np.all(np.diff(t) > 0.0)):
-                raise ValueError(f"log rows must go forward in time after the last recorded "
-                                 f"t = {self._last_t_s} s; got t = {t[0]} .. {t[-1]} s")
+                raise ValueError(
+                    f"log rows must go forward in time after the last recorded "
+                    f"t = {self._last_t_s} s; got t = {t[0]} .. {t[-1]} s"
+                )
             if crane_tip_n is not None:
                 self._crane_tip_n = _crane_tip(crane_tip_n)
             if wire_length_m is not None:
@@ -266,11 +300,15 @@ class SessionRecorder:
             for ch in self._plots:
                 self._add(ch.topic, t_ns, plot_message(ch, row))
             if self._crane_tip_n is not None:
-                self._add(WIRE_TOPIC, t_ns, wire_message(row, self._crane_tip_n,
-                                                         self._wire_length_m))
+                self._add(
+                    WIRE_TOPIC, t_ns, wire_message(row, self._crane_tip_n, self._wire_length_m)
+                )
         if scene:
-            self._add(SCENE_TOPIC, t_ns, scene_message(t_ns, row, self._geo, self._crane_tip_n,
-                                                       self._docking))
+            self._add(
+                SCENE_TOPIC,
+                t_ns,
+                scene_message(t_ns, row, self._geo, self._crane_tip_n, self._docking),
+            )
 
     def event(self, t_s: float, kind: str, text: str, data: dict | None = None) -> None:
         """Record an event at simulation time ``t_s`` on ``/events`` (and ``/log`` for
