@@ -288,7 +288,7 @@ def _print_result_table(summary: dict) -> None:
             f"{leg['rms_east_m']:.4f}",
             f"{leg['rms_heading_deg']:.3f}",
             f"{leg['max_utilisation']:.2f}",
-            f"{leg['saturated_s']:.1f}" + (" TIMEOUT" if leg["timed_out"] else ""),
+            f"{leg['saturated_s']:.1f}" + _leg_flag(leg),
         )
     table.add_row(
         "scored",
@@ -310,7 +310,15 @@ def _print_result_table(summary: dict) -> None:
         f"{summary['settling_time_s']} s; diverged: {summary['diverged']}"
     )
     for w in summary["warnings"]:
-        console.print(f"[bold red]WARNING[/]: {w}")
+        console.print("WARNING: " + w, style="bold red", markup=False)
+    if summary.get("error"):
+        console.print("ERROR: " + summary["error"], style="bold red", markup=False)
+
+
+def _leg_flag(leg: dict) -> str:
+    if leg.get("error"):
+        return " FAILED"
+    return " TIMEOUT" if leg["timed_out"] else ""
 
 
 def _validate_choice(name: str, value: str | None, allowed: tuple[str, ...]) -> None:

@@ -8,6 +8,7 @@ its rows are handed back (``MissionContext.last_log``) and the executor is resum
 
 from __future__ import annotations
 
+import math
 from collections.abc import Generator
 
 import numpy as np
@@ -38,6 +39,8 @@ class MissionDriver:
         self.spans: list[LegSpan] = []
         self.diverged = False
         self.divergence = ""
+        self.error = ""
+        """Why a leg failed (its executor or the simulation refused what it asked)."""
         self.aborted = False
         self._gen: Generator[float, None, bool] | None = None
         self._leg_start = 0
@@ -48,7 +51,12 @@ class MissionDriver:
     # ------------------------------------------------------------------ state
     @property
     def done(self) -> bool:
-        return self.leg_index >= len(self.mission.legs) or self.aborted or self.diverged
+        return (
+            self.leg_index >= len(self.mission.legs)
+            or self.aborted
+            or self.diverged
+            or bool(self.error)
+        )
 
     @property
     def current_leg(self) -> schema.Leg | None:
@@ -75,7 +83,7 @@ class MissionDriver:
             deadline = self.sim.t_s + leg.timeout_s
             self._gen = LEG_EXECUTORS[leg.type](self.ctx, leg, deadline)
 
-    def _end_leg(self, ok: bool) -> None:
+    def _end_leg(self, ok: bool, error: str = "") -> None:
         leg = self.current_leg
         if leg is None:
             return
@@ -87,7 +95,8 @@ class MissionDriver:
                 leg.score,
                 self._leg_start,
                 self.rows,
-                not ok,
+                not ok and not error,
+                error,
             )
         )
 
@@ -105,6 +114,12 @@ class MissionDriver:
                 self._end_leg(bool(stop.value))
                 self._start_leg()
                 continue
+            except Exception as err:  # a leg's failure ends the mission, not its driver
+                self._fail_leg(err)
+                return False
+            if not (math.isfinite(seconds) and seconds >= 0.0):
+                self._fail_leg(ValueError(f"the leg asked to run {seconds} s"))
+                return False
             self._pending = int(round(seconds / self.sim.dt_s))
             return True
         return False
@@ -138,6 +153,9 @@ class MissionDriver:
             except SimulationDiverged as err:
                 self._mark_diverged(str(err))
                 break
+            except ValueError as err:
+                self._fail_leg(err)
+                break
             out.append(rows)
             self._request_parts.append(rows)
             self._pending -= k
@@ -152,6 +170,19 @@ class MissionDriver:
         while not self.done:
             self.advance()
         return self.result()
+
+    def _fail_leg(self, err: Exception) -> None:
+        """The running leg cannot go on: it fails, the mission ends as failed, and the
+        simulation is left as it is (still steppable)."""
+        text = str(err) if isinstance(err, ValueError) else f"{type(err).__name__}: {err}"
+        leg = self.current_leg
+        where = f"leg {self.leg_index + 1} ({leg.type})" if leg is not None else "the mission"
+        self.error = f"{where} failed: {text}"
+        self.ctx.event("error", self.error, leg=self.leg_index + 1)
+        if self._request_parts:
+            self._finish_request()
+        self._end_leg(False, text)
+        self._pending = 0
 
     def _mark_diverged(self, message: str) -> None:
         if self._request_parts:
@@ -184,6 +215,7 @@ class MissionDriver:
             self.diverged,
             list(self.sim.startup.warnings),
         )
+        result.error = self.error
         result.landings = list(self.ctx.landings)
         result.events = list(self.ctx.events)
         return result

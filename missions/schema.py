@@ -9,12 +9,21 @@ interface), radians inside.
 from __future__ import annotations
 
 import tomllib
+import re
 import typing
 from pathlib import Path
 from typing import Annotated, Literal
 
 import tomli_w
-from pydantic import AliasChoices, BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    AliasChoices,
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from control.config import Allocation, Feedback, Mode, Reference
 from sim.params import KdVector, KiVector, KpVector
@@ -27,6 +36,25 @@ Finite = Annotated[float, Field(allow_inf_nan=False)]
 
 class MissionError(ValueError):
     """A mission file is invalid; the message names the file, the field and what is allowed."""
+
+
+MAX_LEGS = 200
+"""Legs in one mission at most (the sea trial of appendix C has 19)."""
+MAX_MISSION_S = 48 * 3600.0
+"""Longest mission: the legs' timeouts added up [s] (two days; the sea trial takes 25 min)."""
+NAME_RE = re.compile(r"^[^\x00-\x1f\x7f-\x9f/\\\u200e\u200f\u202a-\u202e\u2066-\u2069]{1,80}$")
+"""Mission names: 1 to 80 printable characters, no slashes, control codes or direction
+overrides (names label recordings and are shown to other operators)."""
+LEG_NAME_RE = re.compile(r"^[^\x00-\x1f\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069]{0,80}$")
+
+
+def _check_name(value: str, pattern: re.Pattern[str], what: str) -> str:
+    if not pattern.match(value):
+        raise ValueError(
+            f"{what} must be 1 to 80 printable characters without slashes, control codes "
+            f"or direction overrides (got {len(value)} characters)"
+        )
+    return value
 
 
 class _Model(BaseModel):
@@ -113,9 +141,16 @@ class Setup(_Model):
 
 
 class _Leg(_Model):
-    name: str = ""
+    name: str = Field(default="", description="0 to 80 printable characters")
     score: bool = Field(default=False, description="count this leg in the mission's RMS")
     timeout_s: float = Field(default=3600.0, gt=0.0, le=86400.0)
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, value: str) -> str:
+        if not LEG_NAME_RE.match(value):
+            raise ValueError("leg names hold at most 80 printable characters")
+        return value
 
 
 class HoldLeg(_Leg):
@@ -295,10 +330,41 @@ LEG_TYPES = (
 
 class Mission(_Model):
     format_version: Literal[1] = Field(description="mission file format version")
-    name: str
-    description: str = ""
+    name: str = Field(description="1 to 80 printable characters, no slashes")
+    description: str = Field(default="", max_length=2000)
     setup: Setup
-    legs: list[Leg] = Field(min_length=1, max_length=1000)
+    legs: list[Leg] = Field(min_length=1, max_length=MAX_LEGS)
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, value: str) -> str:
+        return _check_name(value, NAME_RE, "name")
+
+    @model_validator(mode="after")
+    def _limits(self) -> Mission:
+        total = sum(leg.timeout_s for leg in self.legs)
+        if total > MAX_MISSION_S:
+            raise ValueError(
+                f"legs: their timeouts add up to {total:.0f} s; a mission may take at most "
+                f"{MAX_MISSION_S:.0f} s (48 h)"
+            )
+        self._check_wire_payout()
+        return self
+
+    def _check_wire_payout(self) -> None:
+        """Refuse a winch plan that hauls in more wire than there is (or pays out more than
+        the winch holds), from the payout the set-up hangs the tree on: about its depth."""
+        payout = self.setup.depth_m
+        for i, leg in enumerate(self.legs):
+            if leg.type == "wire":
+                payout += leg.change_m
+                if payout < 1.0 or payout > 5000.0:
+                    raise ValueError(
+                        f"legs[{i + 1}] (wire).change_m: the winch would end at about "
+                        f"{payout:.0f} m of wire; it must stay in [1, 5000] m"
+                    )
+            elif leg.type in ("dock", "lift") and self.setup.docking_frame is not None:
+                payout = self.setup.docking_frame.landing_depth_m
 
     @model_validator(mode="after")
     def _frame_for_docking(self) -> Mission:
@@ -374,11 +440,27 @@ def parse_mission(data: dict, source: str = "<mission>", text: str | None = None
         return Mission.model_validate(data)
     except ValidationError as err:
         lines = [f"invalid mission {source}:"]
-        for e in err.errors():
+        for e in err.errors()[:MAX_ERRORS_SHOWN]:
             line = _line_of(text, e["loc"]) if text is not None else None
             where = f"line {line}: " if line else ""
-            lines.append(f"  {where}{_where(data, e['loc'])}: {e['msg']} (got {e.get('input')!r})")
+            field = _where(data, e["loc"]) or "mission"
+            msg = e["msg"].removeprefix("Value error, ")
+            lines.append(f"  {where}{field}: {msg}{_got(e.get('input'))}")
+        if err.error_count() > MAX_ERRORS_SHOWN:
+            lines.append(f"  ... and {err.error_count() - MAX_ERRORS_SHOWN} more")
         raise MissionError("\n".join(lines)) from None
+
+
+MAX_ERRORS_SHOWN = 20
+
+
+def _got(value: object) -> str:
+    """What was given, when it is a short scalar (an error never echoes a whole input back)."""
+    if isinstance(value, bool | int | float) or (isinstance(value, str) and len(value) <= 40):
+        text = repr(value)
+        if text.isprintable():
+            return f" (got {text})"
+    return ""
 
 
 def load_mission(path_or_name: str | Path) -> Mission:

@@ -36,6 +36,8 @@ class LegResult:
     max_utilisation: float
     saturated_s: float
     timed_out: bool
+    error: str = ""
+    """Why the leg failed, when it could not go on ('' otherwise)."""
 
 
 @dataclass(frozen=True)
@@ -72,12 +74,16 @@ class MissionResult:
     landings: list[LandingResult] = field(default_factory=list)
     events: list[dict] = field(default_factory=list)
     log: LogRows | None = field(default=None, repr=False)
+    error: str = ""
+    """Why the mission stopped early: a leg that could not go on ('' when none)."""
 
     @property
     def failed(self) -> bool:
-        """A mission fails when it diverged, a leg timed out or a landing failed."""
+        """A mission fails when it diverged, a leg timed out or could not go on, or a landing
+        failed."""
         return (
-            self.diverged
+            bool(self.error)
+            or self.diverged
             or any(leg.timed_out for leg in self.legs)
             or any(not landing.success for landing in self.landings)
         )
@@ -99,6 +105,7 @@ class MissionResult:
             "legs": [vars(leg) for leg in self.legs],
             "landings": [vars(landing) for landing in self.landings],
             "failed": self.failed,
+            "error": self.error,
         }
 
 
@@ -113,6 +120,7 @@ class LegSpan:
     start: int
     stop: int
     timed_out: bool
+    error: str = ""
 
 
 def rms(values: FloatArray) -> float:
@@ -187,6 +195,7 @@ def score(
                 (span.stop - span.start) * dt_s,
                 *fig,
                 span.timed_out,
+                span.error,
             )
         )
         if span.score:

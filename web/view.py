@@ -9,6 +9,7 @@ not taken yet.
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -31,6 +32,8 @@ class ConsoleView:
     def __init__(self, console: Console, host: str, port: int) -> None:
         self.console = console
         self.server = viser.ViserServer(host=host, port=port, label="ROV console", verbose=False)
+        self.share_requests_refused = 0
+        _refuse_share_links(self.server, self._count_share_request)
         self.server.gui.configure_theme(
             show_share_button=False,
             control_width="large",
@@ -48,6 +51,9 @@ class ConsoleView:
         self.scene.update(console.loop.snapshot)
         self._thread = threading.Thread(target=self._publish, name="console-view", daemon=True)
         self._thread.start()
+
+    def _count_share_request(self) -> None:
+        self.share_requests_refused += 1
 
     @property
     def port(self) -> int:
@@ -96,3 +102,25 @@ class ConsoleView:
         self._stop.set()
         self._thread.join(timeout=5.0)
         self.server.stop()
+
+
+def _refuse_share_links(server: viser.ViserServer, on_request: Callable[[], None]) -> None:
+    """Never open a public share tunnel, whatever a client asks. Hiding viser's share button
+    is not enough: any client (one that never entered the token, or a web page the operator
+    has open) can still send the request message, and viser would open the tunnel. Its two
+    handlers are taken off, a refusing one counts the attempts, and the method itself is
+    replaced, so no other path reaches it."""
+    from viser import _messages  # viser's own message types (no public handle for these)
+
+    incoming = server._websock_server._incoming_handlers
+    for message in (_messages.ShareUrlRequest, _messages.ShareUrlDisconnect):
+        incoming.pop(message, None)
+    server._websock_server.register_handler(
+        _messages.ShareUrlRequest, lambda client_id, message: on_request()
+    )
+
+    def refused(verbose: bool = True) -> None:
+        on_request()
+        return None
+
+    server.request_share_url = refused  # type: ignore[method-assign]

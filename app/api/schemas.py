@@ -9,13 +9,28 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.console import Alarm, MissionStatus, ReplayStatus, Snapshot
+from app.console.commands import (
+    CURRENT_MAX_MPS,
+    DIRECTION_RANGE_DEG,
+    HEADING_RANGE_DEG,
+    REPLAY_T_MAX_S,
+    SPEED_MAX,
+    SPEED_MIN,
+    STEPS_MAX,
+    TARGET_RANGE_M,
+    VESSEL_RANGE_M,
+    VESSEL_SPEED_MAX_MPS,
+)
 from control.config import Allocation, Mode
 from sim.gnc import ssa
 from sim.params import GAIN_LIMITS
 
 
 class _In(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    """What a client sends: unknown fields refused, and no coercion (true is not 1.0, "yes"
+    is not true, "5" is not 5)."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
 
 
 Finite = Annotated[float, Field(allow_inf_nan=False)]
@@ -23,9 +38,16 @@ Finite = Annotated[float, Field(allow_inf_nan=False)]
 
 # ------------------------------------------------------------------ health, state
 class HealthOut(BaseModel):
-    status: Literal["ok"]
+    status: Literal["ok", "stopped", "stalled"] = Field(
+        description="ok: the loop ticks; stopped: its task ended; stalled: no tick for 2 s"
+    )
     t_s: float = Field(description="simulation time [s]")
     loop_running: bool
+    ticks: int = Field(description="ticks of the loop so far")
+    run_error: str | None = Field(
+        default=None, description="why the run is stopped (divergence, a failed step), if it is"
+    )
+    faults: int = Field(default=0, description="errors the loop caught and survived")
 
 
 class EtaOut(BaseModel):
@@ -65,7 +87,9 @@ class PoseOut(BaseModel):
 
 class MissionStatusOut(BaseModel):
     name: str | None
-    state: str = Field(description="idle | running | completed | aborted | diverged | replay")
+    state: str = Field(
+        description="idle | running | completed | failed | aborted | diverged | replay"
+    )
     leg_index: int | None = Field(description="1-based index of the running leg")
     legs_total: int
     leg_type: str | None
@@ -202,18 +226,20 @@ class StateOut(BaseModel):
 
 # ------------------------------------------------------------------ run
 class SpeedIn(_In):
-    speed: float = Field(ge=0.25, le=50.0, description="simulated s per wall-clock s")
+    speed: float = Field(
+        ge=SPEED_MIN, le=SPEED_MAX, allow_inf_nan=False, description="simulated s per wall s"
+    )
 
 
 class StepIn(_In):
-    steps: int = Field(default=1, ge=1, le=10_000, description="plant steps of 0.01 s")
+    steps: int = Field(default=1, ge=1, le=STEPS_MAX, description="plant steps of 0.01 s")
 
 
 class ResetIn(_In):
     params: str | None = Field(
         default=None, max_length=100, description="parameter set (default: the running one)"
     )
-    depth_m: float | None = Field(default=None, gt=5.0, le=4000.0)
+    depth_m: float | None = Field(default=None, gt=5.0, le=4000.0, allow_inf_nan=False)
 
 
 class CommandOut(BaseModel):
@@ -265,10 +291,13 @@ class GripIn(_In):
 
 
 class TargetIn(_In):
-    north_m: float = Field(ge=-10_000.0, le=10_000.0, allow_inf_nan=False)
-    east_m: float = Field(ge=-10_000.0, le=10_000.0, allow_inf_nan=False)
+    north_m: float = Field(ge=-TARGET_RANGE_M, le=TARGET_RANGE_M, allow_inf_nan=False)
+    east_m: float = Field(ge=-TARGET_RANGE_M, le=TARGET_RANGE_M, allow_inf_nan=False)
     heading_deg: float = Field(
-        ge=-3600.0, le=3600.0, allow_inf_nan=False, description="reached the short way round"
+        ge=-HEADING_RANGE_DEG,
+        le=HEADING_RANGE_DEG,
+        allow_inf_nan=False,
+        description="reached the short way round",
     )
 
 
@@ -281,21 +310,24 @@ class EnvironmentOut(BaseModel):
 
 
 class CurrentIn(_In):
-    speed_mps: float = Field(ge=0.0, le=3.0, allow_inf_nan=False)
+    speed_mps: float = Field(ge=0.0, le=CURRENT_MAX_MPS, allow_inf_nan=False)
     direction_deg: float = Field(
-        ge=-360.0, le=360.0, allow_inf_nan=False, description="direction the water flows towards"
+        ge=-DIRECTION_RANGE_DEG,
+        le=DIRECTION_RANGE_DEG,
+        allow_inf_nan=False,
+        description="direction the water flows towards",
     )
 
 
 class VesselIn(_In):
     north_m: float = Field(
-        ge=-1000.0, le=1000.0, allow_inf_nan=False, description="crane tip north [m]"
+        ge=-VESSEL_RANGE_M, le=VESSEL_RANGE_M, allow_inf_nan=False, description="crane tip north"
     )
-    east_m: float = Field(ge=-1000.0, le=1000.0, allow_inf_nan=False)
+    east_m: float = Field(ge=-VESSEL_RANGE_M, le=VESSEL_RANGE_M, allow_inf_nan=False)
     speed_mps: float = Field(
         default=0.5,
         gt=0.0,
-        le=5.0,
+        le=VESSEL_SPEED_MAX_MPS,
         allow_inf_nan=False,
         description="vessel speed on the way [m/s]",
     )
@@ -370,7 +402,7 @@ class ReplayOpenIn(_In):
 
 
 class ReplaySeekIn(_In):
-    t_s: float = Field(ge=0.0, le=1.0e7, allow_inf_nan=False)
+    t_s: float = Field(ge=0.0, le=REPLAY_T_MAX_S, allow_inf_nan=False)
 
 
 class ReplayStateOut(BaseModel):

@@ -6,8 +6,11 @@ carries through the simulation's own methods, and a failing command changes noth
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
 
 from app.console.errors import ConsoleError
 from app.console.session import PreparedRun
@@ -19,6 +22,37 @@ if TYPE_CHECKING:
 
 SPEED_MIN, SPEED_MAX = 0.25, 50.0
 """Simulated seconds per wall-clock second the loop can run at."""
+STEPS_MAX = 1000
+"""Plant steps one Step command may run (10 s simulated; bounded work per request)."""
+TARGET_RANGE_M = 10_000.0
+"""Targets north and east within +-this of the origin [m]."""
+HEADING_RANGE_DEG = 3600.0
+"""Heading targets within +-this [deg] (ten turns)."""
+CURRENT_MAX_MPS = 3.0
+"""Strongest current the console sets [m/s] (well beyond the ROV's capacity)."""
+DIRECTION_RANGE_DEG = 360.0
+VESSEL_RANGE_M = 1000.0
+"""Crane tip north and east within +-this [m]."""
+VESSEL_SPEED_MAX_MPS = 5.0
+REPLAY_T_MAX_S = 1.0e7
+
+
+def number(
+    name: str, value: object, lo: float, hi: float, unit: str = "", lo_open: bool = False
+) -> float:
+    """``value`` as a float, or ValueError naming the field and its range: booleans and text
+    are refused (not coerced), NaN and infinities are 'must be finite'."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name} must be a number, got {type(value).__name__}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ValueError(f"{name} must be finite, got {v}")
+    if v < lo or v > hi or (lo_open and v == lo):
+        bracket = "(" if lo_open else "["
+        raise ValueError(
+            f"{name} must be in {bracket}{lo:g}, {hi:g}]{' ' + unit if unit else ''}, got {v:g}"
+        )
+    return v
 
 
 class Command(Protocol):
@@ -41,6 +75,7 @@ class Resume:
         if console.session.error is not None:
             raise ConsoleError(console.session.error)
         console.paused = False
+        console.cancel_steps("step: the run was resumed")
         return {"paused": False}
 
 
@@ -48,26 +83,32 @@ class Resume:
 class SetSpeed:
     speed: float
 
+    def __post_init__(self) -> None:
+        number("speed", self.speed, SPEED_MIN, SPEED_MAX)
+
     def apply(self, console: PacedLoop) -> object:
-        if not (math.isfinite(self.speed) and SPEED_MIN <= self.speed <= SPEED_MAX):
-            raise ConsoleError(f"speed must be in [{SPEED_MIN}, {SPEED_MAX}], got {self.speed}")
-        console.speed = float(self.speed)
+        console.speed = number("speed", self.speed, SPEED_MIN, SPEED_MAX)
         return {"speed": console.speed}
 
 
 @dataclass(frozen=True)
 class Step:
-    """Advance a paused run by a number of plant steps."""
+    """Advance a paused run by a number of plant steps. The loop runs them over the next ticks
+    (at most ``STEP_CHUNK`` a tick, so the server keeps answering) and the command's result,
+    the simulation time reached, comes when they are done."""
 
     steps: int = 1
+
+    def __post_init__(self) -> None:
+        if isinstance(self.steps, bool) or not isinstance(self.steps, int):
+            raise ValueError(f"steps must be a whole number, got {type(self.steps).__name__}")
+        if not 1 <= self.steps <= STEPS_MAX:
+            raise ValueError(f"steps must be in [1, {STEPS_MAX}], got {self.steps}")
 
     def apply(self, console: PacedLoop) -> object:
         if not console.paused:
             raise ConsoleError("step: pause the run first")
-        if not 1 <= self.steps <= 10_000:
-            raise ConsoleError(f"steps must be in [1, 10000], got {self.steps}")
-        console.session.advance(self.steps)
-        return {"t_s": console.session.sim.t_s}
+        return console.step_later(self.steps)
 
 
 @dataclass(frozen=True)
@@ -77,7 +118,10 @@ class StartRun:
     run: PreparedRun
 
     def apply(self, console: PacedLoop) -> object:
+        stopped_by_error = console.session.error is not None
         console.session.replace_run(self.run)
+        if stopped_by_error:  # the run had stopped itself; a fresh one runs again
+            console.paused = False
         console.session.note(
             "command",
             f"start {self.run.mission.name}",
@@ -99,6 +143,11 @@ class SetTarget:
     north_m: float
     east_m: float
     heading_deg: float
+
+    def __post_init__(self) -> None:
+        number("north_m", self.north_m, -TARGET_RANGE_M, TARGET_RANGE_M, "m")
+        number("east_m", self.east_m, -TARGET_RANGE_M, TARGET_RANGE_M, "m")
+        number("heading_deg", self.heading_deg, -HEADING_RANGE_DEG, HEADING_RANGE_DEG, "deg")
 
     def apply(self, console: PacedLoop) -> object:
         eng = console.session
@@ -140,6 +189,10 @@ class SetMode:
 class SetGrip:
     grip: bool
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.grip, bool):
+            raise ValueError(f"grip must be true or false, got {type(self.grip).__name__}")
+
     def apply(self, console: PacedLoop) -> object:
         console.session.sim.set_grip(self.grip)
         console.session.note("command", f"grip {self.grip}", {"grip": self.grip})
@@ -164,6 +217,12 @@ class SetCurrent:
     speed_mps: float
     direction_deg: float
 
+    def __post_init__(self) -> None:
+        number("speed_mps", self.speed_mps, 0.0, CURRENT_MAX_MPS, "m/s")
+        number(
+            "direction_deg", self.direction_deg, -DIRECTION_RANGE_DEG, DIRECTION_RANGE_DEG, "deg"
+        )
+
     def apply(self, console: PacedLoop) -> object:
         console.session.set_current(self.speed_mps, self.direction_deg)
         console.session.note(
@@ -177,6 +236,11 @@ class MoveVessel:
     north_m: float
     east_m: float
     speed_mps: float
+
+    def __post_init__(self) -> None:
+        number("north_m", self.north_m, -VESSEL_RANGE_M, VESSEL_RANGE_M, "m")
+        number("east_m", self.east_m, -VESSEL_RANGE_M, VESSEL_RANGE_M, "m")
+        number("speed_mps", self.speed_mps, 0.0, VESSEL_SPEED_MAX_MPS, "m/s", lo_open=True)
 
     def apply(self, console: PacedLoop) -> object:
         console.session.move_vessel(self.north_m, self.east_m, self.speed_mps)
@@ -229,6 +293,9 @@ class PlayReplay:
 @dataclass(frozen=True)
 class SeekReplay:
     t_s: float
+
+    def __post_init__(self) -> None:
+        number("t_s", self.t_s, 0.0, REPLAY_T_MAX_S, "s")
 
     def apply(self, console: PacedLoop) -> object:
         rp = console.session.require_replay()

@@ -17,6 +17,7 @@ nothing a client sends can stop the loop.
 from __future__ import annotations
 
 import asyncio
+import collections
 import concurrent.futures
 import queue
 import time
@@ -30,6 +31,8 @@ from app.console.snapshot import LoopStats, Snapshot
 
 MAX_LAG_S = 0.25
 """Falling further behind than this re-anchors the schedule (an overrun)."""
+STEP_CHUNK = 50
+"""Plant steps of a Step command run in one tick at most (the work of one tick at 50x)."""
 MAX_COMMANDS_PER_TICK = 20
 """Commands applied in one tick at most; the rest wait for the next (bounded tick time)."""
 JITTER_WINDOW = 500
@@ -59,12 +62,30 @@ class PacedLoop:
         self._stats = LoopStats(self.period_s, 0.0, 0.0, 0, 0, 0.0)
         self._snapshot = session.snapshot(0, paused, speed, self._stats)
         self.running = False
+        self.faults = 0
+        """Errors the loop caught and survived (a step or a publication that failed)."""
+        self.last_fault = ""
+        self.last_tick_wall = time.monotonic()
+        self._stepping: collections.deque[tuple[int, concurrent.futures.Future]] = (
+            collections.deque()
+        )
+        """Step commands in progress: (steps still to run, the command's future)."""
+        """Wall-clock time (monotonic) of the last tick: a loop that stops ticking is stale."""
 
     # --------------------------------------------------------------- for readers
     @property
     def snapshot(self) -> Snapshot:
         """The latest published state (immutable)."""
         return self._snapshot
+
+    def health(self, stale_after_s: float = 2.0) -> str:
+        """'ok' while the task ticks; 'stopped' when it has ended; 'stalled' when it has not
+        ticked for ``stale_after_s`` of wall time."""
+        if not self.running:
+            return "stopped"
+        if time.monotonic() - self.last_tick_wall > stale_after_s:
+            return "stalled"
+        return "ok"
 
     @property
     def ticks(self) -> int:
@@ -112,17 +133,19 @@ class PacedLoop:
                 self._drain()
                 if self.paused:
                     owed = 0.0
+                    self._run_queued_steps()
                 else:
                     owed += self.speed
                     n = int(owed)
                     owed -= n
                     if n:
-                        self.session.advance(n)
+                        self._advance(n)
                 if self.session.error is not None:
                     self.paused = True
                 self._work[self._ticks % JITTER_WINDOW] = time.perf_counter() - woke
                 self._ticks += 1
-                self._publish()
+                self.last_tick_wall = time.monotonic()
+                self._publish_safely()
                 next_t += self.period_s
                 if time.perf_counter() - next_t > MAX_LAG_S:
                     next_t = time.perf_counter()
@@ -132,6 +155,51 @@ class PacedLoop:
             self.running = False
             self._fail_pending()
             self.session.close()
+
+    def step_later(self, steps: int) -> concurrent.futures.Future:
+        """Queue ``steps`` plant steps of a paused run; the returned future resolves to
+        {"t_s": ...} once they have run (the loop runs STEP_CHUNK a tick)."""
+        future: concurrent.futures.Future = concurrent.futures.Future()
+        future.set_running_or_notify_cancel()
+        self._stepping.append((steps, future))
+        return future
+
+    def _run_queued_steps(self) -> None:
+        if not self._stepping:
+            return
+        left, future = self._stepping[0]
+        k = min(left, STEP_CHUNK)
+        self._advance(k)
+        left -= k
+        if left > 0 and self.session.error is None:
+            self._stepping[0] = (left, future)
+            return
+        self._stepping.popleft()
+        if self.session.error is not None:
+            future.set_exception(ConsoleError(self.session.error))
+        else:
+            future.set_result({"t_s": self.session.sim.t_s})
+
+    def cancel_steps(self, why: str) -> None:
+        while self._stepping:
+            _, future = self._stepping.popleft()
+            future.set_exception(ConsoleError(why))
+
+    def _advance(self, n: int) -> None:
+        """Step the session; whatever goes wrong in a step pauses the run with the reason
+        shown, and the loop goes on answering commands (nothing may end the task)."""
+        try:
+            self.session.advance(n)
+        except Exception as err:
+            self.session.fail(f"{type(err).__name__}: {err}")
+            self.faults += 1
+
+    def _publish_safely(self) -> None:
+        try:
+            self._publish()
+        except Exception as err:
+            self.faults += 1
+            self.last_fault = f"publishing the state failed: {type(err).__name__}: {err}"
 
     def _drain(self) -> None:
         for _ in range(MAX_COMMANDS_PER_TICK):
@@ -143,11 +211,16 @@ class PacedLoop:
                 continue
             try:
                 self.session.flush_recording()
-                future.set_result(command.apply(self))
+                result = command.apply(self)
+                if isinstance(result, concurrent.futures.Future):
+                    _chain(result, future)
+                else:
+                    future.set_result(result)
             except Exception as err:
                 future.set_exception(err)
 
     def _fail_pending(self) -> None:
+        self.cancel_steps("the console is shutting down")
         while True:
             try:
                 _, future = self._queue.get_nowait()
@@ -177,3 +250,16 @@ class PacedLoop:
             self._overruns,
             float(np.percentile(work_ms, 99)),
         )
+
+
+def _chain(inner: concurrent.futures.Future, outer: concurrent.futures.Future) -> None:
+    """Resolve ``outer`` with ``inner``'s result or error when it is done."""
+
+    def done(f: concurrent.futures.Future) -> None:
+        err = f.exception()
+        if err is not None:
+            outer.set_exception(err)
+        else:
+            outer.set_result(f.result())
+
+    inner.add_done_callback(done)

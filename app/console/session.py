@@ -167,6 +167,11 @@ class Session:
             if self.driver.diverged:
                 self._diverged(self.driver.divergence)
                 return
+            if self.driver.error:
+                self.notices = (*self.notices[-4:], self.driver.error)
+                self._finish_mission("failed")
+                self.note("alarm", self.driver.error, {"name": "mission"})
+                return
             if not self.driver.done:
                 return
             self._finish_mission("completed")
@@ -206,6 +211,14 @@ class Session:
         )
         self._result = self._workers.submit(lambda: driver.result().summary())
         self.note("mission", f"mission {s.name} {state}", {"state": state})
+
+    def fail(self, message: str) -> None:
+        """Something in a step went wrong that the simulation did not expect: stop the run
+        (a reset goes on), end the mission as failed, say why."""
+        self.error = f"the run stopped: {message}; reset to go on"
+        if self._mission_running:
+            self._finish_mission("failed")
+        self.note("error", self.error, {})
 
     def _diverged(self, message: str) -> None:
         self.error = f"simulation diverged: {message}; reset to go on"

@@ -59,7 +59,7 @@ class MissionStatus:
 
     name: str | None = None
     state: str = "idle"
-    """idle | running | completed | aborted | diverged"""
+    """idle | running | completed | failed | aborted | diverged"""
     leg_index: int | None = None
     """1-based index of the running leg."""
     legs_total: int = 0
