@@ -14,13 +14,17 @@ import threading
 import time
 from collections.abc import AsyncIterator, Iterator
 from dataclasses import dataclass, replace
+from typing import Any
 
 import uvicorn
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from app.api import control, environment, gains, health, missions, recordings, replay, run, state
+from app.api.guards import MAX_BODY_BYTES, BodyLimit, allowed_hosts
+from app.api.schemas import ErrorOut
 from app.api.state import StateJsonCache
 from app.console import Console, ConsoleSettings
 
@@ -71,10 +75,36 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
     app.state.console = console
     app.state.state_cache = StateJsonCache()
     app.state.view = None
+    app.state.allowed_hosts = allowed_hosts(settings.host, settings.allow_remote)
+    app.state.telemetry_clients = 0
     for router in ROUTERS:
-        app.include_router(router)
+        app.include_router(router, responses=ERROR_RESPONSES)
     app.add_exception_handler(RequestValidationError, _validation_error)
+    app.add_exception_handler(RecursionError, _too_deep)
+    app.add_middleware(TrustedHostMiddleware, allowed_hosts=app.state.allowed_hosts)
+    app.add_middleware(BodyLimit, limit=MAX_BODY_BYTES)
     return app
+
+
+ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
+    code: {"model": ErrorOut, "description": text}
+    for code, text in (
+        (400, "malformed request (bad Host header, nesting too deep)"),
+        (401, "this action needs the console token"),
+        (404, "no such mission or recording"),
+        (409, "cannot be done now (a mission is running, a replay is open ...)"),
+        (413, "request body too large"),
+        (422, "a field is out of range or of the wrong type; the message names it"),
+        (429, "too many wrong tokens from this client"),
+        (503, "the simulation loop did not answer"),
+    )
+}
+"""The error answers every route may give: ``{"detail": "<what is wrong>"}``."""
+
+
+async def _too_deep(request: Request, exc: Exception) -> JSONResponse:
+    """A body nested deeper than the parser's recursion limit: a plain 400, no traceback."""
+    return JSONResponse(status_code=400, content={"detail": "request nested too deeply to read"})
 
 
 def _start_view(console: Console, settings: ConsoleSettings):
@@ -87,7 +117,7 @@ async def _validation_error(request: Request, exc: Exception) -> JSONResponse:
     """422 whose message names each bad field: 'body.kp.1: Input should be <= 10000000'."""
     assert isinstance(exc, RequestValidationError)
     errors = exc.errors()
-    message = "; ".join(f"{'.'.join(str(p) for p in e['loc'])}: {e['msg']}" for e in errors)
+    message = "; ".join(f"{'.'.join(str(p) for p in e['loc'])}: {e['msg']}" for e in errors[:20])
     return JSONResponse(
         status_code=422,
         content={

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import time
+from pathlib import Path
 
 import msgspec
 import pytest
@@ -102,3 +103,68 @@ def test_a_big_step_request_is_spread_over_ticks_and_the_server_keeps_answering(
         assert served.console.loop.ticks - ticks0 >= 20
         assert health_answers >= 3
         client.post("/api/run/resume", headers=auth)
+
+
+def test_wrong_tokens_lock_the_client_out_for_a_while(tmp_path: Path) -> None:
+    import httpx
+
+    settings = ConsoleSettings(
+        port=0, view=False, token="lockout-test-token-01", recordings_dir=tmp_path
+    )
+    with serve_in_thread(settings) as running, httpx.Client(base_url=running.base_url) as c:
+        wrong = {"Authorization": "Bearer guess-guess-guess-guess"}
+        codes = [c.post("/api/run/pause", headers=wrong).status_code for _ in range(12)]
+        assert codes[:10] == [401] * 10 and codes[10:] == [429, 429]
+        r = c.post("/api/run/pause", headers=running.auth)
+        assert r.status_code == 429, "locked out even with the right token"
+        assert "too many wrong tokens" in r.json()["detail"]
+        assert 50 <= int(r.headers["Retry-After"]) <= 60
+        assert c.get("/api/state").status_code == 200, "watching needs no token"
+
+
+def test_an_unwritable_recordings_folder_is_a_named_error_not_a_500(tmp_path: Path) -> None:
+    import httpx
+
+    blocker = tmp_path / "not-a-folder"
+    blocker.write_text("a file where the recordings folder should be")
+    settings = ConsoleSettings(
+        port=0, view=False, token="recording-test-token1", recordings_dir=blocker
+    )
+    with serve_in_thread(settings) as running, httpx.Client(base_url=running.base_url) as c:
+        r = c.post("/api/recordings/start", json={"label": "x"}, headers=running.auth)
+        assert r.status_code == 507 and "cannot write" in r.json()["detail"]
+        assert list(tmp_path.iterdir()) == [blocker], "nothing left behind"
+        assert c.get("/api/health").json()["status"] == "ok"
+
+
+def test_telemetry_refuses_foreign_origins_and_too_many_clients(served) -> None:
+    from app.api.guards import MAX_TELEMETRY_CLIENTS
+
+    uri = served.base_url.replace("http", "ws") + "/api/telemetry"
+
+    async def scenario() -> None:
+        with pytest.raises(websockets.InvalidStatus):
+            async with websockets.connect(uri, origin="http://evil.example"):
+                pass
+        async with websockets.connect(uri, origin=served.base_url) as ws:
+            assert "t_s" in await ws.recv()
+        clients = [await websockets.connect(uri) for _ in range(MAX_TELEMETRY_CLIENTS)]
+        try:
+            extra = await websockets.connect(uri)
+            with pytest.raises(websockets.ConnectionClosed) as closed:
+                await extra.recv()
+            assert closed.value.rcvd is not None and closed.value.rcvd.code == 1013
+        finally:
+            for ws in clients:
+                await ws.close()
+
+    asyncio.run(scenario())
+
+
+def test_settings_refuse_short_tokens_and_accept_loopback_spellings() -> None:
+    with pytest.raises(ValueError, match="at least 16 printable characters"):
+        ConsoleSettings(token="eight888")
+    assert ConsoleSettings(host="127.1").host == "127.1"
+    assert ConsoleSettings(host="127.0.0.2").host == "127.0.0.2"
+    with pytest.raises(ValueError, match="not a loopback address"):
+        ConsoleSettings(host="10.0.0.1")

@@ -14,7 +14,7 @@ from fastapi.testclient import TestClient
 from app.console import ConsoleSettings
 from app.server import create_app
 
-TOKEN = "test-token-123"
+TOKEN = "test-token-1234567"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 
@@ -24,7 +24,7 @@ def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
     settings = ConsoleSettings(
         view=False, token=TOKEN, speed=5.0, recordings_dir=tmp_path_factory.mktemp("recordings")
     )
-    with TestClient(create_app(settings)) as c:
+    with TestClient(create_app(settings), base_url="http://127.0.0.1") as c:
         yield c
 
 
@@ -431,7 +431,7 @@ def test_recording_label_is_checked(client: TestClient) -> None:
 
 # ------------------------------------------------------------------ telemetry
 def test_telemetry_stream_sends_fresh_states(client: TestClient) -> None:
-    with client.websocket_connect("/api/telemetry?rate_hz=50") as ws:
+    with client.websocket_connect("ws://127.0.0.1/api/telemetry?rate_hz=50") as ws:
         messages = [ws.receive_json() for _ in range(5)]
     seqs = [m["seq"] for m in messages]
     assert seqs == sorted(seqs) and len(set(seqs)) == 5
@@ -439,7 +439,7 @@ def test_telemetry_stream_sends_fresh_states(client: TestClient) -> None:
 
 
 def test_a_client_that_does_not_read_does_not_hold_up_the_loop(client: TestClient) -> None:
-    with client.websocket_connect("/api/telemetry?rate_hz=100"):
+    with client.websocket_connect("ws://127.0.0.1/api/telemetry?rate_hz=100"):
         ticks = client.get("/api/run").json()["ticks"]
         time.sleep(1.5)
         assert client.get("/api/run").json()["ticks"] > ticks + 50
@@ -450,7 +450,7 @@ def test_bad_telemetry_rate_is_refused(client: TestClient) -> None:
 
     with (
         pytest.raises(WebSocketDisconnect),
-        client.websocket_connect("/api/telemetry?rate_hz=1000") as ws,
+        client.websocket_connect("ws://127.0.0.1/api/telemetry?rate_hz=1000") as ws,
     ):
         ws.receive_json()
 

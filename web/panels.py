@@ -341,10 +341,14 @@ class ClientPanel:
         return callback
 
     def _on_unlock(self, event: Any) -> None:
-        if self.console.is_token(str(self.token_text.value).strip()):
+        # counted for the view as a whole: a new connection does not buy new guesses
+        ok, wait = self.console.check_token(str(self.token_text.value).strip(), "view")
+        if ok:
             self.unlocked = True
             self._set_enabled(True)
             self._say("controls unlocked")
+        elif wait > 0.0:
+            self._say(f"**too many wrong tokens**: try again in {wait:.0f} s")
         else:
             self._say("**wrong token**")
 

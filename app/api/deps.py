@@ -30,11 +30,23 @@ SnapshotDep = Annotated[Snapshot, Depends(get_snapshot)]
 
 
 def require_token(
+    request: Request,
     console: ConsoleDep,
     credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
 ) -> None:
-    """Actions that change the run need the token; watching does not."""
-    if credentials is None or not console.is_token(credentials.credentials):
+    """Actions that change the run need the token; watching does not. A client that sent
+    too many wrong tokens is refused (429) until its window has passed."""
+    client = f"http:{request.client.host if request.client else '?'}"
+    ok, wait = console.check_token(
+        credentials.credentials if credentials is not None else None, client
+    )
+    if wait > 0.0:
+        raise HTTPException(
+            status.HTTP_429_TOO_MANY_REQUESTS,
+            f"too many wrong tokens from this client: try again in {wait:.0f} s",
+            headers={"Retry-After": str(max(int(wait + 0.999), 1))},
+        )
+    if not ok:
         raise HTTPException(
             status.HTTP_401_UNAUTHORIZED,
             "this action needs the console token: send the header "
@@ -56,6 +68,11 @@ async def run_command(console: Console, command: Command) -> object:
         raise HTTPException(status.HTTP_409_CONFLICT, str(err)) from None
     except ValueError as err:
         raise HTTPException(UNPROCESSABLE, str(err)) from None
+    except OSError as err:  # e.g. the recordings folder is read-only or the disk is full
+        raise HTTPException(
+            status.HTTP_507_INSUFFICIENT_STORAGE,
+            f"cannot write: {err.strerror or err}" + (f" ({err.filename})" if err.filename else ""),
+        ) from None
     except TimeoutError:
         raise HTTPException(
             status.HTTP_503_SERVICE_UNAVAILABLE, "the simulation loop did not answer in time"

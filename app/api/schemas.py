@@ -36,6 +36,15 @@ class _In(BaseModel):
 Finite = Annotated[float, Field(allow_inf_nan=False)]
 
 
+class ErrorOut(BaseModel):
+    """Every error answer: what is wrong, in words that name the field and its range."""
+
+    detail: str
+    errors: list[dict[str, Any]] | None = Field(
+        default=None, description="422 only: each bad field (loc, msg, type)"
+    )
+
+
 # ------------------------------------------------------------------ health, state
 class HealthOut(BaseModel):
     status: Literal["ok", "stopped", "stalled"] = Field(

@@ -8,6 +8,7 @@ import contextlib
 from fastapi import APIRouter, Query, WebSocket, WebSocketDisconnect
 
 from app.api.deps import SnapshotDep
+from app.api.guards import MAX_TELEMETRY_CLIENTS, origin_allowed
 from app.api.schemas import StateOut
 from app.console import Console
 
@@ -46,6 +47,24 @@ async def telemetry(
     holds up the loop or the other clients."""
     console: Console = websocket.app.state.console
     cache: StateJsonCache = websocket.app.state.state_cache
+    state = websocket.app.state
+    if not origin_allowed(websocket.headers.get("origin"), state.allowed_hosts):
+        await websocket.close(code=1008, reason="origin not allowed")  # policy violation
+        return
+    if state.telemetry_clients >= MAX_TELEMETRY_CLIENTS:
+        await websocket.accept()  # then close with a reason the client can read: try later
+        await websocket.close(code=1013, reason="too many telemetry clients")
+        return
+    state.telemetry_clients += 1
+    try:
+        await _stream(websocket, console, cache, rate_hz)
+    finally:
+        state.telemetry_clients -= 1
+
+
+async def _stream(
+    websocket: WebSocket, console: Console, cache: StateJsonCache, rate_hz: float
+) -> None:
     await websocket.accept()
     receiver = asyncio.create_task(_drain_incoming(websocket))
     last = -1

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from app.console.loop import PacedLoop
 from app.console.session import PreparedRun, Session, prepare_run, station_keeping_mission
 from app.console.settings import ConsoleSettings
+from app.console.tokens import GuessLimit
 from missions import schema
 
 MAX_UPLOADS = 50
@@ -31,6 +32,8 @@ class Console:
     token: str
     uploads: OrderedDict[str, schema.Mission] = field(default_factory=OrderedDict)
     _uploads_lock: threading.Lock = field(default_factory=threading.Lock)
+    guesses: GuessLimit = field(default_factory=GuessLimit)
+    """Wrong tokens per client (HTTP address or 3D-view client)."""
 
     @staticmethod
     def build(settings: ConsoleSettings) -> Console:
@@ -45,6 +48,17 @@ class Console:
         return candidate is not None and secrets.compare_digest(
             candidate.encode(), self.token.encode()
         )
+
+    def check_token(self, candidate: str | None, client: str) -> tuple[bool, float]:
+        """(is it the token, seconds the client must wait before trying again). A wrong token
+        counts against the client; a locked-out client is refused even with the right one."""
+        wait = self.guesses.retry_after_s(client)
+        if wait > 0.0:
+            return False, wait
+        if self.is_token(candidate):
+            return True, 0.0
+        self.guesses.failed(client)
+        return False, 0.0
 
     # ----------------------------------------------------------- missions
     def mission_names(self) -> tuple[list[str], list[str]]:

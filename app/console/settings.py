@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import ipaddress
 import math
+import socket
 from dataclasses import dataclass
 from pathlib import Path
 
 from app.console.commands import SPEED_MAX, SPEED_MIN
+from app.console.tokens import MIN_TOKEN_CHARS
 
 
 @dataclass(frozen=True)
@@ -54,8 +56,12 @@ class ConsoleSettings:
                 raise ValueError(f"{name} must be in [0, 65535], got {value}")
         if self.view and self.port == self.viser_port and self.port != 0:
             raise ValueError(f"port and viser_port must differ, both are {self.port}")
-        if self.token is not None and len(self.token) < 8:
-            raise ValueError("token must have at least 8 characters")
+        if self.token is not None and (
+            len(self.token) < MIN_TOKEN_CHARS or not self.token.isprintable() or " " in self.token
+        ):
+            raise ValueError(
+                f"token must have at least {MIN_TOKEN_CHARS} printable characters and no spaces"
+            )
         if not (math.isfinite(self.speed) and SPEED_MIN <= self.speed <= SPEED_MAX):
             raise ValueError(f"speed must be in [{SPEED_MIN}, {SPEED_MAX}], got {self.speed}")
         if not (math.isfinite(self.depth_m) and 5.0 < self.depth_m <= 4000.0):
@@ -63,9 +69,15 @@ class ConsoleSettings:
 
 
 def is_loopback(host: str) -> bool:
+    """localhost, or an address in 127.0.0.0/8 or ::1, in any spelling the system accepts
+    (127.1 is 127.0.0.1)."""
     if host == "localhost":
         return True
     try:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
+        pass
+    try:
+        return ipaddress.ip_address(socket.inet_aton(host)).is_loopback
+    except OSError:
         return False
