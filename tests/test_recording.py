@@ -690,7 +690,13 @@ def test_flush_inside_calls_follows_the_wall_clock(tmp_path, monkeypatch):
     clock = FakeClock()
     path = tmp_path / "clock.mcap"
     with recording.SessionRecorder(
-        path, metadata={}, params=ps, n_thrusters=5, flush_interval_s=0.5, clock=clock
+        path,
+        metadata={},
+        params=ps,
+        n_thrusters=5,
+        flush_interval_s=0.5,
+        flush_interval_sim_s=1e6,  # this test is about the wall clock alone
+        clock=clock,
     ) as rec:
         rec.write_log(sim.run_for(1.0).data)
         clock.now = 0.4
@@ -709,13 +715,41 @@ def test_flush_inside_calls_follows_the_wall_clock(tmp_path, monkeypatch):
     assert data.complete and len(data.rows) == 61
 
 
+def test_flush_follows_simulated_time_when_the_wall_clock_stalls(tmp_path, monkeypatch):
+    """On a loaded machine wall time can stretch between writes; simulated time cannot: with
+    the wall clock frozen, a chunk still closes every flush_interval_sim_s of simulated time,
+    so a killed run loses at most that much simulation."""
+    monkeypatch.setattr(recording.SessionRecorder, "_start_flusher", lambda self: None)
+    ps = params.load("model-scale")
+    sim = Simulation(ps, tree_depth_m=100.0)
+    path = tmp_path / "sim-clock.mcap"
+    rec = recording.SessionRecorder(
+        path, metadata={}, params=ps, n_thrusters=5, flush_interval_sim_s=1.0, clock=FakeClock()
+    )
+    try:
+        for _ in range(10):
+            rec.write_log(sim.run_for(0.7).data)
+            readable = recording.load_session(path)
+            behind = sim.t_s - (readable.t_s[-1] if len(readable.t_s) else 0.0)
+            assert behind <= 1.0 + 0.05, f"{behind:.2f} s of simulation not yet on disk"
+        assert len(readable.rows) >= 100  # 7 s written, at 20 Hz, all but the last second
+    finally:
+        rec.close()
+
+
 def test_idle_recorder_flushes_from_its_thread(tmp_path):
     ps = params.load("model-scale")
     sim = Simulation(ps, tree_depth_m=100.0)
     clock = FakeClock()
     path = tmp_path / "idle.mcap"
     rec = recording.SessionRecorder(
-        path, metadata={}, params=ps, n_thrusters=5, flush_interval_s=0.5, clock=clock
+        path,
+        metadata={},
+        params=ps,
+        n_thrusters=5,
+        flush_interval_s=0.5,
+        flush_interval_sim_s=1e6,
+        clock=clock,
     )
     try:
         rec.write_log(sim.run_for(1.0).data)
@@ -837,3 +871,21 @@ def test_log_export_csv_matches_the_rows(session, tmp_path):
     assert {p.name for p in out.iterdir()} >= {"thrusters.csv", "wire.csv", "control_terms.csv"}
     again = CliRunner().invoke(log_app, ["export", str(path), "--csv", str(out)])
     assert again.exit_code == 2 and "would replace" in again.output
+
+
+def test_a_recorder_that_cannot_start_leaves_no_empty_file(tmp_path, monkeypatch):
+    """A full disk when the file is started: the error is raised and no 0-byte file stays."""
+    import errno
+
+    from app.recording import writer as writer_mod
+
+    def full(self, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(writer_mod.Writer, "start", full)
+    path = tmp_path / "full.mcap"
+    with pytest.raises(OSError, match="No space left"):
+        recording.SessionRecorder(
+            path, metadata={}, params=params.load("model-scale"), n_thrusters=5
+        )
+    assert not path.exists()

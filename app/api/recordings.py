@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from typing import Annotated
+
 from fastapi import APIRouter, HTTPException, status
+from fastapi import Path as FastApiPath
 from fastapi.responses import FileResponse
 
 from app.api.deps import UNPROCESSABLE, ConsoleDep, SnapshotDep, TokenDep, run_command
 from app.api.schemas import RecordingInfoOut, RecordingListOut, RecordingOut, RecordingStartIn
-from app.console import ConsoleError, list_recordings, recording_path
+from app.console import RECORDING_NAME, ConsoleError, list_recordings, recording_path
 from app.console.commands import StartRecording, StopRecording
 
 router = APIRouter(prefix="/api/recordings", tags=["recordings"])
@@ -40,7 +43,13 @@ async def stop(console: ConsoleDep, _: TokenDep) -> RecordingOut:
     response_class=FileResponse,
     responses={200: {"content": {"application/octet-stream": {}}}},
 )
-def download(name: str, console: ConsoleDep, snapshot: SnapshotDep) -> FileResponse:
+def download(
+    name: Annotated[
+        str, FastApiPath(pattern=RECORDING_NAME.pattern, description="a recording's file name")
+    ],
+    console: ConsoleDep,
+    snapshot: SnapshotDep,
+) -> FileResponse:
     """The MCAP file (not while it is being written)."""
     try:
         path = recording_path(console.settings.recordings_dir, name)

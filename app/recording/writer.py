@@ -10,11 +10,14 @@ Decimation
 Crash safety
     Messages are grouped in zstd-compressed chunks. A chunk is closed and handed to the
     operating system (``Writer.flush``) whenever ``flush_interval_s`` of wall time (``clock``)
-    has passed since the last flush: inside ``write_log`` / ``event`` between rows, and from a
-    background thread when the caller is idle (paused simulation). A killed process (SIGKILL)
-    therefore loses at most the chunk in progress: about ``flush_interval_s`` of wall time. The
-    file is not fsync'ed; the operating system keeps what was handed to it when a process dies,
-    not when the machine loses power.
+    or ``flush_interval_sim_s`` of simulated time has passed since the last flush, whichever
+    comes first: inside ``write_log`` / ``event`` between rows, and from a background thread
+    when the caller is idle (paused simulation). A killed process (SIGKILL) therefore loses at
+    most the chunk in progress: never more than ``flush_interval_sim_s`` of simulated time
+    (this bound holds however loaded the machine is, since it is counted in the rows written),
+    and on an unloaded machine about ``flush_interval_s`` of wall time. The file is not
+    fsync'ed; the operating system keeps what was handed to it when a process dies, not when
+    the machine loses power.
 """
 
 from __future__ import annotations
@@ -167,6 +170,7 @@ class SessionRecorder:
         params: ParameterSet,
         n_thrusters: int,
         flush_interval_s: float = 0.5,
+        flush_interval_sim_s: float = 1.0,
         numeric_rate_hz: float = 20.0,
         scene_rate_hz: float = 5.0,
         clock: Callable[[], float] = time.monotonic,
@@ -183,6 +187,7 @@ class SessionRecorder:
             "numeric_rate_hz": numeric_rate_hz,
             "scene_rate_hz": scene_rate_hz,
             "flush_interval_s": flush_interval_s,
+            "flush_interval_sim_s": flush_interval_sim_s,
         }
         _check_rates(**rates)
         setup = _setup_record(metadata, params, n_thrusters, rates)
@@ -190,26 +195,42 @@ class SessionRecorder:
         self._geo = scene_geometry(params)
         self.path = Path(path)
         self._file: BinaryIO = open(self.path, "wb" if overwrite else "xb")
-        self._writer = Writer(self._file, compression=CompressionType.ZSTD)
-        self._writer.start(profile="", library=f"rov-console {software_version()}")
-        self._numeric = Decimator(numeric_rate_hz)
-        self._scene = Decimator(scene_rate_hz)
-        self._channels = self._register_channels()
-        self._sequence = dict.fromkeys(self._channels, 0)
-        self._writer.add_metadata(SETUP_RECORD, setup)
+        try:
+            self._writer = Writer(self._file, compression=CompressionType.ZSTD)
+            self._writer.start(profile="", library=f"rov-console {software_version()}")
+            self._start_file(setup, numeric_rate_hz, scene_rate_hz)
+        except BaseException:  # e.g. the disk is full: leave no empty or headless file
+            self._file.close()
+            self.path.unlink(missing_ok=True)
+            raise
         self._crane_tip_n: FloatArray | None = None
         self._wire_length_m = math.nan
         self._docking = docking
         self._last_t_s = -math.inf
         self._clock = clock
         self._flush_interval_s = flush_interval_s
+        self._flush_interval_sim_s = flush_interval_sim_s
+        self._written_t_s = -math.inf
+        """Simulation time of the last row or event written."""
+        self._flushed_t_s = -math.inf
+        """Simulation time written when the last chunk was closed."""
         self._lock = threading.Lock()
         self._dirty = False
         self._closed = False
         self._last_flush = clock()
-        self._writer.flush()
         self._stop = threading.Event()
         self._flusher: threading.Thread | None = self._start_flusher()
+
+    def _start_file(
+        self, setup: dict[str, str], numeric_rate_hz: float, scene_rate_hz: float
+    ) -> None:
+        """Schemas, channels and the setup record, handed to the operating system."""
+        self._numeric = Decimator(numeric_rate_hz)
+        self._scene = Decimator(scene_rate_hz)
+        self._channels = self._register_channels()
+        self._sequence = dict.fromkeys(self._channels, 0)
+        self._writer.add_metadata(SETUP_RECORD, setup)
+        self._writer.flush()
 
     def _start_flusher(self) -> threading.Thread | None:
         """The thread that flushes while the caller is idle."""
@@ -293,7 +314,9 @@ class SessionRecorder:
                 self._maybe_flush()
 
     def _write_row(self, row: FloatArray, numeric: bool, scene: bool) -> None:
-        t_ns = round(float(LAYOUT.take(row, "t_s")) * 1e9)
+        t_s = float(LAYOUT.take(row, "t_s"))
+        self._note_time(t_s)
+        t_ns = round(t_s * 1e9)
         if numeric:
             self._add(SESSION_TOPIC, t_ns, session_row_message(row))
             self._add(TF_TOPIC, t_ns, tf_message(t_ns, row))
@@ -325,20 +348,32 @@ class SessionRecorder:
         t_ns = round(t_s * 1e9)
         with self._lock:
             self._check_open()
+            self._note_time(t_s)
             self._add(EVENTS_TOPIC, t_ns, message)
             self._add(LOG_TOPIC, t_ns, log_message(t_ns, kind, text))
             self._maybe_flush()
 
     # ------------------------------------------------------------------ flushing and closing
+    def _note_time(self, t_s: float) -> None:
+        if self._flushed_t_s == -math.inf:
+            self._flushed_t_s = t_s  # the first chunk counts from the first message
+        self._written_t_s = max(self._written_t_s, t_s)
+
     def _maybe_flush(self) -> None:
-        """Flush (lock held) when flush_interval_s of wall time has passed."""
-        if self._dirty and self._clock() - self._last_flush >= self._flush_interval_s:
+        """Flush (lock held) when flush_interval_s of wall time or flush_interval_sim_s of
+        simulated time has passed since the last flush."""
+        if not self._dirty:
+            return
+        wall_due = self._clock() - self._last_flush >= self._flush_interval_s
+        sim_due = self._written_t_s - self._flushed_t_s >= self._flush_interval_sim_s
+        if wall_due or sim_due:
             self._flush_locked()
 
     def _flush_locked(self) -> None:
         self._writer.flush()
         self._dirty = False
         self._last_flush = self._clock()
+        self._flushed_t_s = self._written_t_s
 
     def flush(self) -> None:
         """Close the chunk in progress and hand everything to the operating system now."""
