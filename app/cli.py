@@ -205,7 +205,14 @@ def run(
         _fail(str(err))
         return
     driver = MissionDriver(spec, sim)
-    recorder = _open_recorder(log, spec, sim, seed) if log else None
+    recorder = None
+    if log:
+        try:
+            Path(log).parent.mkdir(parents=True, exist_ok=True)
+            recorder = _open_recorder(log, spec, sim, seed)
+        except OSError as err:
+            _fail(f"--log {log}: cannot write: {err.strerror or err}")
+            return
     t0 = time.perf_counter()
     try:
         _drive(driver, recorder, show=progress and not json_out)

@@ -243,3 +243,20 @@ def test_missions_with_the_old_newton_spelling_still_load():
     assert mission.setup.heave_force_newton == 12.5
     assert mission.legs[0].force_newton == -7.0
     assert "force_newton = -7.0" in schema.dump_mission(mission)
+
+
+def test_run_log_makes_its_folder_and_refuses_to_overwrite(tmp_path):
+    """`run --log out/x.mcap` on a fresh clone (no out/) writes the log; a second run into the
+    same file is refused with exit 2 and a one-line error, no traceback."""
+    mission = tmp_path / "short.toml"
+    mission.write_text(
+        'format_version = 1\nname = "short"\n[setup]\nparams = "model-scale"\n'
+        'depth_m = 100.0\n[[legs]]\ntype = "hold"\nduration_s = 2.0\n'
+    )
+    log = tmp_path / "out" / "deeper" / "x.mcap"
+    first = run_cli("run", str(mission), "--no-progress", "--log", str(log))
+    assert first.returncode == 0, first.stderr
+    assert log.is_file() and log.stat().st_size > 0
+    second = run_cli("run", str(mission), "--no-progress", "--log", str(log))
+    assert second.returncode == 2
+    assert "cannot write: File exists" in second.stderr and "Traceback" not in second.stderr
