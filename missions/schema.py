@@ -8,8 +8,8 @@ interface), radians inside.
 
 from __future__ import annotations
 
-import tomllib
 import re
+import tomllib
 import typing
 from pathlib import Path
 from typing import Annotated, Literal

@@ -168,3 +168,29 @@ def test_settings_refuse_short_tokens_and_accept_loopback_spellings() -> None:
     assert ConsoleSettings(host="127.0.0.2").host == "127.0.0.2"
     with pytest.raises(ValueError, match="not a loopback address"):
         ConsoleSettings(host="10.0.0.1")
+
+
+def test_the_view_port_checks_host_and_origin(served) -> None:
+    """The 3D view's own port: a page served under another name (DNS rebinding) or a
+    WebSocket opened by another web page is refused; the console's own address works."""
+    import httpx
+
+    view = served.app.state.view
+    url = f"http://127.0.0.1:{view.port}/"
+    before = view.refused_requests
+    assert httpx.get(url, timeout=10.0).status_code == 200
+    evil = httpx.get(url, headers={"Host": "evil.example"}, timeout=10.0)
+    assert evil.status_code == 400 and "Invalid host header" in evil.text
+
+    async def foreign_page() -> None:
+        with pytest.raises(websockets.InvalidStatus) as err:
+            async with websockets.connect(
+                f"ws://127.0.0.1:{view.port}",
+                origin="http://evil.example",
+                subprotocols=[f"viser-v{viser.__version__}"],
+            ):
+                pass
+        assert err.value.response.status_code == 403
+
+    asyncio.run(foreign_page())
+    assert view.refused_requests == before + 2

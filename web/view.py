@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import viser
 
+from app.console import allowed_hosts, origin_allowed
 from web import geometry as geo
 from web.panels import ClientPanel
 from web.scene import SceneView
@@ -31,7 +32,11 @@ class ConsoleView:
 
     def __init__(self, console: Console, host: str, port: int) -> None:
         self.console = console
-        self.server = viser.ViserServer(host=host, port=port, label="ROV console", verbose=False)
+        self.refused_requests = 0
+        """Requests to the view's port refused for their Host or Origin header."""
+        self.server = _guarded_viser_server(
+            host, port, allowed_hosts(host, console.settings.allow_remote), self._count_refused
+        )
         self.share_requests_refused = 0
         _refuse_share_links(self.server, self._count_share_request)
         self.server.gui.configure_theme(
@@ -51,6 +56,9 @@ class ConsoleView:
         self.scene.update(console.loop.snapshot)
         self._thread = threading.Thread(target=self._publish, name="console-view", daemon=True)
         self._thread.start()
+
+    def _count_refused(self) -> None:
+        self.refused_requests += 1
 
     def _count_share_request(self) -> None:
         self.share_requests_refused += 1
@@ -124,3 +132,48 @@ def _refuse_share_links(server: viser.ViserServer, on_request: Callable[[], None
         return None
 
     server.request_share_url = refused  # type: ignore[method-assign]
+
+
+_SERVE_LOCK = threading.Lock()
+
+
+def _guarded_viser_server(
+    host: str, port: int, hosts: list[str], on_refused: Callable[[], None]
+) -> viser.ViserServer:
+    """A viser server whose port answers only requests that name this server in their Host
+    header and, from a browser, come from one of its pages (Origin): the same checks as the
+    HTTP API (DNS rebinding; another web page the operator has open). viser has no option for
+    it, so its websockets server is started with a request check in front of viser's own."""
+    import websockets.asyncio.server as ws_server
+
+    original = ws_server.serve
+
+    def serve(handler: Any, *args: Any, **kwargs: Any) -> Any:
+        inner = kwargs.get("process_request")
+
+        def check(connection: Any, request: Any) -> Any:
+            name = _host_name(request.headers.get("Host", ""))
+            if "*" not in hosts and name not in hosts and f"[{name}]" not in hosts:
+                on_refused()
+                return connection.respond(400, "Invalid host header\n")
+            if not origin_allowed(request.headers.get("Origin"), hosts):
+                on_refused()
+                return connection.respond(403, "Origin not allowed\n")
+            return inner(connection, request) if inner is not None else None
+
+        kwargs["process_request"] = check
+        return original(handler, *args, **kwargs)
+
+    with _SERVE_LOCK:  # the server binds inside the constructor: patched only meanwhile
+        ws_server.serve = serve  # type: ignore[misc,assignment]
+        try:
+            return viser.ViserServer(host=host, port=port, label="ROV console", verbose=False)
+        finally:
+            ws_server.serve = original  # type: ignore[misc]
+
+
+def _host_name(header: str) -> str:
+    """The name in a Host header, without the port ('[::1]:8080' -> '::1')."""
+    if header.startswith("["):
+        return header[1 : header.find("]")] if "]" in header else header
+    return header.rsplit(":", 1)[0] if header.count(":") == 1 else header

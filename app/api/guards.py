@@ -2,21 +2,21 @@
 
 - ``BodyLimit``: request bodies above ``MAX_BODY_BYTES`` are refused with 413 (by the declared
   length, and by counting when none is declared), so no upload is kept in memory whole.
-- ``allowed_hosts``: the Host header must name this server (DNS rebinding: a web page on
-  another name that resolves to 127.0.0.1 must not read the console).
+- the Host header must name this server (``app.console.allowed_hosts``; DNS rebinding: a web
+  page on another name that resolves to 127.0.0.1 must not read the console).
 - wrong tokens are counted per client (``app.console.tokens.GuessLimit``): after too many,
   that client is refused with 429 until its window has passed.
-- ``origin_allowed``: a browser's WebSocket carries an Origin; only this server's own pages
-  (or clients that send none, like scripts) may open the telemetry stream.
+- a browser's WebSocket carries an Origin (``app.console.origin_allowed``): only this
+  server's own pages (or clients that send none, like scripts) may open the telemetry stream.
 """
 
 from __future__ import annotations
 
-import ipaddress
 import json
 from collections.abc import Awaitable, Callable, MutableMapping
 from typing import Any
-from urllib.parse import urlsplit
+
+from app.console import allowed_hosts, origin_allowed
 
 MAX_BODY_BYTES = 256 * 1024
 """Largest request body [bytes]: a mission file of 200 legs is about 30 kB."""
@@ -90,30 +90,10 @@ class BodyLimit:
         await send({"type": "http.response.body", "body": body})
 
 
-def allowed_hosts(host: str, allow_remote: bool) -> list[str]:
-    """Host names the server answers to: the loopback names and the bound address; with
-    ``allow_remote`` and a wildcard bind, any (the operator chose to expose it)."""
-    if allow_remote and host in ("0.0.0.0", "::"):
-        return ["*"]
-    names = {"127.0.0.1", "localhost", "::1", "[::1]", host, f"[{host}]"}
-    return sorted(names)
-
-
-def origin_allowed(origin: str | None, hosts: list[str]) -> bool:
-    """A WebSocket's Origin (None for non-browser clients) must be one of our host names."""
-    if origin is None or "*" in hosts:
-        return True
-    try:
-        name = urlsplit(origin).hostname or ""
-    except ValueError:
-        return False
-    return name in hosts or f"[{name}]" in hosts or _is_loopback_name(name)
-
-
-def _is_loopback_name(name: str) -> bool:
-    if name == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(name).is_loopback
-    except ValueError:
-        return False
+__all__ = [
+    "MAX_BODY_BYTES",
+    "MAX_TELEMETRY_CLIENTS",
+    "BodyLimit",
+    "allowed_hosts",
+    "origin_allowed",
+]

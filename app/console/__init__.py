@@ -25,7 +25,7 @@ from app.console.instance import Console, initial_run
 from app.console.loop import PacedLoop
 from app.console.replay import RECORDING_NAME, list_recordings, load_replay, recording_path
 from app.console.session import PreparedRun, Session, prepare_run, station_keeping_mission
-from app.console.settings import ConsoleSettings, is_loopback
+from app.console.settings import ConsoleSettings, allowed_hosts, is_loopback, origin_allowed
 from app.console.snapshot import (
     LoopStats,
     MissionStatus,
@@ -61,12 +61,14 @@ __all__ = [
     "SceneInfo",
     "Session",
     "Snapshot",
+    "allowed_hosts",
     "attachment_point_n",
     "commands",
     "initial_run",
     "is_loopback",
     "list_recordings",
     "load_replay",
+    "origin_allowed",
     "prepare_run",
     "quaternion_wxyz_from_rpy_radians",
     "recording_path",

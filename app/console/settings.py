@@ -7,6 +7,7 @@ import math
 import socket
 from dataclasses import dataclass
 from pathlib import Path
+from urllib.parse import urlsplit
 
 from app.console.commands import SPEED_MAX, SPEED_MIN
 from app.console.tokens import MIN_TOKEN_CHARS
@@ -81,3 +82,23 @@ def is_loopback(host: str) -> bool:
         return ipaddress.ip_address(socket.inet_aton(host)).is_loopback
     except OSError:
         return False
+
+
+def allowed_hosts(host: str, allow_remote: bool) -> list[str]:
+    """Host names the server answers to: the loopback names and the bound address; with
+    ``allow_remote`` and a wildcard bind, any (the operator chose to expose it)."""
+    if allow_remote and host in ("0.0.0.0", "::"):
+        return ["*"]
+    names = {"127.0.0.1", "localhost", "::1", "[::1]", host, f"[{host}]"}
+    return sorted(names)
+
+
+def origin_allowed(origin: str | None, hosts: list[str]) -> bool:
+    """A WebSocket's Origin (None for non-browser clients) must be one of our host names."""
+    if origin is None or "*" in hosts:
+        return True
+    try:
+        name = urlsplit(origin).hostname or ""
+    except ValueError:
+        return False
+    return name in hosts or f"[{name}]" in hosts or is_loopback(name)
