@@ -17,12 +17,32 @@ from app.log_cli import log_app
 app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
+    # plain help text: units in brackets ([m], [s]) are units, not terminal markup
+    rich_markup_mode=None,
     help="Simulator, control system and console for ROV-assisted tree-on-wire installation.",
 )
 
 
+def _print_version(value: bool) -> None:
+    if value:
+        from app.recording import software_version
+
+        typer.echo(f"rov-console {software_version()}")
+        raise typer.Exit()
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version",
+            callback=_print_version,
+            is_eager=True,
+            help="print the version and exit",
+        ),
+    ] = False,
+) -> None:
     """Simulator, control system and console for ROV-assisted tree-on-wire installation."""
 
 
@@ -455,7 +475,8 @@ def serve(
     token: Annotated[
         str | None,
         typer.Option(
-            help="token for actions that change the run (generated and printed if not given)"
+            help="token for actions that change the run: at least 16 printable characters, "
+            "no spaces (generated and printed if not given)"
         ),
     ] = None,
     params: Annotated[

@@ -19,6 +19,7 @@ EXIT_COMPLETE, EXIT_TRUNCATED, EXIT_UNREADABLE = 0, 1, 2
 log_app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
+    rich_markup_mode=None,
     help="Session logs (MCAP): check what a file holds, export it as CSV.",
 )
 
