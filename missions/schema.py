@@ -477,12 +477,32 @@ def load_mission(path_or_name: str | Path) -> Mission:
                 f"unknown mission {str(path_or_name)!r}; the library has: "
                 f"{', '.join(library_names())}"
             )
-    text = path.read_text()
+    try:
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise MissionError(f"{path}: larger than {MAX_FILE_BYTES} bytes; not a mission file")
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as err:
+        raise MissionError(f"cannot read {path}: {err}") from None
+    return parse_text(text, str(path))
+
+
+MAX_FILE_BYTES = 256 * 1024
+"""Largest mission file read (a mission of 200 legs is about 30 kB)."""
+
+
+def parse_text(text: str, source: str) -> Mission:
+    """A mission from TOML text; every malformed text is one MissionError, never a traceback
+    (unparsable, nested too deeply, or invalid)."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise MissionError(f"cannot parse {path}: {err}") from None
-    return parse_mission(data, str(path), text)
+        raise MissionError(f"cannot parse {source}: {err}") from None
+    except RecursionError:
+        raise MissionError(f"cannot parse {source}: nested too deeply") from None
+    try:
+        return parse_mission(data, source, text)
+    except RecursionError:
+        raise MissionError(f"invalid mission {source}: nested too deeply") from None
 
 
 def dump_mission(mission: Mission) -> str:

@@ -260,3 +260,22 @@ def test_run_log_makes_its_folder_and_refuses_to_overwrite(tmp_path):
     second = run_cli("run", str(mission), "--no-progress", "--log", str(log))
     assert second.returncode == 2
     assert "cannot write: File exists" in second.stderr and "Traceback" not in second.stderr
+
+
+def test_every_malformed_file_is_one_line_of_error(tmp_path):
+    """Deeply nested, binary or oversized files: exit 2 and one error line, no traceback."""
+    deep = tmp_path / "deep.toml"
+    deep.write_text('format_version = 1\nname = "deep"\nx = ' + "[" * 20000 + "]" * 20000 + "\n")
+    binary = tmp_path / "binary.toml"
+    binary.write_bytes(b"\xff\xfe\x00garbage")
+    huge = tmp_path / "huge.toml"
+    huge.write_text("# " + "x" * 300_000 + "\n")
+    for path, words in (
+        (deep, "nested too deeply"),
+        (binary, "cannot read"),
+        (huge, "larger than 262144 bytes"),
+    ):
+        proc = run_cli("run", str(path), "--no-progress")
+        assert proc.returncode == 2, path.name
+        assert words in proc.stderr and "Traceback" not in proc.stderr
+        assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr

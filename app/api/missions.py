@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-import tomllib
 
 from fastapi import APIRouter, HTTPException, status
 
@@ -41,11 +40,7 @@ def parse_text(body: MissionTextIn) -> schema.Mission:
     if (body.toml is None) == (body.mission is None):
         raise schema.MissionError("give exactly one of 'toml' (text) or 'mission' (object)")
     if body.toml is not None:
-        try:
-            data = tomllib.loads(body.toml)
-        except tomllib.TOMLDecodeError as err:
-            raise schema.MissionError(f"toml: cannot parse: {err}") from None
-        return schema.parse_mission(data, "<upload>", body.toml)
+        return schema.parse_text(body.toml, "toml")
     return schema.parse_mission(body.mission or {}, "<upload>")
 
 
