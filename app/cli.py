@@ -338,6 +338,13 @@ def _print_result_table(summary: dict) -> None:
     )
     for w in summary["warnings"]:
         console.print("WARNING: " + w, style="bold red", markup=False)
+    for leg in summary["legs"]:
+        if leg.get("error") and leg["error"] not in summary.get("error", ""):
+            console.print(
+                f"FAILED leg {leg['index']} ({leg['type']}): {leg['error']}",
+                style="bold red",
+                markup=False,
+            )
     if summary.get("error"):
         console.print("ERROR: " + summary["error"], style="bold red", markup=False)
 

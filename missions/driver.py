@@ -81,12 +81,21 @@ class MissionDriver:
                 type=leg.type,
             )
             deadline = self.sim.t_s + leg.timeout_s
+            self.ctx.leg = leg
+            self.ctx.misses = []
             self._gen = LEG_EXECUTORS[leg.type](self.ctx, leg, deadline)
 
     def _end_leg(self, ok: bool, error: str = "") -> None:
         leg = self.current_leg
         if leg is None:
             return
+        if not error and self.ctx.misses:
+            error = self.ctx.misses[0]
+            if len(self.ctx.misses) > 1:
+                error += f" (and {len(self.ctx.misses) - 1} more targets)"
+            self.ctx.event(
+                "miss", f"leg {self.leg_index + 1} ({leg.type}) {error}", leg=self.leg_index + 1
+            )
         self.spans.append(
             LegSpan(
                 self.leg_index + 1,

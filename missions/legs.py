@@ -50,6 +50,10 @@ class MissionContext:
         self.previous_row: FloatArray | None = None
         self.charted_frame: DockingFrame | None = None
         self.events: list[dict] = []
+        self.leg: schema.Leg | None = None
+        """The leg being run (set by the driver)."""
+        self.misses: list[str] = []
+        """Targets of the present leg the tree did not reach within its tolerance."""
         self.landings: list[LandingResult] = []
 
     def event(self, kind: str, text: str, **data: object) -> None:
@@ -95,7 +99,25 @@ class MissionContext:
         if not (yield from self.run_until(self.reference_arrived, deadline_s)):
             return False
         yield from self.wait(settle_s, deadline_s)
+        self.check_reached(north, east, psi)
         return True
+
+    def check_reached(self, north: float, east: float, psi: float) -> None:
+        """Note a miss when the tree's true pose is outside the leg's tolerance of the target
+        (the reference arriving says nothing of the tree: a wrong mount vector or saturated
+        thrusters leave it behind)."""
+        tol_m = getattr(self.leg, "tolerance_m", None)
+        tol_deg = getattr(self.leg, "tolerance_deg", None)
+        if tol_m is None or tol_deg is None:
+            return
+        tree = self.sim.tree_eta_n
+        off_m = math.hypot(tree[0] - north, tree[1] - east)
+        off_deg = abs(math.degrees(ssa(tree[5] - psi)))
+        if off_m > tol_m or off_deg > tol_deg:
+            self.misses.append(
+                f"did not reach its target: {off_m:.2f} m and {off_deg:.1f} deg off at "
+                f"t = {self.sim.t_s:.1f} s (tolerance {tol_m:g} m, {tol_deg:g} deg)"
+            )
 
 
 Executor = Callable[[MissionContext, Any, float], LegRun]

@@ -158,7 +158,20 @@ class HoldLeg(_Leg):
     duration_s: float = Field(gt=0.0, le=86400.0)
 
 
-class RotateLeg(_Leg):
+class _Reaching(_Leg):
+    """A leg that goes to a target and settles there: after settling, the tree (its true
+    pose, as the camera shows it) must be within these tolerances of the target, or the leg
+    fails (the mission goes on, and is reported failed)."""
+
+    tolerance_m: float = Field(
+        default=0.1, gt=0.0, le=100.0, description="horizontal distance allowed [m]"
+    )
+    tolerance_deg: float = Field(
+        default=2.0, gt=0.0, le=180.0, description="heading error allowed [deg]"
+    )
+
+
+class RotateLeg(_Reaching):
     type: Literal["rotate"]
     angle_deg: float = Field(
         ge=-1080.0, le=1080.0, description="positive = clockwise seen from above; 360 allowed"
@@ -166,7 +179,7 @@ class RotateLeg(_Leg):
     settle_s: float = Field(default=60.0, ge=0.0, le=3600.0)
 
 
-class MoveLeg(_Leg):
+class MoveLeg(_Reaching):
     type: Literal["move"]
     north_m: float = Field(ge=-1000.0, le=1000.0)
     east_m: float = Field(ge=-1000.0, le=1000.0)
@@ -184,7 +197,7 @@ class StepLeg(_Leg):
     duration_s: float = Field(gt=0.0, le=86400.0)
 
 
-class SquareLeg(_Leg):
+class SquareLeg(_Reaching):
     type: Literal["square"]
     side_m: float = Field(gt=0.0, le=100.0)
     heading_deg: float | None = Field(
@@ -194,7 +207,7 @@ class SquareLeg(_Leg):
     settle_s: float = Field(default=20.0, ge=0.0, le=3600.0)
 
 
-class WaypointsLeg(_Leg):
+class WaypointsLeg(_Reaching):
     type: Literal["waypoints"]
     points_ne_m: list[Annotated[list[Finite], Field(min_length=2, max_length=2)]] = Field(
         min_length=1, max_length=200

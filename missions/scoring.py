@@ -79,10 +79,11 @@ class MissionResult:
 
     @property
     def failed(self) -> bool:
-        """A mission fails when it diverged, a leg timed out or could not go on, or a landing
-        failed."""
+        """A mission fails when it diverged, a leg timed out, could not go on or did not bring
+        the tree within its tolerance of the target, or a landing failed."""
         return (
             bool(self.error)
+            or any(leg.error for leg in self.legs)
             or self.diverged
             or any(leg.timed_out for leg in self.legs)
             or any(not landing.success for landing in self.landings)

@@ -47,6 +47,9 @@ def test_square_at_100_m_is_harder_than_at_400_m(square_400):
     f100 = np.abs(r100.log["tau_tree_cmd"][:, 0:2]).max()
     f400 = np.abs(square_400.log["tau_tree_cmd"][:, 0:2]).max()
     assert f100 > 1.5 * f400
+    # beyond the ROV at 100 m (README): the square's corners are not reached, and it says so
+    assert r100.failed and "did not reach its target" in r100.legs[-1].error
+    assert not square_400.failed
 
 
 def test_full_rotation_turns_360_both_ways_and_returns():
@@ -115,9 +118,12 @@ def test_wrong_sign_of_r_fails_to_rotate_and_is_reported():
     assert rot.rms_heading_deg > 30.0
     assert abs(abs(r.final_eta_n[5]) - 180.0) > 20.0  # not at the 180 deg target
     assert any("looks like it has the wrong sign" in w for w in r.warnings)
+    # the reference arrived, the tree did not: the leg and the mission say they failed
+    assert r.failed and "did not reach its target" in rot.error and "180.0 deg off" in rot.error
     right = run("model-rotation-wrong-r", r_mount_config_m=None)
     assert not right.warnings
     assert abs(abs(right.final_eta_n[5]) - 180.0) < 2.0
+    assert not right.failed and all(leg.error == "" for leg in right.legs)
 
 
 def test_same_seed_same_result():
