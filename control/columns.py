@@ -27,8 +27,9 @@ M_MAX = 8
 
 _POSE6 = ("north_m", "east_m", "down_m", "roll_rad", "pitch_rad", "yaw_rad")
 _VEL6 = ("u_mps", "v_mps", "w_mps", "p_rad_s", "q_rad_s", "r_rad_s")
-_AXES3 = ("surge_newton", "sway_newton", "yaw_newton_m")
-_AXES6 = (
+AXES3 = ("surge_newton", "sway_newton", "yaw_newton_m")
+"""Element names of [surge, sway, yaw] force blocks (tree controller, bias, terms)."""
+AXES6 = (
     "surge_newton",
     "sway_newton",
     "heave_newton",
@@ -112,7 +113,7 @@ LOG_COLUMNS: tuple[LogColumn, ...] = (
         ["est_tree_u_mps", "est_tree_v_mps", "est_tree_r_rad_s"],
     ),
     _block(
-        "bias_tree", "N, N m", "tree axes", "estimated bias force", [f"bias_{n}" for n in _AXES3]
+        "bias_tree", "N, N m", "tree axes", "estimated bias force", [f"bias_{n}" for n in AXES3]
     ),
     _block(
         "eta_ref_n",
@@ -133,21 +134,21 @@ LOG_COLUMNS: tuple[LogColumn, ...] = (
         "N, N m",
         "tree axes",
         "commanded force on the tree",
-        [f"tau_tree_{n}" for n in _AXES3],
+        [f"tau_tree_{n}" for n in AXES3],
     ),
     _block(
         "tau_rov_cmd_b",
         "N, N m",
         "ROV axes",
         "commanded ROV wrench",
-        [f"tau_rov_cmd_{n}" for n in _AXES6],
+        [f"tau_rov_cmd_{n}" for n in AXES6],
     ),
     _block(
         "tau_rov_ach_b",
         "N, N m",
         "ROV axes",
         "achieved ROV wrench",
-        [f"tau_rov_ach_{n}" for n in _AXES6],
+        [f"tau_rov_ach_{n}" for n in AXES6],
     ),
     _block("thruster_force", "N", "-", "thruster forces (unused slots 0)", _thr("force_newton")),
     _block("thruster_speed", "rev/s", "-", "propeller speeds", _thr("speed_rps")),
@@ -163,7 +164,7 @@ LOG_COLUMNS: tuple[LogColumn, ...] = (
         "N, N m",
         "tree axes",
         "P, I, D and feedforward parts of the tree force",
-        [f"term_{p}_{a}" for p in ("p", "i", "d", "ff") for a in _AXES3],
+        [f"term_{p}_{a}" for p in ("p", "i", "d", "ff") for a in AXES3],
     ),
     _block(
         "y", "mixed", "sensor", "held sensor values (sim.sensors)", [f"y_{n}" for n in _Y_NAMES]

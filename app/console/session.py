@@ -16,6 +16,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -415,16 +416,9 @@ class Session:
         return Snapshot(
             seq=seq,
             source="live",
-            t_s=v.t_s,
             paused=paused,
             speed=speed,
-            tree_eta_n=v.tree_eta_n,
-            rov_eta_n=v.rov_eta_n,
-            eta_ref=v.eta_ref,
-            eta_hat=v.eta_hat,
-            thruster_utilisation=v.utilisation,
-            thruster_force_newton=v.force_newton,
-            mode=v.mode,
+            **_row_fields(v),
             allocation=sim.settings.allocation,
             grip=bool(sim.gripping),
             gains=sim.gains,
@@ -453,16 +447,9 @@ class Session:
         return Snapshot(
             seq=seq,
             source="replay",
-            t_s=v.t_s,
             paused=not rp.playing,
             speed=speed,
-            tree_eta_n=v.tree_eta_n,
-            rov_eta_n=v.rov_eta_n,
-            eta_ref=v.eta_ref,
-            eta_hat=v.eta_hat,
-            thruster_utilisation=v.utilisation,
-            thruster_force_newton=v.force_newton,
-            mode=v.mode,
+            **_row_fields(v),
             allocation=None,
             grip=None,
             gains=None,
@@ -489,3 +476,17 @@ class Session:
             except Exception:
                 self.recorder = None
         self._workers.shutdown(wait=False, cancel_futures=True)
+
+
+def _row_fields(v: RowView) -> dict[str, Any]:
+    """The snapshot's fields that come from one log row (live or replayed alike)."""
+    return {
+        "t_s": v.t_s,
+        "tree_eta_n": v.tree_eta_n,
+        "rov_eta_n": v.rov_eta_n,
+        "eta_ref": v.eta_ref,
+        "eta_hat": v.eta_hat,
+        "thruster_utilisation": v.utilisation,
+        "thruster_force_newton": v.force_newton,
+        "mode": v.mode,
+    }

@@ -17,7 +17,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import NDArray
 
-from control.columns import COLUMN_NAMES, LAYOUT, LOG_COLUMNS, Layout
+from control.columns import AXES3, AXES6, COLUMN_NAMES, LAYOUT, LOG_COLUMNS, Layout
 
 FloatArray = NDArray[np.float64]
 
@@ -108,17 +108,8 @@ class PlotChannel:
         return (v * scale).tolist()
 
 
-_AXES3 = ("surge_newton", "sway_newton", "yaw_newton_m")
-_AXES6 = (
-    "surge_newton",
-    "sway_newton",
-    "heave_newton",
-    "roll_newton_m",
-    "pitch_newton_m",
-    "yaw_newton_m",
-)
 _POSE = ("north_m", "east_m", "down_m", "roll_deg", "pitch_deg", "yaw_deg")
-_TERMS = tuple(f"{p}_{a}" for p in ("p", "i", "d", "ff") for a in _AXES3)
+_TERMS = tuple(f"{p}_{a}" for p in ("p", "i", "d", "ff") for a in AXES3)
 
 
 def _elements(block: str) -> tuple[str, ...]:
@@ -144,7 +135,7 @@ def _estimate_fields() -> tuple[PlotField, ...]:
         PlotField("u_mps", "nu_hat_tree", 0),
         PlotField("v_mps", "nu_hat_tree", 1),
         PlotField("r_deg_s", "nu_hat_tree", 2, DEG),
-        *_named("bias_", "bias_tree", _AXES3),
+        *_named("bias_", "bias_tree", AXES3),
         *_named("nis_", "nis", ("north", "east", "heading")),
     )
 
@@ -187,9 +178,9 @@ def _thruster_fields(n_thrusters: int) -> tuple[PlotField, ...]:
 def plot_channels(n_thrusters: int) -> tuple[PlotChannel, ...]:
     """The plot channels for an ROV with ``n_thrusters`` thrusters."""
     forces = (
-        *_named("tree_", "tau_tree_cmd", _AXES3),
-        *_named("rov_cmd_", "tau_rov_cmd_b", _AXES6),
-        *_named("rov_ach_", "tau_rov_ach_b", _AXES6),
+        *_named("tree_", "tau_tree_cmd", AXES3),
+        *_named("rov_cmd_", "tau_rov_cmd_b", AXES6),
+        *_named("rov_ach_", "tau_rov_ach_b", AXES6),
         PlotField("mode", "mode"),
     )
     return (
