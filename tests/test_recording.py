@@ -273,7 +273,17 @@ def test_messages_carry_the_rows_in_foxglove_frames(session):
     k = 150
     tree_eta, ref = block(rows, "tree_eta_n")[k], block(rows, "eta_ref_n")[k]
     t_ns, tf = msgs["/tf"][k]
-    assert t_ns == round(block(rows, "t_s")[k] * 1e9)
+    # log times are the session's real start (STARTED, at simulation time 0) plus the
+    # simulation time, so Foxglove shows the date the session ran, not 1970
+    origin = round(STARTED.timestamp() * 1e9)
+    assert t_ns == origin + round(block(rows, "t_s")[k] * 1e9)
+    assert (
+        tf["transforms"][0]["timestamp"]["sec"]
+        == (origin + round(block(rows, "t_s")[k] * 1e9)) // 10**9
+    )
+    assert recording.load_session(path).end_time_s == pytest.approx(
+        block(source, "t_s")[-1], abs=0.06
+    )
     frames = {x["child_frame_id"]: x for x in tf["transforms"]}
     assert frames["ned"]["parent_frame_id"] == "world"
     assert frames["ned"]["rotation"] == {"x": 1.0, "y": 0.0, "z": 0.0, "w": 0.0}

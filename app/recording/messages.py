@@ -7,7 +7,9 @@ Frames
     reference pose at the tree's depth) are children of ``ned``.
 
 Numbers
-    Message times are simulation times in nanoseconds (Foxglove shows them as 1970-01-01 + t).
+    Message and stamp times are the session's real start plus the simulation time, in
+    nanoseconds (the recorder's ``time_origin_ns``), so Foxglove shows the date the session
+    ran; every message also carries the simulation time itself as ``t_s``.
     Non-finite numbers are written as ``null`` (JSON has no NaN) and read back as NaN.
 """
 

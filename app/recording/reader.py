@@ -227,6 +227,13 @@ def _rows(messages: list[Message], width: int) -> FloatArray:
     return rows
 
 
+def time_origin_ns(setup: dict) -> int:
+    """Log time of simulation time zero in a file (0 for files before it was recorded)."""
+    recorder = setup.get("recorder")
+    value = recorder.get("time_origin_ns", 0) if isinstance(recorder, dict) else 0
+    return int(value) if isinstance(value, int | float) else 0
+
+
 def read_scan(path: str | Path) -> tuple[FileScan, SessionData]:
     """The raw scan of a file and what it holds (for check_session and export_csv)."""
     scan = _scan_file(Path(path))
@@ -247,7 +254,7 @@ def read_scan(path: str | Path) -> tuple[FileScan, SessionData]:
         events=events,
         complete=scan.complete,
         message_counts={t: len(m) for t, m in sorted(scan.messages.items())},
-        end_time_s=max(ends) / 1e9 if ends else math.nan,
+        end_time_s=(max(ends) - time_origin_ns(setup)) / 1e9 if ends else math.nan,
         file_bytes=scan.file_bytes,
         intact_bytes=scan.intact_bytes,
         problem=scan.problem,
@@ -262,7 +269,8 @@ def load_session(path: str | Path) -> SessionData:
     return read_scan(path)[1]
 
 
-def _channel_report(scan: FileScan, ch: Channel) -> dict:
+def _channel_report(scan: FileScan, ch: Channel, origin: int) -> dict:
+    """A channel's counts and simulation-time range [s]."""
     msgs = scan.messages.get(ch.topic, [])
     schema = scan.schemas.get(ch.schema_id)
     return {
@@ -270,8 +278,8 @@ def _channel_report(scan: FileScan, ch: Channel) -> dict:
         "schema": schema.name if schema else "",
         "encoding": ch.message_encoding,
         "messages": len(msgs),
-        "first_s": min(m.log_time for m in msgs) / 1e9 if msgs else None,
-        "last_s": max(m.log_time for m in msgs) / 1e9 if msgs else None,
+        "first_s": (min(m.log_time for m in msgs) - origin) / 1e9 if msgs else None,
+        "last_s": (max(m.log_time for m in msgs) - origin) / 1e9 if msgs else None,
     }
 
 
@@ -280,7 +288,8 @@ def check_session(path: str | Path) -> dict:
 
     Raises ValueError naming the file when it is not an MCAP file at all."""
     scan, data = read_scan(path)
-    channels = [_channel_report(scan, ch) for ch in scan.channels_in_order()]
+    origin = time_origin_ns(data.metadata)
+    channels = [_channel_report(scan, ch, origin) for ch in scan.channels_in_order()]
     starts = [c["first_s"] for c in channels if c["first_s"] is not None]
     return {
         "file": str(path),

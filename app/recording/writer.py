@@ -28,6 +28,7 @@ import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from datetime import datetime
 from importlib import metadata as importlib_metadata
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -124,8 +125,28 @@ def _log_rows(data: FloatArray | LogRows) -> FloatArray:
     return rows
 
 
+def time_origin_of(metadata: Mapping[str, Any]) -> int:
+    """Wall-clock time [ns since 1970, UTC] of simulation time zero: the session's start
+    (``started_utc`` at ``start_t_s``) when the metadata gives it, else now. Message log times
+    are this plus the simulation time, so Foxglove shows the date the session ran."""
+    started = metadata.get("started_utc")
+    if isinstance(started, str):
+        try:
+            moment = datetime.fromisoformat(started)
+        except ValueError:
+            moment = None
+        if moment is not None and moment.tzinfo is not None:
+            start_t_s = float(metadata.get("start_t_s", 0.0) or 0.0)
+            return round(moment.timestamp() * 1e9) - round(start_t_s * 1e9)
+    return time.time_ns()
+
+
 def _setup_record(
-    metadata: Mapping[str, Any], ps: ParameterSet, n_thrusters: int, rates: dict[str, float]
+    metadata: Mapping[str, Any],
+    ps: ParameterSet,
+    n_thrusters: int,
+    rates: dict[str, float],
+    origin_ns: int = 0,
 ) -> dict[str, str]:
     """The metadata record: every value JSON-encoded (strings too, so reading is exact).
 
@@ -137,6 +158,8 @@ def _setup_record(
         "n_thrusters": n_thrusters,
         "frames": "world = [north, west, up] (z up); "
         "ned = [north, east, down]; tree, rov, reference: children of ned",
+        "time_origin_ns": origin_ns,
+        "times": "log time = time_origin_ns + simulation time; messages carry t_s (simulation)",
     } | rates
     own = {"params": ps.spec.model_dump(mode="json"), "columns": COLUMNS, "recorder": recorder}
     clash = sorted(k for k in RESERVED_SETUP_KEYS if k in metadata and metadata[k] != own[k])
@@ -176,6 +199,7 @@ class SessionRecorder:
         clock: Callable[[], float] = time.monotonic,
         overwrite: bool = False,
         docking: DockingFrame | None = None,
+        time_origin_ns: int | None = None,
     ) -> None:
         """Create ``path`` (refuses an existing file unless ``overwrite``), write the header,
         schemas, channels and the ``setup`` metadata record (``metadata``, e.g. from
@@ -190,7 +214,10 @@ class SessionRecorder:
             "flush_interval_sim_s": flush_interval_sim_s,
         }
         _check_rates(**rates)
-        setup = _setup_record(metadata, params, n_thrusters, rates)
+        self._origin_ns = (
+            int(time_origin_ns) if time_origin_ns is not None else time_origin_of(metadata)
+        )
+        setup = _setup_record(metadata, params, n_thrusters, rates, self._origin_ns)
         self._plots = plot_channels(n_thrusters)
         self._geo = scene_geometry(params)
         self.path = Path(path)
@@ -316,7 +343,7 @@ class SessionRecorder:
     def _write_row(self, row: FloatArray, numeric: bool, scene: bool) -> None:
         t_s = float(LAYOUT.take(row, "t_s"))
         self._note_time(t_s)
-        t_ns = round(t_s * 1e9)
+        t_ns = self._origin_ns + round(t_s * 1e9)
         if numeric:
             self._add(SESSION_TOPIC, t_ns, session_row_message(row))
             self._add(TF_TOPIC, t_ns, tf_message(t_ns, row))
@@ -345,7 +372,7 @@ class SessionRecorder:
             json_bytes(message)
         except (TypeError, ValueError) as err:
             raise ValueError(f"event data cannot be written as JSON: {err}") from None
-        t_ns = round(t_s * 1e9)
+        t_ns = self._origin_ns + round(t_s * 1e9)
         with self._lock:
             self._check_open()
             self._note_time(t_s)
