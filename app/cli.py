@@ -250,8 +250,12 @@ def run(
         summary["log"] = log
     if plots:
         from app.plots import mission_figures
+        from missions.setup import charted_frame
 
-        summary["plots"] = [str(p) for p in mission_figures(result, Path(plots), sim.crane_tip_n)]
+        charted = charted_frame(spec)
+        docking = None if charted is None else (charted, sim.ps.spec.docking.to_numeric())
+        figures = mission_figures(result, Path(plots), sim.crane_tip_n, docking)
+        summary["plots"] = [str(p) for p in figures]
     if json_out:
         typer.echo(json.dumps(summary, indent=2, default=_json_default))
     else:
