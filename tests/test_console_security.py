@@ -98,6 +98,7 @@ def test_a_big_step_request_is_spread_over_ticks_and_the_server_keeps_answering(
             assert client.get("/api/health").status_code == 200
             health_answers += 1
         worker.join()
+        # 1000 steps of 0.01 s; 0.02 s = two steps: the paused snapshot t0 may be a tick old
         assert answers and answers[0] == pytest.approx(t0 + 10.0, abs=0.02)
         # 1000 steps at most 50 a tick: at least 20 ticks, and the server answered meanwhile
         assert served.console.loop.ticks - ticks0 >= 20
@@ -118,6 +119,7 @@ def test_wrong_tokens_lock_the_client_out_for_a_while(tmp_path: Path) -> None:
         r = c.post("/api/run/pause", headers=running.auth)
         assert r.status_code == 429, "locked out even with the right token"
         assert "too many wrong tokens" in r.json()["detail"]
+        # the window is GUESS_WINDOW_S = 60 s from the first wrong token, a few seconds ago
         assert 50 <= int(r.headers["Retry-After"]) <= 60
         assert c.get("/api/state").status_code == 200, "watching needs no token"
 

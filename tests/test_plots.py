@@ -62,4 +62,6 @@ def test_a_one_second_transient_does_not_set_the_scale(tmp_path, monkeypatch):
     _robust_limits(ax, steady, spike)
     lo, hi = ax.get_ylim()
     plt.close(fig)
+    # the steady signal spans 0.99..1.01; a scale set by the 40 m spike would reach past 40,
+    # so 2.0 and 0.9 separate the two cases by more than an order of magnitude
     assert hi < 2.0 and lo > 0.9

@@ -281,6 +281,7 @@ def test_messages_carry_the_rows_in_foxglove_frames(session):
         tf["transforms"][0]["timestamp"]["sec"]
         == (origin + round(block(rows, "t_s")[k] * 1e9)) // 10**9
     )
+    # end time in simulation seconds again; 0.06 s > one 20 Hz row interval (decimation)
     assert recording.load_session(path).end_time_s == pytest.approx(
         block(source, "t_s")[-1], abs=0.06
     )
@@ -741,6 +742,8 @@ def test_flush_follows_simulated_time_when_the_wall_clock_stalls(tmp_path, monke
             rec.write_log(sim.run_for(0.7).data)
             readable = recording.load_session(path)
             behind = sim.t_s - (readable.t_s[-1] if len(readable.t_s) else 0.0)
+            # the bound is flush_interval_sim_s = 1 s, plus one 20 Hz row interval (0.05 s):
+            # the readable rows are decimated, so the last one on disk can be that much older
             assert behind <= 1.0 + 0.05, f"{behind:.2f} s of simulation not yet on disk"
         assert len(readable.rows) >= 100  # 7 s written, at 20 Hz, all but the last second
     finally:
