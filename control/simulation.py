@@ -59,6 +59,13 @@ WIRE_LENGTH_RANGE_M = (1.0, 5000.0)
 WINCH_RATE_MAX_MPS = 2.0
 VESSEL_SPEED_MAX_MPS = 5.0
 HEAVE_FORCE_MAX_NEWTON = 1.0e5
+GRIP_REACH_M = 0.3
+"""Farthest the ROV's origin may be from its mount on the tree for the gripper to close [m]:
+the reach of a work-class manipulator's jaw around the tree's grab bar is a few decimetres, and
+the hook-up leg's tolerance (at most 1 m in the schema) is tighter in every library mission."""
+GRIP_REACH_DEG = 10.0
+"""Largest heading difference from the mount at which the gripper closes [deg]: beyond it the
+spring would yank the tree round (12 deg from 100 deg off, in the console defect report)."""
 
 
 class SimulationDiverged(RuntimeError):
@@ -343,6 +350,11 @@ class Simulation:
             ]
         )
 
+    @property
+    def free_setpoint_n(self) -> FloatArray:
+        """The free-flying ROV's set point [north, east, down, psi] (a copy)."""
+        return self.cs[loop.CS_FSP : loop.CS_FSP + 4].copy()
+
     def check_mount(self) -> StartupReport:
         """The start-up check of the mount vector against the measured geometry."""
         return check_mount_vector(
@@ -418,7 +430,22 @@ class Simulation:
         """Physically grip (True) or release (False) the tree."""
         if not isinstance(gripping, bool | np.bool_):
             raise ValueError(f"grip must be true or false, got {gripping!r}")
+        if gripping and not self.gripping:
+            miss_m, miss_deg = self.grip_miss()
+            if miss_m > GRIP_REACH_M or miss_deg > GRIP_REACH_DEG:
+                raise ValueError(
+                    f"grip: the ROV is {miss_m:.2f} m and {miss_deg:.0f} deg from its mount on "
+                    f"the tree; the gripper closes within {GRIP_REACH_M:g} m and "
+                    f"{GRIP_REACH_DEG:g} deg (fly it there first: a hook-up leg does)"
+                )
         self.gripping = bool(gripping)
+
+    def grip_miss(self) -> tuple[float, float]:
+        """How far the ROV is from its mount on the tree: (distance [m], heading [deg])."""
+        mount = self.mount_pose_n()
+        rov = self.x[12:18]
+        miss_m = float(np.linalg.norm(rov[0:3] - mount[0:3]))
+        return miss_m, abs(math.degrees(ssa(float(rov[5] - mount[3]))))
 
     def set_allocation(self, kind: Allocation) -> None:
         kinds = {
@@ -442,7 +469,9 @@ class Simulation:
     def set_free_setpoint(
         self, north_m: float, east_m: float, down_m: float, psi_rad: float
     ) -> None:
-        """Where the free-flying ROV should hold station (supervisor's free mode)."""
+        """Where the free-flying ROV should hold station (supervisor's free mode). The step
+        that switches to free mode holds the ROV where it is (bumpless), so a set point for
+        the free ROV is given after that step."""
         values = finite_vector("free-ROV set point", [north_m, east_m, down_m, psi_rad], 4)
         self.cs[loop.CS_FSP : loop.CS_FSP + 4] = values
 

@@ -289,7 +289,9 @@ class HookupLeg(_Leg):
     switches to the tree controller (appendix C step 4)."""
 
     type: Literal["hookup"]
-    grip_tolerance_m: float = Field(default=0.05, gt=0.0, le=1.0)
+    grip_tolerance_m: float = Field(default=0.05, gt=0.0, le=0.3)
+    """How close the ROV must come to its mount before it grips [m]; at most the gripper's
+    reach (control.simulation.GRIP_REACH_M)."""
 
 
 class HeaveLeg(_Leg):

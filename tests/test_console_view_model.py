@@ -202,3 +202,34 @@ def test_position_slack_innovation_and_dropout_alarms() -> None:
     e.update(rows(t + 4.0), 300e3)
     assert {"dropout"} <= active(e) and "innovation" not in active(e)
     assert any("dvl" in a.message or "position" in a.message for a in e.state if a.active)
+
+
+def test_a_tree_resting_on_the_frame_is_not_a_slack_wire() -> None:
+    """Defect: the slack alarm went red after a good landing. The frame's post tops are at
+    99 m; a tree 2 m high (bottom 1 m below its centre) resting there has a slack wire."""
+    limits = AlarmLimits(position_error_m=0.25, sample_period_s=(1.0,) * 5)
+    m = AlarmMonitor(
+        limits, 4, 300e3, uses_sensors=False, support_depth_m=99.0, tree_half_height_m=1.0
+    )
+    hanging = rows(np.array([0.01]))
+    hanging["tree_eta_n"][:, 2] = 97.5  # bottom 0.5 m above the post tops
+    m.update(hanging, 10e3)
+    assert active(m) == {"wire_slack"}, "a slack wire under a hanging tree is an alarm"
+    landed = rows(np.array([0.02]))
+    landed["tree_eta_n"][:, 2] = 98.02  # bottom 0.02 m into the contact
+    m.update(landed, 0.0)
+    assert active(m) == set()
+
+
+def test_free_mode_position_alarm_compares_the_rov_with_its_set_point() -> None:
+    """Defect: in free mode the alarm still compared the (released) tree with the tree's
+    reference. Now the ROV against its free-flying set point, with the same 0.25 m limit."""
+    m = monitor()
+    free = rows(np.array([0.01]), err_m=5.0)  # the tree is 5 m off its old reference
+    free["mode"][:] = 1.0
+    free["rov_eta_n"][:, 0:2] = (10.0, 2.0)
+    m.update(free, 300e3, free_setpoint_n=np.array([10.1, 2.0, 50.0, 0.0]))
+    assert active(m) == set()
+    m.update(free, 300e3, free_setpoint_n=np.array([10.5, 2.0, 50.0, 0.0]))
+    assert active(m) == {"position_error"}
+    assert "ROV 0.50 m" in m.state[1].message and "set point" in m.state[1].message

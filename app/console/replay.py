@@ -118,6 +118,8 @@ class Replay:
             self.scene.tree_weight_newton,
             uses_sensors=self.log.layout.has("accepted")
             and bool(np.any(self.log["accepted"] > 0.5)),
+            support_depth_m=self.scene.support_depth_m,
+            tree_half_height_m=self.scene.tree_dimensions_m[2] / 2.0,
         )
 
     @property

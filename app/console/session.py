@@ -119,12 +119,16 @@ class Session:
             sim.ps, sim.crane_tip_n[0:2], float(sim.tree_eta_n[5]), float(sim.tree_eta_n[2])
         )
         self._scene_version += 1
-        self.scene = scene_info(sim.ps, frame, self._scene_version)
+        self.scene = scene_info(
+            sim.ps, frame, self._scene_version, frame_in_mission=sim.docking_frame is not None
+        )
         self.monitor = AlarmMonitor(
             AlarmLimits.for_params(sim.ps),
             self.scene.n_thrusters,
             self.scene.tree_weight_newton,
             uses_sensors=sim.settings.feedback == "ekf",
+            support_depth_m=self.scene.support_depth_m,
+            tree_half_height_m=self.scene.tree_dimensions_m[2] / 2.0,
         )
         self.trend = TrendBuffer(sim.dt_s)
         self.last_row = sim.present_row()
@@ -232,7 +236,10 @@ class Session:
         frame = self.sim.docking_frame
         if frame is not None and frame is not self.scene.frame:
             self._scene_version += 1
-            self.scene = replace(self.scene, frame=frame, version=self._scene_version)
+            self.scene = replace(
+                self.scene, frame=frame, version=self._scene_version, frame_in_mission=True
+            )
+            self.monitor.support_depth_m = self.scene.support_depth_m
 
     def _take_rows(self, rows: LogRows) -> None:
         self._follow_docking_frame()
@@ -240,7 +247,8 @@ class Session:
         self.trend.extend(rows)
         self.tension_newton = self.sim.wire_tension_newton()
         before = {a.name: a.active for a in self.monitor.state}
-        for alarm in self.monitor.update(rows, self.tension_newton):
+        free_setpoint = self.sim.free_setpoint_n
+        for alarm in self.monitor.update(rows, self.tension_newton, free_setpoint):
             if alarm.active != before.get(alarm.name):
                 self.note(
                     "alarm",
@@ -368,12 +376,13 @@ class Session:
         except (KeyError, TypeError, ValueError):
             return self.scene
         frame = recorded_docking_frame(meta)
+        in_mission = frame is not None
         if frame is None:
             first = np.asarray(data.rows, float)[0]
             tree = LAYOUT.take(first, "tree_eta_n")
             frame = default_docking_frame(ps, tree[0:2], float(tree[5]), float(tree[2]))
         self._scene_version += 1
-        return scene_info(ps, frame, self._scene_version)
+        return scene_info(ps, frame, self._scene_version, frame_in_mission=in_mission)
 
     def close_replay(self) -> None:
         if self.replay is not None:

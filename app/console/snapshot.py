@@ -51,6 +51,16 @@ class SceneInfo:
     """Tree submerged weight W0 [N]."""
     preset_gains: Gains
     """The parameter set's controller gains (the gain sliders' reference)."""
+    frame_in_mission: bool = False
+    """True when the mission places the docking frame (False: ``frame`` is drawn under the
+    tree only to give the scene a seabed)."""
+
+    @property
+    def support_depth_m(self) -> float | None:
+        """Depth of the post tops, where a tree coming down rests on the frame [m]."""
+        if not self.frame_in_mission:
+            return None
+        return self.frame.landing_depth_m - self.layout.post_height_m
 
 
 @dataclass(frozen=True)
@@ -163,7 +173,9 @@ def default_docking_frame(
     return DockingFrame(np.asarray(center_ne, float).copy(), heading_rad, landing)
 
 
-def scene_info(ps: ParameterSet, frame: DockingFrame, version: int) -> SceneInfo:
+def scene_info(
+    ps: ParameterSet, frame: DockingFrame, version: int, frame_in_mission: bool = False
+) -> SceneInfo:
     dims = ps.tree.dimensions_m
     return SceneInfo(
         version=version,
@@ -177,6 +189,7 @@ def scene_info(ps: ParameterSet, frame: DockingFrame, version: int) -> SceneInfo
         wire_weight_newton_per_m=float(ps.wire.submerged_weight_per_length()),
         tree_weight_newton=float(ps.tree.submerged_weight_newton),
         preset_gains=Gains.of(ps.gains.kp, ps.gains.ki, ps.gains.kd),
+        frame_in_mission=frame_in_mission,
     )
 
 
