@@ -295,43 +295,18 @@ def _print_result_table(summary: dict) -> None:
     from rich.console import Console
     from rich.table import Table
 
+    from missions.scoring import LEG_TABLE_COLUMNS, leg_table_rows
+
     table = Table(
         title=f"{summary['name']}  (simulated {summary['simulated_s']:.0f} s, "
         f"{summary['real_time_factor']}x real time)"
     )
-    for col in (
-        "leg",
-        "type",
-        "duration s",
-        "RMS N m",
-        "RMS E m",
-        "RMS psi deg",
-        "max util",
-        "saturated s",
-    ):
+    for col in LEG_TABLE_COLUMNS:
         table.add_column(col, justify="right")
-    for leg in summary["legs"]:
-        table.add_row(
-            f"{leg['index']} {leg['name']}",
-            leg["type"],
-            f"{leg['duration_s']:.0f}",
-            f"{leg['rms_north_m']:.4f}",
-            f"{leg['rms_east_m']:.4f}",
-            f"{leg['rms_heading_deg']:.3f}",
-            f"{leg['max_utilisation']:.2f}",
-            f"{leg['saturated_s']:.1f}" + _leg_flag(leg),
-        )
-    table.add_row(
-        "scored",
-        "",
-        "",
-        f"{summary['rms_north_m']:.4f}",
-        f"{summary['rms_east_m']:.4f}",
-        f"{summary['rms_heading_deg']:.3f}",
-        f"{summary['max_thruster_utilisation']:.2f}",
-        f"{summary['saturated_time_s']:.1f}",
-        style="bold",
-    )
+    *legs, scored = leg_table_rows(summary)
+    for row in legs:
+        table.add_row(*row)
+    table.add_row(*scored, style="bold")
     console = Console(width=120)
     console.print(table)
     final = summary["final_eta_n"]
@@ -351,12 +326,6 @@ def _print_result_table(summary: dict) -> None:
             )
     if summary.get("error"):
         console.print("ERROR: " + summary["error"], style="bold red", markup=False)
-
-
-def _leg_flag(leg: dict) -> str:
-    if leg.get("error"):
-        return " FAILED"
-    return " TIMEOUT" if leg["timed_out"] else ""
 
 
 def _validate_choice(name: str, value: str | None, allowed: tuple[str, ...]) -> None:
@@ -428,13 +397,10 @@ def _open_recorder(path: str, spec, sim, seed):
 
 
 def _print_landings(summary: dict) -> None:
-    for i, landing in enumerate(summary.get("landings", []), start=1):
-        verdict = "LANDED" if landing["success"] else "FAILED"
-        typer.echo(
-            f"landing {i}: {verdict} - miss {landing['miss_m']:.3f} m, heading error "
-            f"{landing['heading_error_deg']:.2f} deg, contact speed "
-            f"{landing['contact_speed_mps']:.3f} m/s, rests on the {landing['rests_on']}"
-        )
+    from missions.scoring import landing_lines
+
+    for line in landing_lines(summary):
+        typer.echo(line)
     if summary.get("failed"):
         typer.echo("mission FAILED", err=True)
 

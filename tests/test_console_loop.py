@@ -177,3 +177,39 @@ def test_published_snapshots_cannot_be_changed_by_readers(tmp_path: Path) -> Non
         snap.trend[0, 0] = 1.0
     with pytest.raises(AttributeError):
         snap.t_s = 0.0  # type: ignore[misc]
+
+
+def test_operations_log_names_who_did_what_and_goes_into_the_recording(tmp_path: Path) -> None:
+    """Who paused, who set a gain the console refused: in the snapshot every viewer reads and
+    in the recording's events (a review can tell whose pause stopped the run)."""
+    from app.recording import load_session
+
+    async def scenario() -> str:
+        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
+        console = PacedLoop(eng)
+        task = asyncio.create_task(console.run())
+        name = (await console.call(cmd.StartRecording("ops")))["name"]
+        await asyncio.to_thread(console.call_blocking, cmd.Pause(), 10.0, "viewer 2 (Anna)")
+        too_big = Gains((99999.0, 2000.0, 2000.0), (175.0, 175.0, 75.0), (8e3, 8e3, 38500.0))
+        with pytest.raises(ValueError, match=r"gain kp surge must be in \[0, 8000\]"):
+            await console.call(cmd.SetGains(too_big))
+        await console.call(cmd.Resume())
+        await asyncio.sleep(0.1)
+        ops = console.snapshot.operations
+        assert [(op.who, op.action, op.outcome[:7]) for op in ops[-3:]] == [
+            ("viewer 2 (Anna)", "pause", "done"),
+            ("console", ops[-2].action, "refused"),
+            ("console", "resume", "done"),
+        ]
+        assert "99999" in ops[-2].action and "8000]" in ops[-2].outcome
+        await console.call(cmd.StopRecording())
+        console.stop()
+        await task
+        return name
+
+    name = asyncio.run(scenario())
+    data = load_session(tmp_path / name)
+    operations = [e for e in data.events if e.get("kind") == "operation"]
+    assert any(
+        e["data"]["who"] == "viewer 2 (Anna)" and e["data"]["action"] == "pause" for e in operations
+    ), operations

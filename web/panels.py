@@ -22,9 +22,11 @@ from app.console import (
     ConsoleError,
     Gains,
     Snapshot,
+    counters_markdown,
     list_recordings,
     load_replay,
     prepare_run,
+    result_markdown,
     station_keeping_mission,
 )
 from app.console import commands as cmd
@@ -39,8 +41,9 @@ SPEEDS = ("0.25", "0.5", "1", "2", "5", "10", "20", "50")
 STATUS_EVERY_S = 0.2
 PLOTS_EVERY_S = 0.5
 PLOT_WINDOW_S = 120.0
-GAIN_RANGE_FACTOR = 4.0
-"""Gain sliders run from 0 to this many times the parameter set's gain (a safe band)."""
+EDIT_HOLD_S = 30.0
+"""An input the operator has edited keeps the edit this long before it follows the live value
+again (unless its command is sent first)."""
 AXES = ("surge", "sway", "yaw")
 CAMERAS = ("Overview", "Top-down", "ROV camera")
 
@@ -65,9 +68,11 @@ class ClientPanel:
         self.camera_mode = "Overview"
         self._camera_pending = True
         self._guarded: list[Any] = []
+        self._edited: dict[str, float] = {}
+        self.last_error = ""
+        """What went wrong with the last command this browser sent ('' when it was done)."""
         self._status_wall = 0.0
         self._plots_wall = 0.0
-        self._gain_touch = 0.0
         self._scene_version = -1
         self._replay_name: str | None = None
         snap = console.loop.snapshot
@@ -95,18 +100,50 @@ class ClientPanel:
             self.camera_buttons = gui.add_button_group("Camera", CAMERAS)
             self.camera_buttons.on_click(self._on_camera)
         with gui.add_folder("Access", expand_by_default=True):
+            self.name_text = gui.add_text(
+                "Your name", initial_value="", hint="shown in the operations log beside what you do"
+            )
             self.token_text = gui.add_text("Token", initial_value="")
+            # viser has no password input: this page's style draws the token's characters as
+            # dots (the field is found by its label's 'for', which is the input's uuid)
+            gui.add_html(_masked_input_style(self.token_text))
             self.unlock_button = gui.add_button("Unlock controls")
             self.unlock_button.on_click(self._on_unlock)
-        with gui.add_folder("Thrusters"):
+            self.lock_button = gui.add_button("Lock controls", visible=False)
+            self.lock_button.on_click(self._on_lock)
+        with gui.add_folder("Operations log", expand_by_default=False):
+            self.operations_md = gui.add_markdown("*nothing done yet*")
+        with gui.add_folder("Thrusters") as self.thruster_folder:
             self.thruster_md = gui.add_markdown("")
-            n = self.console.loop.snapshot.scene.n_thrusters
-            self.bars = [gui.add_progress_bar(0.0, color="blue") for _ in range(n)]
+        self.bars: list[Any] = []
+        self._make_bars(self.console.loop.snapshot.scene.n_thrusters)
+
+    def _make_bars(self, n: int) -> None:
+        """One bar a thruster (the ROV of a new set-up may have another number of them)."""
+        for bar in self.bars:
+            bar.remove()
+        with self.thruster_folder:
+            self.bars = [self.gui.add_progress_bar(0.0, color="blue") for _ in range(n)]
 
     def _guard(self, handle: Any) -> Any:
         """A control that needs the token."""
         self._guarded.append(handle)
         return handle
+
+    def _live_input(self, group: str, handle: Any) -> Any:
+        """An input (guarded) that shows the live value of ``group`` until the operator edits
+        it; it follows the live value again ``EDIT_HOLD_S`` after the last edit or once the
+        group's command has been sent."""
+
+        def edited(event: Any) -> None:
+            if event.client is not None:
+                self._edited[group] = time.monotonic()
+
+        handle.on_update(edited)
+        return self._guard(handle)
+
+    def _editing(self, group: str) -> bool:
+        return time.monotonic() - self._edited.get(group, -math.inf) < EDIT_HOLD_S
 
     def _build_run(self) -> None:
         gui = self.gui
@@ -117,10 +154,19 @@ class ClientPanel:
         self.speed.on_update(self._on_speed)
         self.reset_button = self._guard(gui.add_button("Reset to station keeping"))
         self.reset_button.on_click(self._on_reset)
+        snap = self.console.loop.snapshot
+        goal = snap.target or snap.eta_ref
         with gui.add_folder("Target (no mission)"):
-            self.target_n = self._guard(gui.add_number("Target north m", 0.0, step=0.1))
-            self.target_e = self._guard(gui.add_number("Target east m", 0.0, step=0.1))
-            self.target_psi = self._guard(gui.add_number("Target heading deg", 0.0, step=1.0))
+            self.target_n = self._live_input(
+                "target", gui.add_number("Target north m", round(goal[0], 2), step=0.1)
+            )
+            self.target_e = self._live_input(
+                "target", gui.add_number("Target east m", round(goal[1], 2), step=0.1)
+            )
+            self.target_psi = self._live_input(
+                "target",
+                gui.add_number("Target heading deg", round(math.degrees(goal[2]), 1), step=1.0),
+            )
             self._action(
                 self._guard(gui.add_button("Go to target")),
                 lambda: cmd.SetTarget(
@@ -128,6 +174,7 @@ class ClientPanel:
                     float(self.target_e.value),
                     float(self.target_psi.value),
                 ),
+                done="target",
             )
 
     def _build_missions(self) -> None:
@@ -139,6 +186,7 @@ class ClientPanel:
         self.mission_start.on_click(self._on_start_library)
         self._action(self._guard(gui.add_button("Abort mission", color="red")), cmd.AbortMission)
         self.mission_md = gui.add_markdown("")
+        self.counters_md = gui.add_markdown("")
         with gui.add_folder("Mission builder"):
             self.builder = BuilderPanel(gui, self.console, self._guard, self._start)
 
@@ -159,53 +207,65 @@ class ClientPanel:
         self.grip = self._guard(gui.add_checkbox("Grip", bool(snap.grip)))
         self.grip.on_update(self._when_client(lambda: cmd.SetGrip(bool(self.grip.value))))
         with gui.add_folder("Gains"):
-            self.gain_sliders: dict[str, list[Any]] = {}
             preset = snap.scene.preset_gains
             live = snap.gains or preset
-            for term in ("kp", "ki", "kd"):
-                row = []
-                for i, axis in enumerate(AXES):
-                    hi = _slider_max(getattr(preset, term)[i], getattr(live, term)[i])
-                    slider = self._guard(
-                        gui.add_slider(
-                            f"{term} {axis}",
-                            min=0.0,
-                            max=hi,
-                            step=hi / 200.0,
-                            initial_value=float(getattr(live, term)[i]),
-                        )
-                    )
-                    slider.on_update(self._on_gain)
-                    row.append(slider)
-                self.gain_sliders[term] = row
+            self.gain_md = gui.add_markdown(_gain_band_text(preset))
+            self.gain_rows = {
+                term: self._live_input(
+                    "gains",
+                    gui.add_text(
+                        f"{term} [surge, sway, yaw]",
+                        _gain_row_text(getattr(live, term)),
+                        hint=f"three numbers, each within its band (see above); {term} of "
+                        "the parameter set: " + _gain_row_text(getattr(preset, term)),
+                    ),
+                )
+                for term in ("kp", "ki", "kd")
+            }
+            self._action(self._guard(gui.add_button("Apply gains")), self._typed_gains, "gains")
             self._action(
                 self._guard(gui.add_button("Preset gains")),
                 lambda: cmd.SetGains(self.console.loop.snapshot.scene.preset_gains),
+                done="gains",
             )
         with gui.add_folder("Current"):
-            self.current_speed = self._guard(
-                gui.add_number("Speed m/s", 0.0, min=0.0, max=3.0, step=0.01)
+            self.current_speed = self._live_input(
+                "current",
+                gui.add_number(
+                    "Speed m/s", round(snap.current_speed_mps, 3), min=0.0, max=3.0, step=0.01
+                ),
             )
-            self.current_dir = self._guard(
-                gui.add_number("Towards deg", 0.0, min=-360.0, max=360.0, step=1.0)
+            self.current_dir = self._live_input(
+                "current",
+                gui.add_number(
+                    "Towards deg",
+                    round(math.degrees(snap.current_direction_rad), 1),
+                    min=-360.0,
+                    max=360.0,
+                    step=1.0,
+                ),
             )
             self._action(
                 self._guard(gui.add_button("Set current")),
                 lambda: cmd.SetCurrent(
                     float(self.current_speed.value), float(self.current_dir.value)
                 ),
+                done="current",
             )
         with gui.add_folder("Vessel (crane tip)"):
             ct = snap.crane_tip_n
-            self.vessel_n = self._guard(
-                gui.add_number("North m", round(ct[0], 2), min=-1000.0, max=1000.0, step=0.1)
+            self.vessel_n = self._live_input(
+                "vessel",
+                gui.add_number("North m", round(ct[0], 2), min=-1000.0, max=1000.0, step=0.1),
             )
-            self.vessel_e = self._guard(
-                gui.add_number("East m", round(ct[1], 2), min=-1000.0, max=1000.0, step=0.1)
+            self.vessel_e = self._live_input(
+                "vessel",
+                gui.add_number("East m", round(ct[1], 2), min=-1000.0, max=1000.0, step=0.1),
             )
             self._action(
                 self._guard(gui.add_button("Move vessel")),
                 lambda: cmd.MoveVessel(float(self.vessel_n.value), float(self.vessel_e.value), 0.5),
+                done="vessel",
             )
 
     def _build_plots(self) -> None:
@@ -262,22 +322,42 @@ class ClientPanel:
 
     def _run(self, make: Callable[[], Any]) -> Any:
         """Build a command and have the loop apply it; show the outcome."""
+        self.last_error = ""
         if not self.unlocked:
-            self._say("**locked**: enter the console token under Access")
+            self.last_error = "locked: enter the console token under Access"
+            self._say(f"**{self.last_error}**")
             return None
         try:
-            result = self.console.loop.call_blocking(make(), timeout_s=15.0)
+            result = self.console.loop.call_blocking(make(), timeout_s=15.0, who=self.who)
         except (ConsoleError, ValueError, FileNotFoundError, KeyError) as err:
-            self._say(f"**error**: {err}")
-            return None
+            self.last_error = str(err)
         except Exception as err:
-            self._say(f"**error**: {type(err).__name__}: {err}")
+            self.last_error = f"{type(err).__name__}: {err}"
+        if self.last_error:
+            self._say(f"**error**: {self.last_error}")
             return None
         self._say("")
         return result
 
-    def _action(self, button: Any, make: Callable[[], Any]) -> None:
-        button.on_click(lambda event: self._run(make) if event.client is not None else None)
+    def _action(self, button: Any, make: Callable[[], Any], done: str | None = None) -> None:
+        """A button that runs a command; ``done``: the input group it sends, which follows
+        the live value again once sent."""
+
+        feedback = self.gui.add_markdown("") if done is not None else None
+
+        def clicked(event: Any) -> None:
+            if event.client is None:
+                return
+            self._run(make)
+            if done is None or feedback is None:
+                return
+            if self.last_error:  # the typed values stay, to be corrected
+                feedback.content = f"**not applied**: {self.last_error}"
+            else:
+                feedback.content = ""
+                self._edited.pop(done, None)
+
+        button.on_click(clicked)
 
     def _when_client(self, make: Callable[[], Any]) -> Callable[[Any], None]:
         """An input callback that acts on what the operator did, not on our own updates."""
@@ -291,14 +371,30 @@ class ClientPanel:
     def _on_unlock(self, event: Any) -> None:
         # counted for the view as a whole: a new connection does not buy new guesses
         ok, wait = self.console.check_token(str(self.token_text.value).strip(), "view")
+        self.token_text.value = ""  # type: ignore[misc]  # the token does not stay on the page
         if ok:
             self.unlocked = True
             self._set_enabled(True)
+            self.unlock_button.visible = False
+            self.lock_button.visible = True
             self._say("controls unlocked")
         elif wait > 0.0:
             self._say(f"**too many wrong tokens**: try again in {wait:.0f} s")
         else:
             self._say("**wrong token**")
+
+    def _on_lock(self, event: Any) -> None:
+        self.unlocked = False
+        self._set_enabled(False)
+        self.lock_button.visible = False
+        self.unlock_button.visible = True
+        self._say("controls locked")
+
+    @property
+    def who(self) -> str:
+        """This browser in the operations log: 'viewer 3 (Anna)'."""
+        name = " ".join(str(self.name_text.value).split())[:40]
+        return f"viewer {self.client.client_id}" + (f" ({name})" if name else "")
 
     def _on_camera(self, event: Any) -> None:
         self.camera_mode = str(self.camera_buttons.value)
@@ -335,12 +431,14 @@ class ClientPanel:
             return
         self._start(mission)
 
-    def _on_gain(self, event: Any) -> None:
-        if event.client is None:
-            return
-        self._gain_touch = time.monotonic()
-        values = {t: tuple(float(s.value) for s in row) for t, row in self.gain_sliders.items()}
-        self._run(lambda: cmd.SetGains(Gains.of(values["kp"], values["ki"], values["kd"])))
+    def _typed_gains(self) -> cmd.SetGains:
+        """The gains typed in the three rows; ValueError naming the row and entry."""
+        rows = {
+            term: _parse_gain_row(term, str(handle.value))
+            for term, handle in self.gain_rows.items()
+        }
+        cmd.check_gain_band(rows, self.console.loop.snapshot.scene.preset_gains)
+        return cmd.SetGains(Gains.of(rows["kp"], rows["ki"], rows["kd"]))
 
     def _on_record(self, start: bool) -> None:
         if start:
@@ -443,13 +541,18 @@ class ClientPanel:
             self.alarms_html.content = html
         self._update_thrusters(snap)
         self._update_controls(snap)
+        ops = _operations_text(snap)
+        if self.operations_md.content != ops:
+            self.operations_md.content = ops
 
     def _update_thrusters(self, snap: Snapshot) -> None:
         util = snap.thruster_utilisation
+        if len(self.bars) != len(util):
+            self._make_bars(len(util))
         for bar, u in zip(self.bars, util, strict=False):
             value = round(100.0 * min(max(u, 0.0), 1.0), 1)
             if bar.value != value:
-                bar.value = value  # type: ignore[misc]  # settable at run time
+                bar.value = value
             color = _bar_color(u)
             if bar.color != color:
                 bar.color = color
@@ -459,24 +562,56 @@ class ClientPanel:
 
     def _update_controls(self, snap: Snapshot) -> None:
         """Keep inputs in step with changes made elsewhere (API, missions, other browsers)."""
-        if snap.gains is not None and time.monotonic() - self._gain_touch > 1.0:
-            for term, row in self.gain_sliders.items():
-                for slider, value in zip(row, getattr(snap.gains, term), strict=True):
-                    if value > slider.max:
-                        slider.max = value
-                    if abs(slider.value - value) > 1e-9 * max(1.0, value):
-                        slider.value = value
+        if snap.gains is not None and not self._editing("gains"):
+            for term, handle in self.gain_rows.items():
+                text = _gain_row_text(getattr(snap.gains, term))
+                if handle.value != text:
+                    handle.value = text
+            band = _gain_band_text(snap.scene.preset_gains)
+            if self.gain_md.content != band:
+                self.gain_md.content = band
         if snap.mode != self.mode.value:
             self.mode.value = snap.mode
         if snap.allocation and snap.allocation != self.allocation.value:
             self.allocation.value = snap.allocation
         if snap.grip is not None and snap.grip != self.grip.value:
             self.grip.value = snap.grip
+        self._follow_live_inputs(snap)
         speed = f"{snap.speed:g}"
         if speed in SPEEDS and speed != self.speed.value:
             self.speed.value = speed
-        self.mission_md.content = _mission_text(snap)
+        text = _mission_text(snap)
+        if self.mission_md.content != text:
+            self.mission_md.content = text
+        counters = counters_markdown(snap.quality_counters)
+        if self.counters_md.content != counters:
+            self.counters_md.content = counters
         self._update_replay(snap)
+
+    def _follow_live_inputs(self, snap: Snapshot) -> None:
+        """Inputs the operator is not editing show the live values."""
+        goal = snap.target or snap.eta_ref
+        live = {
+            "target": (
+                (self.target_n, round(goal[0], 2)),
+                (self.target_e, round(goal[1], 2)),
+                (self.target_psi, round(math.degrees(goal[2]), 1)),
+            ),
+            "current": (
+                (self.current_speed, round(snap.current_speed_mps, 3)),
+                (self.current_dir, round(math.degrees(snap.current_direction_rad), 1)),
+            ),
+            "vessel": (
+                (self.vessel_n, round(snap.crane_tip_n[0], 2)),
+                (self.vessel_e, round(snap.crane_tip_n[1], 2)),
+            ),
+        }
+        for group, pairs in live.items():
+            if self._editing(group):
+                continue
+            for handle, value in pairs:
+                if handle.value != value:
+                    handle.value = value
 
     def _update_replay(self, snap: Snapshot) -> None:
         rp = snap.replay
@@ -508,16 +643,59 @@ class ClientPanel:
 def _mission_text(snap: Snapshot) -> str:
     m = snap.mission
     if m.result:
-        r = m.result
-        return (
-            f"**{m.name}** {m.state}: RMS N {r.get('rms_north_m', float('nan')):.3f} m, "
-            f"E {r.get('rms_east_m', float('nan')):.3f} m, heading "
-            f"{r.get('rms_heading_deg', float('nan')):.2f} deg"
-        )
+        return result_markdown(m.name, m.state, m.result)
     if m.leg_index:
         return f"**{m.name}**: leg {m.leg_index}/{m.legs_total} `{m.leg_type}` {m.leg_name or ''}"
     return f"{m.name or 'no mission'} ({m.state})"
 
 
-def _slider_max(preset: float, live: float) -> float:
-    return max(GAIN_RANGE_FACTOR * preset, live, 1.0)
+def _operations_text(snap: Snapshot) -> str:
+    """The latest operations, newest first: time, who, what, outcome."""
+    if not snap.operations:
+        return "*nothing done yet*"
+    lines = [
+        f"- {op.utc[11:19]} (t {op.t_s:.1f} s) **{op.who}**: {op.action} - {op.outcome}"
+        for op in reversed(snap.operations[-10:])
+    ]
+    return "\n".join(lines)
+
+
+def _masked_input_style(handle: Any) -> str:
+    """CSS that draws a text input's characters as dots (Chromium, Firefox, Safari)."""
+    uuid = handle._impl.uuid  # viser labels an input with for="<uuid>"
+    return (
+        "<style>"
+        f'div:has(> div > p > label[for="{uuid}"]) input '
+        "{ -webkit-text-security: disc; }"
+        "</style>"
+    )
+
+
+def _gain_row_text(values: tuple[float, ...]) -> str:
+    return ", ".join(f"{v:g}" for v in values)
+
+
+def _gain_band_text(preset: Gains) -> str:
+    """The band each gain may be set in (commands.gain_band), as a small table."""
+    lines = ["| band | surge | sway | yaw |", "|---|---|---|---|"]
+    for term in ("kp", "ki", "kd"):
+        cells = " | ".join(f"0 - {cmd.gain_band(v):g}" for v in getattr(preset, term))
+        lines.append(f"| {term} | {cells} |")
+    return "\n".join(lines)
+
+
+def _parse_gain_row(term: str, text: str) -> tuple[float, float, float]:
+    """'2000, 2000, 5000' -> three floats; ValueError naming the gain when an entry is not a
+    number or the row does not have three."""
+    parts = [p.strip() for p in text.replace(";", ",").split(",")]
+    if len(parts) != 3:
+        raise ValueError(
+            f"{term}: give three numbers (surge, sway, yaw) separated by commas, got {text!r}"
+        )
+    out = []
+    for axis, part in zip(cmd.AXIS_NAMES, parts, strict=True):
+        try:
+            out.append(float(part))
+        except ValueError:
+            raise ValueError(f"gain {term} {axis}: {part!r} is not a number") from None
+    return out[0], out[1], out[2]

@@ -445,6 +445,8 @@ class Session:
             stats=stats,
             warnings=(*sim.startup.warnings, *self.notices),
             error=self.error,
+            target=tuple(float(v) for v in sim.target),  # type: ignore[arg-type]
+            quality_counters=tuple(tuple(int(c) for c in row) for row in sim.quality_counters),
             trend=self._trend(),
         )
 

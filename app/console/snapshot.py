@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.console.alarms import Alarm
+from app.console.operations import Operation
 from control.columns import LogRows
 from control.config import MODES, Gains
 from sim.docking import DockingFrame, DockingLayout
@@ -143,6 +144,14 @@ class Snapshot:
     stats: LoopStats
     warnings: tuple[str, ...] = ()
     error: str | None = None
+    quality_counters: tuple[tuple[int, ...], ...] | None = None
+    """Signal-check counters: a row a sensor (position, depth, compass, dvl, gyro), a column a
+    check (range, wild point, frozen, variance); None in a replay."""
+    operations: tuple[Operation, ...] = ()
+    """The latest operations (who did what), oldest first."""
+    target: Vec3 | None = None
+    """The tree's target [north, east, psi] (where the reference model is heading; None in a
+    replay)."""
     trend: FloatArray = field(default_factory=lambda: _frozen(np.zeros((0, 7))), repr=False)
 
     @property
