@@ -76,9 +76,10 @@ def test_gain_change_in_the_panel_is_applied(
     tab(page, "Control")
     before = api.get("/api/gains").json()
     target = before["kp"][0] * 1.5
-    box = field(page, "kp surge")
-    box.fill(f"{target:g}")
-    box.press("Enter")
+    kp = ", ".join(f"{v:g}" for v in [target, *before["kp"][1:]])
+    field(page, "kp [surge, sway, yaw]").fill(kp)
+    time.sleep(0.2)  # viser sends an input's value at most every 50 ms
+    click(page, "Apply gains")
     wait_for(
         lambda: abs(api.get("/api/gains").json()["kp"][0] - target) < 1e-6,
         10.0,
@@ -111,7 +112,7 @@ def test_mission_built_in_the_panel_moves_the_tree(
         "the built mission to start",
     )
     start = api.get("/api/state").json()["tree_eta_n"]["north_m"]
-    tab(page, "Plots")
+    tab(page, "Run")
     time.sleep(1.5)
     _dismiss_notifications(page)
     before = scene_part(image(page))
@@ -149,7 +150,11 @@ def test_recording_from_the_panel_is_written_and_replayed(
         10.0,
         "the recording to start",
     )
-    time.sleep(2.0)
+    time.sleep(1.0)
+    # an event while recording: a gain change (a mark on the replay's scrub bar)
+    gains = api.get("/api/gains").json()
+    api.put("/api/gains", json={k: gains[k] for k in ("kp", "ki", "kd")}).raise_for_status()
+    time.sleep(1.0)
     click(page, "Stop recording")
     wait_for(
         lambda: api.get("/api/state").json()["recording"] is None, 10.0, "the recording to stop"
@@ -163,6 +168,8 @@ def test_recording_from_the_panel_is_written_and_replayed(
     wait_for(lambda: api.get("/api/state").json()["source"] == "replay", 20.0, "replay mode")
     replay = api.get("/api/replay").json()["replay"]
     assert replay["end_s"] - replay["start_s"] > 5.0
+    assert replay["marks"], "the gain change is marked on the scrub bar"
+    page.locator(".mantine-Slider-mark").first.wait_for(timeout=5000)
     click(page, "Play replay")
     t0 = api.get("/api/state").json()["t_s"]
     wait_for(lambda: api.get("/api/state").json()["t_s"] > t0 + 1.0, 15.0, "the replay to play")

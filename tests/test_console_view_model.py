@@ -233,3 +233,24 @@ def test_free_mode_position_alarm_compares_the_rov_with_its_set_point() -> None:
     m.update(free, 300e3, free_setpoint_n=np.array([10.5, 2.0, 50.0, 0.0]))
     assert active(m) == {"position_error"}
     assert "ROV 0.50 m" in m.state[1].message and "set point" in m.state[1].message
+
+
+def test_replay_marks_name_legs_runs_and_landings_and_tick_commands_and_alarms() -> None:
+    from app.console.replay import event_marks
+
+    events = [
+        {"t_s": 1.0, "kind": "mission", "text": "leg 1 (move) started", "data": {"leg": 1}},
+        {"t_s": 2.0, "kind": "command", "text": "gains", "data": {}},
+        {"t_s": 3.0, "kind": "alarm", "text": "saturation on", "data": {"active": True}},
+        {"t_s": 4.0, "kind": "alarm", "text": "saturation off", "data": {"active": False}},
+        {"t_s": 5.0, "kind": "landing", "text": "landed", "data": {}},
+        {"t_s": 6.0, "kind": "mission", "text": "mission m completed", "data": {"state": "done"}},
+        {"t_s": 99.0, "kind": "landing", "text": "after the end", "data": {}},
+    ]
+    assert event_marks(events, 0.0, 10.0) == (
+        (1.0, "L1"),
+        (2.0, ""),
+        (3.0, ""),
+        (5.0, "landing"),
+        (6.0, "done"),
+    )

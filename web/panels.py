@@ -41,6 +41,10 @@ SPEEDS = ("0.25", "0.5", "1", "2", "5", "10", "20", "50")
 STATUS_EVERY_S = 0.2
 PLOTS_EVERY_S = 0.5
 PLOT_WINDOW_S = 120.0
+PLOT_MIN_SPAN = (0.2, 0.2, 2.0)
+"""Smallest vertical span of the north, east [m] and heading [deg] plots."""
+PLOT_POINTS_PER_S = 2.0
+"""Points a second of simulated time drawn in the plots."""
 EDIT_HOLD_S = 30.0
 """An input the operator has edited keeps the edit this long before it follows the live value
 again (unless its command is sent first)."""
@@ -84,10 +88,12 @@ class ClientPanel:
             self._build_missions()
         with tabs.add_tab("Control"):
             self._build_control(snap)
-        with tabs.add_tab("Plots"):
-            self._build_plots()
         with tabs.add_tab("Record"):
             self._build_record()
+        # not a tab: a hidden tab is drawn 0 px wide, and uPlot's charts came back blank from
+        # one (a collapsed folder keeps its width, so the charts stay valid while folded)
+        with self.gui.add_folder("Plots", expand_by_default=True):
+            self._build_plots()
         self._set_enabled(False)
 
     # ================================================================== building
@@ -272,19 +278,30 @@ class ClientPanel:
         gui = self.gui
         self.plots = []
         for title, unit in (("North", "m"), ("East", "m"), ("Heading", "deg")):
-            empty = np.zeros(2)
+            empty = np.array([-PLOT_WINDOW_S, 0.0])
             series = (
-                {"label": "t [s]"},
+                {"label": "t - now [s]"},
                 {"label": f"tree {unit}", "stroke": "#1f5fd0", "width": 2},
                 {"label": f"reference {unit}", "stroke": "#d03030", "width": 1.5, "dash": (6, 4)},
+                # an invisible pair of points that keeps the vertical scale at least
+                # PLOT_MIN_SPAN wide: otherwise millimetre ringing about 1 m is drawn over the
+                # whole height with every tick labelled "1"
+                {
+                    "label": "min. span",
+                    "stroke": "rgba(0,0,0,0)",
+                    "width": 0,
+                    "points": {"show": False},
+                },
             )
             self.plots.append(
                 gui.add_uplot(
-                    (empty, empty, empty),
+                    (empty, empty, empty, empty),
                     series,  # type: ignore[arg-type]
-                    title=f"{title} [{unit}]",
+                    title=f"{title} [{unit}], last {PLOT_WINDOW_S:.0f} s",
                     aspect=2.0,
-                    scales={"x": {"time": False}},
+                    # a fixed window in time before now: the x scale never depends on the
+                    # chart's size or on earlier data, so nothing stale is kept between updates
+                    scales={"x": {"time": False, "range": (-PLOT_WINDOW_S, 0.0)}},
                 )
             )
 
@@ -296,7 +313,7 @@ class ClientPanel:
         stop = self._guard(gui.add_button("Stop recording"))
         stop.on_click(lambda event: self._on_record(False))
         self.record_md = gui.add_markdown("")
-        with gui.add_folder("Replay"):
+        with gui.add_folder("Replay") as self.replay_folder:
             self.recordings = gui.add_dropdown("Recording", self._recording_names())
             refresh = gui.add_button("Refresh list")
             refresh.on_click(lambda _: self._refresh_recordings())
@@ -305,12 +322,32 @@ class ClientPanel:
             self._action(self._guard(gui.add_button("Play replay")), lambda: cmd.PlayReplay(True))
             self._action(self._guard(gui.add_button("Pause replay")), lambda: cmd.PlayReplay(False))
             self._action(self._guard(gui.add_button("Close replay")), cmd.CloseReplay)
+        self._make_replay_slider(0.0, 1.0, ())  # enters the folder itself
+
+    def _make_replay_slider(
+        self, start_s: float, end_s: float, marks: tuple[tuple[float, str], ...]
+    ) -> None:
+        """The scrub bar, with the recording's events as marks (legs, runs, landings named;
+        commands and alarms as ticks); made anew for each replay opened."""
+        old = getattr(self, "replay_time", None)
+        if old is not None:
+            self._guarded = [h for h in self._guarded if h is not old]
+            old.remove()
+        with self.replay_folder:
             self.replay_time = self._guard(
-                gui.add_slider("Replay time s", min=0.0, max=1.0, step=0.1, initial_value=0.0)
+                self.gui.add_slider(
+                    "Replay time s",
+                    min=start_s,
+                    max=max(end_s, start_s + 0.1),
+                    step=0.1,
+                    initial_value=start_s,
+                    marks=tuple((t, label) if label else t for t, label in marks) or None,
+                )
             )
-            self.replay_time.on_update(
-                self._when_client(lambda: cmd.SeekReplay(float(self.replay_time.value)))
-            )
+        self.replay_time.disabled = not self.unlocked
+        self.replay_time.on_update(
+            self._when_client(lambda: cmd.SeekReplay(float(self.replay_time.value)))
+        )
 
     # ================================================================== callbacks
     def _set_enabled(self, enabled: bool) -> None:
@@ -620,8 +657,7 @@ class ClientPanel:
             return
         if rp.name != self._replay_name:
             self._replay_name = rp.name
-            self.replay_time.min = rp.start_s
-            self.replay_time.max = max(rp.end_s, rp.start_s + 0.1)
+            self._make_replay_slider(rp.start_s, rp.end_s, rp.marks)
         if abs(self.replay_time.value - rp.t_s) > 0.05:
             self.replay_time.value = round(rp.t_s, 1)
 
@@ -630,14 +666,22 @@ class ClientPanel:
         if len(trend) < 2:
             return
         recent = trend[trend[:, 0] >= trend[-1, 0] - PLOT_WINDOW_S]
-        t = recent[:, 0]
+        # PLOT_POINTS_PER_S a second (a trace a few hundred pixels wide needs no more): the
+        # whole window goes out at each update (viser's uPlot has no append), so this is what
+        # keeps the message small
+        first_of_bin = np.unique(np.floor(recent[:, 0] * PLOT_POINTS_PER_S), return_index=True)[1]
+        recent = recent[np.union1d(first_of_bin, [len(recent) - 1])]
+        t = recent[:, 0] - trend[-1, 0]
         data = (
             (t, recent[:, 1], recent[:, 4]),
             (t, recent[:, 2], recent[:, 5]),
             (t, np.degrees(recent[:, 3]), np.degrees(recent[:, 6])),
         )
-        for plot, series in zip(self.plots, data, strict=True):
-            plot.data = tuple(np.ascontiguousarray(a) for a in series)
+        for plot, series, span in zip(self.plots, data, PLOT_MIN_SPAN, strict=True):
+            mid = 0.5 * (float(np.min(series[1:])) + float(np.max(series[1:])))
+            frame = np.full(len(t), np.nan)
+            frame[0], frame[-1] = mid - span / 2, mid + span / 2
+            plot.data = tuple(np.ascontiguousarray(a) for a in (*series, frame))
 
 
 def _mission_text(snap: Snapshot) -> str:

@@ -218,6 +218,8 @@ class PacedLoop:
             if not future.set_running_or_notify_cancel():
                 continue
             action = describe(command)
+            notes_before = self.session.notes_written
+            self.session.actor = who
             try:
                 self.session.flush_recording()
                 result = command.apply(self)
@@ -227,18 +229,24 @@ class PacedLoop:
                     future.set_result(result)
             except Exception as err:
                 future.set_exception(err)
-                self._log_operation(who, action, f"refused: {err}")
+                self._log_operation(who, action, f"refused: {err}", noted=False)
             else:
-                self._log_operation(who, action, "done")
+                noted = self.session.notes_written > notes_before
+                self._log_operation(who, action, "done", noted)
+            finally:
+                self.session.actor = None
 
-    def _log_operation(self, who: str, action: str, outcome: str) -> None:
+    def _log_operation(self, who: str, action: str, outcome: str, noted: bool) -> None:
+        """Into the operations log; and into the recording unless the command wrote its own
+        event (which then names ``who``)."""
         entry = self.operations.add(self.session.sim.t_s, who, action, outcome)
         self._operations = self.operations.latest()
-        self.session.note(
-            "operation",
-            f"{who}: {action} ({outcome})",
-            {"who": who, "action": action, "outcome": outcome, "utc": entry.utc},
-        )
+        if not noted:
+            self.session.note(
+                "operation",
+                f"{who}: {action} ({outcome})",
+                {"who": who, "action": action, "outcome": outcome, "utc": entry.utc},
+            )
 
     def _fail_pending(self) -> None:
         self.cancel_steps("the console is shutting down")

@@ -97,6 +97,12 @@ class Session:
         self.recording_name: str | None = None
         self._recording_label = ""
         self._rec_rows: list[FloatArray] = []
+        self.actor: str | None = None
+        """Who sent the command being applied (set by the loop; None between commands)."""
+        self.notes_written = 0
+        self._rec_offset_s = 0.0
+        """Added to the simulation time in the recording: a run started while recording goes
+        on in the same file after the one before."""
         self.replay: Replay | None = None
         self._trend_cache = frozen_copy(np.zeros((0, 7)))
         self._trend_wall = 0.0
@@ -137,18 +143,38 @@ class Session:
         self.notices: tuple[str, ...] = ()
 
     def replace_run(self, run: PreparedRun) -> None:
-        """Swap in a new simulation; a recording in progress goes on in a new file (the log's
-        time starts again at zero)."""
+        """Swap in a new simulation. A recording in progress goes on in the same file, its
+        time continuing from where the last run stopped, when the new run has the same
+        parameter set (the same log layout); otherwise it goes on in a new file, and a notice
+        says so."""
         self.close_replay()
         if self._mission_running:
             self._finish_mission("aborted")
         label = self._recording_label
         was_recording = self.recorder is not None
+        same_layout = (
+            run.sim.ps.name == self.sim.ps.name and run.sim.n_thrusters == self.sim.n_thrusters
+        )
+        if was_recording and same_layout:
+            self.flush_recording()
+            self._rec_offset_s += self.sim.t_s - run.sim.t_s + self.sim.dt_s
+            self._install(run)
+            self.note(
+                "run",
+                f"new run: {run.mission.name}" + (" (its legs)" if run.run_legs else ""),
+                {"mission": run.mission.name, "legs": run.run_legs},
+            )
+            return
         if was_recording:
-            self.stop_recording()
+            old = self.stop_recording()
         self._install(run)
         if was_recording:
-            self.start_recording(label)
+            new = self.start_recording(label)
+            self.notices = (
+                *self.notices[-4:],
+                f"recording goes on in {new}: the new run's parameter set "
+                f"({run.sim.ps.name}) differs from {old}'s",
+            )
 
     # ------------------------------------------------------------------ stepping
     @property
@@ -287,12 +313,16 @@ class Session:
 
     # ------------------------------------------------------------------ recording
     def note(self, kind: str, text: str, data: dict) -> None:
-        """An event in the recording (commands, alarms, mission progress)."""
+        """An event in the recording (commands, alarms, mission progress); while the loop
+        applies someone's command, the event names them (``who``)."""
+        self.notes_written += 1
+        if self.actor is not None:
+            data = {**data, "who": self.actor}
         if self.recorder is None:
             return
         self.flush_recording()
         try:
-            self.recorder.event(self.sim.t_s, kind, text, data)
+            self.recorder.event(self.sim.t_s + self._rec_offset_s, kind, text, data)
         except Exception as err:
             self._recording_failed(err)
 
@@ -323,6 +353,7 @@ class Session:
         self.recording_name = name
         self._recording_label = label
         self._rec_rows = []
+        self._rec_offset_s = 0.0
         return name
 
     def flush_recording(self) -> None:
@@ -330,6 +361,8 @@ class Session:
             return
         rows = np.vstack(self._rec_rows)
         self._rec_rows = []
+        if self._rec_offset_s:
+            rows[:, 0] += self._rec_offset_s  # t_s, the first column (control.columns)
         try:
             self.recorder.write_log(
                 rows,

@@ -91,6 +91,8 @@ class ReplayStatus:
     playing: bool
     complete: bool
     """False when the log was not closed cleanly (its tail was recovered)."""
+    marks: tuple[tuple[float, str], ...] = ()
+    """Events to mark on the scrub bar: (time [s], label; '' for a plain tick)."""
 
 
 @dataclass(frozen=True)
