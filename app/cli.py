@@ -406,6 +406,32 @@ def _print_landings(summary: dict) -> None:
 
 
 @app.command()
+def report(
+    log: Annotated[
+        Path, typer.Argument(help="a session log (.mcap) from run --log or the console")
+    ],
+    out: Annotated[
+        Path, typer.Option("-o", "--out", help="HTML file to write (its folder is made)")
+    ] = Path("report.html"),
+) -> None:
+    """Write a self-contained debrief of a recorded session: scores per leg, landings, pose
+    against reference, the track over the docking frame, forces and thrusters, and every event
+    with who did it."""
+    from app.report import write_report
+
+    if not log.is_file():
+        _fail(f"no log file {log}")
+    try:
+        d = write_report(log, out)
+    except ValueError as err:
+        _fail(str(err))
+    typer.echo(
+        f"{out}: debrief of {d.name} ({d.duration_s:.0f} s, {len(d.result.legs)} legs, "
+        f"{len(d.events)} events)"
+    )
+
+
+@app.command()
 def study(
     name: Annotated[str, typer.Argument(help="table-4.1 (waves) or table-4.2 (robustness)")],
     duration: Annotated[float, typer.Option(help="table-4.1: seconds per run")] = 600.0,

@@ -53,15 +53,12 @@ def main() -> None:
             executable_path=str(CHROMIUM), args=CHROMIUM_ARGS, headless=True
         )
         page = browser.new_page(viewport={"width": 1400, "height": 900})
-        cdp = page.context.new_cdp_session(page)
-        cdp.send("Network.enable")
         received = {"bytes": 0}
-        cdp.on(
-            "Network.webSocketFrameReceived",
-            lambda e: received.__setitem__(
-                "bytes", received["bytes"] + len(e["response"]["payloadData"])
-            ),
-        )
+
+        def count(payload: str | bytes) -> None:
+            received["bytes"] += len(payload)
+
+        page.on("websocket", lambda ws: ws.on("framereceived", count))
         page.goto(srv.view_url)
         page.get_by_text("Unlock controls").wait_for(timeout=60_000)
         _dismiss_notifications(page)
