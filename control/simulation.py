@@ -476,8 +476,46 @@ class Simulation:
         self.cs[loop.CS_FSP : loop.CS_FSP + 4] = values
 
     def reset_observer(self) -> None:
-        """Restart the EKF from the present measurements (after hook-up)."""
-        self.xhat, self.P_cov = self._initial_estimate()
+        """Restart the EKF at hook-up from the ROV's own measurements moved to the tree with
+        the mounting vector r (see ``_hookup_estimate``)."""
+        self.xhat, self.P_cov = self._hookup_estimate()
+
+    def _hookup_estimate(self) -> tuple[FloatArray, FloatArray]:
+        """EKF start at the grip: the tree's pose and velocity are the ROV's, moved to the
+        tree's origin through r (eq. 3.4-3.6), each with the variance of the sensor it comes
+        from; the bias starts at zero with its configured spread.
+
+        The held position fix can be up to one fix interval old: it is carried forward over
+        its age with the DVL's velocity, and its variance grows by the DVL's over that age.
+        A start with loose pose variances but the gyro's tight rate variance is what made the
+        filter run away at the grip: the wire spring couples the position to the yaw
+        acceleration (the tree and ROV's mass matrix has sway-yaw terms), so after a few steps
+        the gyro's corrections moved the east estimate by metres."""
+        C, y = self.C, self.held_y
+        psi_hat = y[4] - C.psi_rel
+        ne, psi, uv, rate = loop.tree_measurements(y, psi_hat, C)
+        c, s = math.cos(psi), math.sin(psi)
+        vel_n = np.array([c * uv[0] - s * uv[1], s * uv[0] + c * uv[1]])
+        last_fix_s = float(self.Q.last_t[sensors.POSITION])
+        age_s = max(self.t_s - last_fix_s, 0.0) if last_fix_s >= 0.0 else 0.0
+        x0 = np.zeros(9)
+        x0[0:2] = ne + age_s * vel_n
+        x0[2] = psi
+        x0[3:5] = uv
+        x0[5] = rate
+        pos_var = C.r_pos + age_s**2 * C.r_dvl
+        p0 = np.diag(
+            [
+                pos_var,
+                pos_var,
+                C.r_psi,
+                C.r_dvl,
+                C.r_dvl,
+                C.r_gyro,
+                *(np.asarray(self.ps.spec.observer.process_force_std) ** 2),
+            ]
+        )
+        return x0, p0
 
     # ------------------------------------------------------------------ plant commands
     def set_thruster_speeds(self, n_rps: FloatArray) -> None:
