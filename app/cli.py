@@ -61,6 +61,10 @@ def parse_polar(text: str, what: str, unit: str) -> tuple[float, float]:
     return value, math.radians(direction)
 
 
+DEFAULT_SCORES_DB = Path("recordings") / "scores.sqlite"
+"""Where scores go by default: beside the console's recordings (``serve --recordings``)."""
+
+
 def _fail(message: str) -> None:
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(code=2)
@@ -199,6 +203,12 @@ def run(
         ),
     ] = None,
     progress: Annotated[bool, typer.Option(help="show a progress bar")] = True,
+    trainee: Annotated[
+        str | None, typer.Option(help="store this run's scores under this trainee's name")
+    ] = None,
+    scores_db: Annotated[
+        Path, typer.Option(help="the scores database (SQLite) --trainee writes to")
+    ] = DEFAULT_SCORES_DB,
 ) -> None:
     """Run a mission headless, faster than real time; exit 1 if it failed."""
     from control.config import ALLOCATIONS, FEEDBACKS, LAWS
@@ -256,6 +266,13 @@ def run(
         docking = None if charted is None else (charted, sim.ps.spec.docking.to_numeric())
         figures = mission_figures(result, Path(plots), sim.crane_tip_n, docking)
         summary["plots"] = [str(p) for p in figures]
+    if trainee is not None:
+        from app import scores
+
+        try:
+            summary["score_id"] = scores.record(scores_db, trainee, result, "run", log)
+        except (ValueError, OSError) as err:
+            _fail(f"--trainee: cannot store the scores in {scores_db}: {err}")
     if json_out:
         typer.echo(json.dumps(summary, indent=2, default=_json_default))
     else:
@@ -403,6 +420,75 @@ def _print_landings(summary: dict) -> None:
         typer.echo(line)
     if summary.get("failed"):
         typer.echo("mission FAILED", err=True)
+
+
+@app.command()
+def scores(
+    trainee: Annotated[str | None, typer.Option(help="only this trainee's runs")] = None,
+    mission: Annotated[str | None, typer.Option(help="only this mission's runs")] = None,
+    best: Annotated[bool, typer.Option("--best", help="the best run of each mission")] = False,
+    db: Annotated[Path, typer.Option(help="the scores database (SQLite)")] = DEFAULT_SCORES_DB,
+    json_out: Annotated[bool, typer.Option("--json", help="JSON instead of a table")] = False,
+) -> None:
+    """List stored scores (newest first): who flew which mission when, landed or not, miss,
+    heading error and contact speed at the landing, RMS errors, time saturated."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from app import scores as store
+
+    try:
+        rows = store.history(db, trainee, mission)
+    except ValueError as err:
+        _fail(str(err))
+        return
+    if best:
+        rows = store.best(rows)
+    if json_out:
+        typer.echo(store.as_json(rows))
+        return
+    if not rows:
+        typer.echo(f"no scores in {db}" + (f" for {trainee}" if trainee else ""))
+        return
+    table = Table(title=f"scores ({db})")
+    for col in (
+        "id",
+        "when (UTC)",
+        "trainee",
+        "mission",
+        "result",
+        "miss m",
+        "psi err deg",
+        "contact m/s",
+        "RMS N m",
+        "RMS E m",
+        "RMS psi deg",
+        "saturated s",
+    ):
+        table.add_column(col, justify="right")
+
+    def num(v: float | None, fmt: str) -> str:
+        return "-" if v is None else format(v, fmt)
+
+    for r in rows:
+        verdict = "PASS" if r.passed else "FAIL"
+        if r.landed is not None:
+            verdict += ", landed" if r.landed else ", not landed"
+        table.add_row(
+            str(r.id),
+            r.utc.replace("T", " ").rstrip("Z"),
+            r.trainee,
+            r.mission,
+            verdict,
+            num(r.miss_m, ".3f"),
+            num(r.heading_error_deg, ".2f"),
+            num(r.contact_speed_mps, ".3f"),
+            f"{r.rms_north_m:.4f}",
+            f"{r.rms_east_m:.4f}",
+            f"{r.rms_heading_deg:.3f}",
+            f"{r.saturated_s:.1f}",
+        )
+    Console(width=160).print(table)
 
 
 @app.command()

@@ -66,6 +66,13 @@ def _value_text(value: object) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
+def trainee_of(who: str) -> str:
+    """The trainee behind an operations-log name: the name typed in the page ("viewer 3
+    (Anna)" -> "Anna"), else the sender as logged ("API 127.0.0.1", "viewer 3")."""
+    match = re.fullmatch(r"viewer \d+ \((.+)\)", who)
+    return match.group(1) if match else who
+
+
 class OperationsLog:
     """The latest operations (oldest first)."""
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+import sqlite3
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
@@ -21,8 +22,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from app import scores
 from app.console.alarms import AlarmLimits, AlarmMonitor
 from app.console.errors import ConsoleError
+from app.console.operations import trainee_of
 from app.console.replay import Replay, recording_path
 from app.console.snapshot import (
     LoopStats,
@@ -86,6 +89,10 @@ def prepare_run(mission: schema.Mission, run_legs: bool = True) -> PreparedRun:
     return PreparedRun(mission, build_simulation(mission), run_legs)
 
 
+SCORES_DB = "scores.sqlite"
+"""The scores database, in the recordings folder (``rov-console scores --db``)."""
+
+
 class Session:
     """The live simulation with its mission, alarms, recorder and replay."""
 
@@ -98,6 +105,7 @@ class Session:
         self._recording_label = ""
         self._rec_rows: list[FloatArray] = []
         self.actor: str | None = None
+        self.started_by: str | None = None
         """Who sent the command being applied (set by the loop; None between commands)."""
         self.notes_written = 0
         self._rec_offset_s = 0.0
@@ -110,6 +118,8 @@ class Session:
 
     # ------------------------------------------------------------------ set-up
     def _install(self, run: PreparedRun) -> None:
+        self.started_by = self.actor
+        """Who started this run (None: the console itself, at start-up)."""
         self.sim = run.sim
         self.mission = run.mission
         self.driver = MissionDriver(run.mission, run.sim) if run.run_legs else None
@@ -240,7 +250,22 @@ class Session:
         self.mission_status = MissionStatus(
             s.name, state, s.leg_index, s.legs_total, s.leg_type, s.leg_name
         )
-        self._result = self._workers.submit(lambda: driver.result().summary())
+        started_by, log_file = self.started_by, self.recording_name
+        db = self.recordings_dir / SCORES_DB
+
+        def score() -> dict:
+            result = driver.result()
+            summary = result.summary()
+            if started_by is not None:  # someone flew it: their score goes in the database
+                try:
+                    summary["score_id"] = scores.record(
+                        db, trainee_of(started_by), result, "console", log_file
+                    )
+                except (OSError, ValueError, sqlite3.Error) as err:
+                    summary["score_error"] = f"scores not stored in {db}: {err}"
+            return summary
+
+        self._result = self._workers.submit(score)
         self.note("mission", f"mission {s.name} {state}", {"state": state})
 
     def fail(self, message: str) -> None:
