@@ -44,6 +44,7 @@ from control.config import (
     control_arrays,
     system_thruster_config,
 )
+from control.faults import Fault
 from control.startup import StartupReport, check_mount_vector
 from sim import environment as envmod
 from sim import plant, sensors, site
@@ -51,6 +52,7 @@ from sim import wire as wm
 from sim.docking import DockingFrame
 from sim.gnc import Rzyx, ssa
 from sim.params import ParameterSet
+from sim.sensors import SENSOR_NAMES
 
 FloatArray = NDArray[np.float64]
 DT_RANGE_S = (1e-4, 0.05)
@@ -229,6 +231,12 @@ class Simulation:
         self.wire_target_m = self.wire_length_m
         self.wire_rate_mps = 0.0
         self.docking_frame: DockingFrame | None = None
+        self.faults: list[Fault] = []
+        """Injected faults, past, present and scheduled (control.faults)."""
+        self._slipped: set[int] = set()
+        self._faults_on: set[int] = set()
+        self._fault_log: list[tuple[float, str]] = []
+        self._mount_flipped = False
         tree_pos = np.array([self.crane_tip_n[0], self.crane_tip_n[1], tree_depth_m])
         self.x = initial_state(ps, tree_pos, tree_heading_rad, self.has_rov)
         self.held_y = sensors.true_outputs(self.x)
@@ -578,7 +586,7 @@ class Simulation:
         out = np.empty((int(n), N_LOG))
         done = 0
         while done < n:
-            k = min(self.chunk_steps, int(n) - done)
+            k = min(self.chunk_steps, int(n) - done, self._steps_to_fault_edge())
             out[done : done + k] = self._chunk(k)
             done += k
         return LogRows(out, self.n_thrusters, self.Q.counters.copy())
@@ -597,9 +605,117 @@ class Simulation:
     def _chunk_inputs(self, n: int) -> tuple[FloatArray, sensors.NoiseChunk]:
         """Environment rows and sensor noise for the next n steps. Injected faults (sensor
         dropouts, biases, winch slip, current surges) change these before the kernel runs."""
+        if self.faults:
+            self._faults_before_chunk()
         env = self._environment_chunk(n)
         noise = sensors.draw_noise(self.sensor_cfg, self.rng, self.step_index, n)
+        if self.faults:
+            self._faults_in_chunk(env, noise)
         return env, noise
+
+    # ------------------------------------------------------------------ injected faults
+    def inject_fault(self, fault: Fault) -> None:
+        """Schedule a fault (control.faults); one that starts in the past starts now."""
+        if not isinstance(fault, Fault):
+            raise ValueError(f"fault must be a control.faults.Fault, got {type(fault).__name__}")
+        self.faults.append(fault)
+
+    def clear_faults(self) -> None:
+        """End every fault now (a slipped winch stays where it slipped to)."""
+        for k in sorted(self._faults_on):
+            self._fault_log.append((self.t_s, f"fault cleared: {self.faults[k].kind}"))
+        self.faults, self._faults_on, self._slipped = [], set(), set()
+        self._apply_mount_sign(False)
+
+    def take_fault_log(self) -> list[tuple[float, str]]:
+        """Faults that started or ended since the last call: (time [s], what)."""
+        out, self._fault_log = self._fault_log, []
+        return out
+
+    def active_faults(self) -> list[Fault]:
+        """Faults whose window covers the present time."""
+        return [f for f in self.faults if f.active(self.t_s)]
+
+    def _steps_to_fault_edge(self) -> int:
+        """Steps until the next fault starts or ends (chunks end there, so a fault acts from
+        its own step; without faults, chunks are as before)."""
+        if not self.faults:
+            return self.chunk_steps
+        edges = [e for f in self.faults for e in (f.start_s, f.end_s) if e > self.t_s + 1e-9]
+        if not edges:
+            return self.chunk_steps
+        return max(1, round((min(edges) - self.t_s) / self.dt_s))
+
+    def _faults_before_chunk(self) -> None:
+        """Faults that act once at their start (winch slip) and those that reconfigure the
+        control system while active (mount sign)."""
+        t = self.t_s + 1e-9
+        active = {k for k, f in enumerate(self.faults) if f.active(t)}
+        for k in sorted(active - self._faults_on):
+            self._fault_log.append((self.t_s, f"fault: {self.faults[k].describe()}"))
+        for k in sorted(self._faults_on - active):
+            self._fault_log.append((self.t_s, f"fault over: {self.faults[k].kind}"))
+        self._faults_on = active
+        for k, f in enumerate(self.faults):
+            if f.kind == "winch_slip" and f.active(t) and k not in self._slipped:
+                self._slipped.add(k)
+                self.wire_length_m += f.value  # the tree drops at once
+                self.wire_target_m += f.value
+        flipped = any(f.kind == "mount_sign" and f.active(t) for f in self.faults)
+        self._apply_mount_sign(flipped)
+
+    def _apply_mount_sign(self, flipped: bool) -> None:
+        """The control system's mounting vector: as configured, or mirrored."""
+        if flipped == self._mount_flipped:
+            return
+        self._mount_flipped = flipped
+        r = self.sysm.r_rov_from_tree_tree_m
+        self.sysm = model.system_model(self.ps, self.wire_length_m, -r)
+        self.thruster_config = system_thruster_config(self.ps, self.sysm)
+        alloc, heave = self.C.alloc_kind, self.C.heave_newton
+        self.C = control_arrays(
+            self.ps, self.sysm, self.settings, self.gains, self.crane_tip_n[0:2], self.dt_s
+        )._replace(alloc_kind=alloc, heave_newton=heave)
+
+    def _faulted_current(
+        self, speeds: FloatArray, dirs: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """The current's speed and direction over the chunk's steps with surges and turns
+        added (at the tree and along the wire alike)."""
+        t = self.t_s + self.dt_s * np.arange(len(speeds))
+        speeds, dirs = np.array(speeds, float), np.array(dirs, float)
+        for f in self.faults:
+            on = (t >= f.start_s - 1e-9) & (t < f.end_s - 1e-9)
+            if f.kind == "current_surge":
+                speeds[on] = np.maximum(speeds[on] + f.value, 0.0)
+            elif f.kind == "current_turn":
+                dirs[on] += math.radians(f.value)
+        return speeds, dirs
+
+    def _faults_in_chunk(self, env: FloatArray, noise: sensors.NoiseChunk) -> None:
+        """Sensor and environment faults over the chunk's steps."""
+        n = len(env)
+        t = self.t_s + self.dt_s * np.arange(n)
+        for f in self.faults:
+            on = (t >= f.start_s - 1e-9) & (t < f.end_s - 1e-9)
+            if not on.any():
+                continue
+            if f.kind == "dvl_lost":
+                noise.fresh[on, SENSOR_NAMES.index("dvl")] = False
+            elif f.kind == "position_dropout":
+                noise.fresh[on, SENSOR_NAMES.index("position")] = False
+            elif f.kind == "position_wild_points":
+                fixes = np.flatnonzero(on & noise.fresh[:, SENSOR_NAMES.index("position")])
+                noise.noise[fixes[::2], 0] += f.value  # every second fix jumps north
+            elif f.kind == "compass_bias":
+                noise.noise[on, 4] += math.radians(f.value)
+            elif f.kind == "vessel_drift":
+                d = math.radians(f.direction_deg)
+                step = f.value * self.dt_s * np.array([math.cos(d), math.sin(d), 0.0])
+                drift = np.cumsum(on)[:, None] * step[None, :]
+                env[:, plant.E_CT : plant.E_CT + 3] += drift
+                self.crane_tip_n = env[-1, plant.E_CT : plant.E_CT + 3].copy()
+                self.crane_target_n = self.crane_tip_n.copy()
 
     def _chunk(self, n: int) -> FloatArray:
         if self.control_on:
@@ -718,6 +834,8 @@ class Simulation:
         self.current_state, speeds, dirs = envmod.advance_current(
             self.current_state, self.current_params, self.dt_s, n, self.rng
         )
+        if self.faults:
+            speeds, dirs = self._faulted_current(speeds, dirs)
         water_n = envmod.current_velocity_n(speeds, dirs)
         accel_n = np.zeros_like(water_n)
         if self.wave_field is not None:
