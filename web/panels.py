@@ -140,7 +140,14 @@ class ClientPanel:
         self._action(self._guard(gui.add_button("Abort mission", color="red")), cmd.AbortMission)
         self.mission_md = gui.add_markdown("")
         with gui.add_folder("Mission builder"):
-            self.builder = BuilderPanel(gui, self.console, self._guard, self._start)
+            self.builder = BuilderPanel(
+                self.client,
+                self.console,
+                self._guard,
+                self._start,
+                lambda: self.unlocked,
+                (self.mission_pick,),
+            )
 
     def _build_control(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -476,6 +483,7 @@ class ClientPanel:
         if speed in SPEEDS and speed != self.speed.value:
             self.speed.value = speed
         self.mission_md.content = _mission_text(snap)
+        self.builder.update(snap)
         self._update_replay(snap)
 
     def _update_replay(self, snap: Snapshot) -> None:
