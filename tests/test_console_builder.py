@@ -67,6 +67,18 @@ def set_number(pg, label: str, value: float, handle) -> None:
     wait_for(lambda: float(handle.value) == value, 10.0, f"{label} = {value:g} on the server")
 
 
+def pick_leg_type(pg, builder, leg_type: str, first_label: str) -> None:
+    """Choose a leg type and wait until its own inputs are made on the server and shown (an
+    input of the same name from the previous type may still be on the page a moment)."""
+    choose(pg, "Leg type", leg_type)
+    wait_for(
+        lambda: builder._leg_folder is not None and builder._leg_folder.label == f"{leg_type} leg",
+        10.0,
+        f"the {leg_type} leg's inputs",
+    )
+    field(pg, first_label).wait_for(timeout=10_000)
+
+
 def clear_legs(pg) -> None:
     click(pg, "Clear")
     pg.get_by_text("no legs yet").first.wait_for(timeout=5000)
@@ -123,8 +135,7 @@ def test_a_dock_leg_built_on_a_docking_set_up_lands_the_tree(page, server, api, 
         ("Frame heading [deg]", 0.0, builder.frame_psi),
     ):
         set_number(page, label, value, handle)
-    choose(page, "Leg type", "dock")
-    wait_for(lambda: "settle_s" in builder._leg_inputs, 10.0, "the dock leg's inputs")
+    pick_leg_type(page, builder, "dock", "Hover [m]")
     set_number(page, "Settle [s]", 5.0, builder._leg_inputs["settle_s"][1])
     click(page, "Add leg")
     page.get_by_text("added dock leg").wait_for(timeout=5000)
@@ -169,8 +180,7 @@ def test_download_gives_a_mission_file_and_a_malformed_upload_one_line(
     field(page, "Mission name").fill("download test")
     field(page, "Mission name").press("Tab")
     wait_for(lambda: builder.name_text.value == "download test", 10.0, "the name on the server")
-    choose(page, "Leg type", "hold")
-    wait_for(lambda: "duration_s" in builder._leg_inputs, 10.0, "the hold leg's inputs")
+    pick_leg_type(page, builder, "hold", "Duration [s]")
     set_number(page, "Duration [s]", 7.0, builder._leg_inputs["duration_s"][1])
     click(page, "Add leg")
     page.get_by_text("added hold leg").wait_for(timeout=5000)

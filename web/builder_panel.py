@@ -347,6 +347,9 @@ class BuilderPanel:
             )
 
     def _on_upload(self, event: Any) -> None:
+        if not self._is_unlocked():
+            self._error("locked: enter the console token under Access")
+            return
         upload = self.upload_button.value
         try:
             mission = mb.parse_upload(upload.name, upload.content)
