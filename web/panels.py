@@ -194,7 +194,14 @@ class ClientPanel:
         self.mission_md = gui.add_markdown("")
         self.counters_md = gui.add_markdown("")
         with gui.add_folder("Mission builder"):
-            self.builder = BuilderPanel(gui, self.console, self._guard, self._start)
+            self.builder = BuilderPanel(
+                self.client,
+                self.console,
+                self._guard,
+                self._start,
+                lambda: self.unlocked,
+                (self.mission_pick,),
+            )
 
     def _build_control(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -623,6 +630,7 @@ class ClientPanel:
         counters = counters_markdown(snap.quality_counters)
         if self.counters_md.content != counters:
             self.counters_md.content = counters
+        self.builder.update(snap)
         self._update_replay(snap)
 
     def _follow_live_inputs(self, snap: Snapshot) -> None:
