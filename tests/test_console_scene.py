@@ -74,8 +74,17 @@ def _share(img: np.ndarray, hue_deg: tuple[float, float]) -> float:
     return float(((hue >= hue_deg[0]) & (hue <= hue_deg[1]) & (sat > 0.4) & (val > 40)).mean())
 
 
+MOVED = "camera moved by hand"
 TREE_HUE = (40.0, 80.0)
 ROV_HUE = (5.0, 36.0)
+
+
+def _tree_off_centre(img: np.ndarray, full_width: int) -> float:
+    """Distance of the tree's pixels' centroid from the middle of the whole canvas (the
+    camera's axis; the panel covers the right of it), in canvas heights."""
+    hue, sat, val = _hue_sat(img)
+    ys, xs = np.nonzero((hue >= TREE_HUE[0]) & (hue <= TREE_HUE[1]) & (sat > 0.4) & (val > 40))
+    return float(np.hypot(xs.mean() - full_width / 2, ys.mean() - img.shape[0] / 2)) / img.shape[0]
 
 
 def _shot(pg, name: str) -> np.ndarray:
@@ -154,6 +163,7 @@ def test_overview_follows_the_tree_and_the_readout_matches_the_state(
     start_img = _shot(page, "console-scene-overview-start.png")
     start_px = _share(start_img, TREE_HUE)
     assert start_px > 0.002, f"the tree is not on screen at the start ({start_px:.4f})"
+    assert _tree_off_centre(start_img, 1400) < 0.15
     api.post("/api/missions/uploads", json={"toml": MOVE_MISSION}).raise_for_status()
     api.post("/api/missions/start", json={"name": "scene-move-north"}).raise_for_status()
     north0 = api.get("/api/state").json()["tree_eta_n"]["north_m"]
@@ -170,8 +180,11 @@ def test_overview_follows_the_tree_and_the_readout_matches_the_state(
     end_img = _shot(page, "console-scene-overview-end.png")
     end_px = _share(end_img, TREE_HUE)
     # the view widens to keep the frame in it too: the tree's share shrinks with the square
-    # of the distance (about (17 / 26)^2 here), never to nothing
-    assert end_px > 0.2 * start_px, f"the tree left the overview ({start_px:.4f} -> {end_px:.4f})"
+    # of the distance (about (17 / 30)^2 here), never to nothing, and the tree stays near the
+    # middle (a camera left where it was has it 0.42 canvas heights off, at the top left)
+    assert end_px > 0.1 * start_px, f"the tree left the overview ({start_px:.4f} -> {end_px:.4f})"
+    off = _tree_off_centre(end_img, 1400)
+    assert off < 0.3, f"the tree drifted {off:.2f} canvas heights off the overview's middle"
 
     state = api.get("/api/state").json()
     info = server.console.loop.snapshot.scene
@@ -188,4 +201,16 @@ def test_overview_follows_the_tree_and_the_readout_matches_the_state(
     assert abs(shown["distance"] - distance) <= 0.006 and distance > MOVE_NORTH_M - 2
     assert abs(shown["heading"] - heading) <= 0.06
     assert abs(shown["tension"] - state["wire_tension_newton"] / 1000.0) <= 0.06
+    assert page.get_by_text(MOVED).count() == 0, "the page's own camera moves taken for the user's"
+
+    # the user drags the view: the overview stops following (and says so) until pressed again
+    box = page.locator("canvas").first.bounding_box()
+    x, y = box["x"] + 0.3 * box["width"], box["y"] + 0.6 * box["height"]
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x + 160, y + 40, steps=8)
+    page.mouse.up()
+    page.get_by_text(MOVED).first.wait_for(timeout=10_000)
+    click(page, "Overview")
+    wait_for(lambda: page.get_by_text(MOVED).count() == 0, 10.0, "following again")
     api.post("/api/run/resume").raise_for_status()
