@@ -98,10 +98,14 @@ OVERVIEW_FOV_RAD = np.radians(50.0)
 """Vertical field of view of the overview and top-down presets."""
 ROV_CAMERA_FOV_RAD = np.radians(60.0)
 """Vertical field of view of the ROV's camera."""
-ROV_CAMERA_PITCH_RAD = (np.radians(10.0), np.radians(55.0))
-"""Tilt range of the ROV's camera below the horizontal. With the lens ahead of the ROV's bow,
-every ray of a 60 deg (vertical), 16:10 frustum tilted at most 55 deg still points forward,
-so no part of the ROV (all behind the lens) can be in the picture."""
+ROV_CAMERA_PITCH_RAD = (math.radians(10.0), math.radians(35.0))
+"""Tilt range of the ROV's camera below the horizontal."""
+ROV_CAMERA_YAW_RAD = math.radians(20.0)
+"""Largest turn of the ROV's camera off the ROV's heading. With the lens ahead of the ROV's
+bow, every ray of a 60 deg (vertical) frustum up to 2.1:1 wide, tilted at most 35 deg and
+turned at most 20 deg, still points forward (the worst corner keeps cos 35 cos 20 -
+tan 30 sin 35 cos 20 - 2.1 tan 30 sin 20 = 0.04 of its length forward), so no part of the
+ROV (all behind the lens) can be in the picture."""
 
 
 def overview_camera(
@@ -144,29 +148,32 @@ def rov_camera(
     post_tops_n: FloatArray,
 ) -> CameraPose:
     """The pilot's camera: on a skid just ahead of the ROV's bow, below the tree's bottom (its
-    funnels' skirts end 0.12 tree heights below it), looking ahead along the ROV's heading and
-    tilted down towards the post top farthest ahead (``post_tops_n``: (k, 3)), so the funnels
-    coming down over the posts are in the picture; the tilt is kept within
-    ``ROV_CAMERA_PITCH_RAD`` so the ROV stays out of it (the least tilt when no post is
-    ahead). The skid hangs at most one tree
-    height below the ROV's bottom."""
+    funnels' skirts end 0.12 tree heights below it), turned and tilted towards the post top
+    farthest ahead (``post_tops_n``: (k, 3)), so a funnel coming down over its post is in the
+    picture. Turn and tilt stay within ``ROV_CAMERA_YAW_RAD`` and ``ROV_CAMERA_PITCH_RAD``
+    so the ROV stays out of it; with no post ahead, it looks straight ahead at the least tilt.
+    The skid hangs at most one tree height below the ROV's bottom."""
     eta = np.asarray(rov_eta_n, float)
     size = np.asarray(rov_size_m, float)
     tree = np.asarray(tree_eta_n, float)
     psi = float(eta[5])
     forward = np.array([math.cos(psi), math.sin(psi), 0.0])
+    starboard = np.array([-math.sin(psi), math.cos(psi), 0.0])
     below_tree = tree[2] + 0.7 * tree_height_m - eta[2]
     drop = min(max(below_tree, 0.5 * size[2] + 0.05), 0.5 * size[2] + tree_height_m)
     lens = eta[0:3] + (0.5 * size[0] + 0.05) * forward + np.array([0.0, 0.0, drop])
     tops = np.asarray(post_tops_n, float).reshape(-1, 3)
     ahead_each = (tops - lens) @ forward
     far = int(np.argmax(ahead_each))
+    yaw, pitch = 0.0, ROV_CAMERA_PITCH_RAD[0]
     if ahead_each[far] > 0.0:
-        pitch = math.atan2(float(tops[far, 2] - lens[2]), float(ahead_each[far]))
+        to_top = tops[far] - lens
+        yaw = math.atan2(float(to_top @ starboard), float(ahead_each[far]))
+        yaw = min(max(yaw, -ROV_CAMERA_YAW_RAD), ROV_CAMERA_YAW_RAD)
+        pitch = math.atan2(float(to_top[2]), float(np.hypot(to_top[0], to_top[1])))
         pitch = min(max(pitch, ROV_CAMERA_PITCH_RAD[0]), ROV_CAMERA_PITCH_RAD[1])
-    else:  # no post ahead: look ahead, the least tilt
-        pitch = ROV_CAMERA_PITCH_RAD[0]
-    look = forward * math.cos(pitch) + np.array([0.0, 0.0, math.sin(pitch)])
+    heading = forward * math.cos(yaw) + starboard * math.sin(yaw)
+    look = heading * math.cos(pitch) + np.array([0.0, 0.0, math.sin(pitch)])
     return CameraPose(lens, lens + tree_height_m * look, UP_N)
 
 
