@@ -45,6 +45,9 @@ AXES = ("surge", "sway", "yaw")
 CAMERAS = ("Overview", "Top-down", "ROV camera", "Follow ROV")
 FOLLOWING = ("Overview", "ROV camera", "Follow ROV")
 """Presets that follow the scene each frame (the overview only until the user moves it)."""
+CAMERA_SETTLE_S = 1.5
+"""After a preset is pressed (or the first pose is sent), camera reports are not taken for
+the user's: the browser may still report the camera it had."""
 
 
 BarColor = Literal["red", "orange", "blue"]
@@ -99,6 +102,7 @@ class ClientPanel:
             self.camera_buttons.on_click(self._on_camera)
             self.camera_md = gui.add_markdown("")
         self._camera_sent: list[tuple[np.ndarray, np.ndarray]] = []
+        self._camera_settle = 0.0
         self.client.camera.on_update(self._on_camera_moved)
         with gui.add_folder("Access", expand_by_default=True):
             self.token_text = gui.add_text("Token", initial_value="")
@@ -309,6 +313,7 @@ class ClientPanel:
     def _on_camera(self, event: Any) -> None:
         self.camera_mode = str(self.camera_buttons.value)
         self._camera_pending = True
+        self._camera_settle = time.monotonic() + CAMERA_SETTLE_S
         self.camera_md.content = ""
         self._apply_camera(self.console.loop.snapshot)
 
@@ -317,6 +322,8 @@ class ClientPanel:
         was moved by the user, and the overview stops following until a preset is pressed."""
         if self.camera_mode != "Overview" or not self._camera_pending or not self._camera_sent:
             return
+        if time.monotonic() < self._camera_settle:
+            return  # reports of the camera the browser had before
         pos, look = np.asarray(camera.position), np.asarray(camera.look_at)
         scale = 1e-3 * (1.0 + float(np.linalg.norm(self._camera_sent[-1][0])))
         ours_pos = any(np.linalg.norm(pos - p) < scale for p, _ in self._camera_sent)
@@ -437,6 +444,8 @@ class ClientPanel:
         # the last 100 distinct poses sent (5 s of a moving scene at 20 frames a second), to
         # tell the browser's echoes of them from a camera the user moved
         sent = self._camera_sent
+        if not sent:
+            self._camera_settle = time.monotonic() + CAMERA_SETTLE_S
         if not sent or np.any(sent[-1][0] != pose.position_n) or np.any(sent[-1][1] != between):
             self._camera_sent = [
                 *sent[-98:],
