@@ -49,7 +49,12 @@ EDIT_HOLD_S = 30.0
 """An input the operator has edited keeps the edit this long before it follows the live value
 again (unless its command is sent first)."""
 AXES = ("surge", "sway", "yaw")
-CAMERAS = ("Overview", "Top-down", "ROV camera")
+CAMERAS = ("Overview", "Top-down", "ROV camera", "Follow ROV")
+FOLLOWING = ("Overview", "ROV camera", "Follow ROV")
+"""Presets that follow the scene each frame (the overview only until the user moves it)."""
+CAMERA_SETTLE_S = 1.5
+"""After a preset is pressed (or the first pose is sent), camera reports are not taken for
+the user's: the browser may still report the camera it had."""
 
 
 BarColor = Literal["red", "orange", "blue"]
@@ -100,11 +105,16 @@ class ClientPanel:
     def _build_header(self) -> None:
         gui = self.gui
         self.status_md = gui.add_markdown("starting...")
+        self.readout_md = gui.add_markdown("")
         self.alarms_html = gui.add_html("")
         self.message_md = gui.add_markdown("")
         with gui.add_folder("View"):
             self.camera_buttons = gui.add_button_group("Camera", CAMERAS)
             self.camera_buttons.on_click(self._on_camera)
+            self.camera_md = gui.add_markdown("")
+        self._camera_sent: list[tuple[np.ndarray, np.ndarray]] = []
+        self._camera_settle = 0.0
+        self.client.camera.on_update(self._on_camera_moved)
         with gui.add_folder("Access", expand_by_default=True):
             self.name_text = gui.add_text(
                 "Your name", initial_value="", hint="shown in the operations log beside what you do"
@@ -443,7 +453,24 @@ class ClientPanel:
     def _on_camera(self, event: Any) -> None:
         self.camera_mode = str(self.camera_buttons.value)
         self._camera_pending = True
+        self._camera_settle = time.monotonic() + CAMERA_SETTLE_S
+        self.camera_md.content = ""
         self._apply_camera(self.console.loop.snapshot)
+
+    def _on_camera_moved(self, camera: viser.CameraHandle) -> None:
+        """The browser reports its camera: one that matches none of the poses sent lately
+        was moved by the user, and the overview stops following until a preset is pressed."""
+        if self.camera_mode != "Overview" or not self._camera_pending or not self._camera_sent:
+            return
+        if time.monotonic() < self._camera_settle:
+            return  # reports of the camera the browser had before
+        pos, look = np.asarray(camera.position), np.asarray(camera.look_at)
+        scale = 1e-3 * (1.0 + float(np.linalg.norm(self._camera_sent[-1][0])))
+        ours_pos = any(np.linalg.norm(pos - p) < scale for p, _ in self._camera_sent)
+        ours_look = any(np.linalg.norm(look - q) < scale for _, q in self._camera_sent)
+        if not (ours_pos and ours_look):
+            self._camera_pending = False
+            self.camera_md.content = "camera moved by hand: press Overview to follow again"
 
     def _on_speed(self, event: Any) -> None:
         if event.client is not None:
@@ -519,29 +546,55 @@ class ClientPanel:
     def _apply_camera(self, snap: Snapshot) -> None:
         info = snap.scene
         size = max(info.tree_dimensions_m)
+        tree = np.array(snap.tree_eta_n)
+        frame = info.frame
         if self.camera_mode == "Top-down":
-            pose = geo.top_down_camera(
-                info.frame.center_n, info.frame.landing_depth_m, np.array(snap.tree_eta_n), size
-            )
+            pose = geo.top_down_camera(frame.center_n, frame.landing_depth_m, tree, size)
         elif self.camera_mode == "ROV camera":
+            posts = frame.post_positions_n(info.layout)
+            tops = np.column_stack(
+                [posts, np.full(len(posts), frame.post_top_depth_m(info.layout))]
+            )
             pose = geo.rov_camera(
                 np.array(snap.rov_eta_n),
                 np.array(info.rov_dimensions_m),
-                np.array(snap.tree_eta_n),
+                tree,
                 info.tree_dimensions_m[2],
+                tops,
+            )
+        elif self.camera_mode == "Follow ROV":
+            pose = geo.follow_rov_camera(
+                np.array(snap.rov_eta_n), np.array(info.rov_dimensions_m), size
             )
         else:
-            pose = geo.overview_camera(np.array(snap.tree_eta_n), size)
+            pose = geo.overview_camera(
+                tree, size, np.array([*frame.center_n, frame.landing_depth_m])
+            )
         cam = self.client.camera
+        fov = geo.ROV_CAMERA_FOV_RAD if self.camera_mode == "ROV camera" else geo.OVERVIEW_FOV_RAD
         try:
+            # setting the position carries the look-at point along before it is set: the
+            # browser may report that in-between pose too
+            between = cam.look_at + (pose.position_n - cam.position)
             with self.client.atomic():
                 cam.up_direction = pose.up_n
                 cam.position = pose.position_n
                 cam.look_at = pose.look_at_n
-                cam.fov = math.radians(60.0 if self.camera_mode == "ROV camera" else 50.0)
+                cam.fov = float(fov)
         except AssertionError:
             return  # the browser has not reported its camera yet: try again next frame
-        self._camera_pending = self.camera_mode == "ROV camera"
+        # the last 100 distinct poses sent (5 s of a moving scene at 20 frames a second), to
+        # tell the browser's echoes of them from a camera the user moved
+        sent = self._camera_sent
+        if not sent:
+            self._camera_settle = time.monotonic() + CAMERA_SETTLE_S
+        if not sent or np.any(sent[-1][0] != pose.position_n) or np.any(sent[-1][1] != between):
+            self._camera_sent = [
+                *sent[-98:],
+                (pose.position_n, between),
+                (pose.position_n, pose.look_at_n),
+            ]
+        self._camera_pending = self.camera_mode in FOLLOWING
 
     def update(self, snap: Snapshot) -> None:
         """Refresh from a snapshot (the publisher thread)."""
@@ -571,6 +624,7 @@ class ClientPanel:
         )
         if self.status_md.content != text:
             self.status_md.content = text
+        self._update_readout(snap)
         badges = "".join(
             f"<span style='display:inline-block;margin:1px;padding:1px 5px;border-radius:4px;"
             f"color:white;background:{'#c0392b' if a.active else '#27ae60'}' "
@@ -588,6 +642,21 @@ class ClientPanel:
         ops = _operations_text(snap)
         if self.operations_md.content != ops:
             self.operations_md.content = ops
+
+    def _update_readout(self, snap: Snapshot) -> None:
+        """Height over the post tops, distance and heading error to the frame, wire tension."""
+        info = snap.scene
+        readout = geo.pilot_readout(
+            np.array(snap.tree_eta_n),
+            info.tree_dimensions_m[2],
+            info.frame.center_n,
+            info.frame.heading_rad,
+            info.frame.post_top_depth_m(info.layout),
+            snap.wire_tension_newton,
+        )
+        text = geo.readout_markdown(readout)
+        if self.readout_md.content != text:
+            self.readout_md.content = text
 
     def _update_thrusters(self, snap: Snapshot) -> None:
         util = snap.thruster_utilisation
