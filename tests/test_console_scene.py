@@ -4,8 +4,8 @@ carries it several tree lengths, the pilot's readout matches the state the API r
 the ROV's camera is not filled by the ROV. Screenshots of every camera preset go to
 docs/screenshots/.
 
-Uses the server, browser and helpers of ``tests/test_console_browser.py`` (its fixtures are
-module-scoped: this module gets its own server and browser).
+Uses the server, browser and helpers of ``tests/browser.py`` (its fixtures are module-scoped:
+this module gets its own server and browser).
 """
 
 from __future__ import annotations
@@ -20,13 +20,8 @@ import numpy as np
 from PIL import Image
 
 from app.server import RunningServer
-from tests import test_console_browser as tb
-from tests.test_console_browser import click, save, scene_part, unlock, wait_for
-
-# the browser module's fixtures, used here by name
-server = tb.server
-page = tb.page
-api = tb.api
+from tests import browser as tb
+from tests.browser import click, save, scene_part, unlock, wait_for
 
 MOVE_NORTH_M = 18.0
 """How far the uploaded mission carries the tree: five lengths of the full-scale tree."""
