@@ -27,6 +27,8 @@ and outcome figures. Nothing here knows about Dask or Parquet (``app.campaign`` 
 from __future__ import annotations
 
 import math
+import os
+import socket
 import time
 import tomllib
 from dataclasses import dataclass
@@ -48,6 +50,11 @@ FORMAT_VERSION = 1
 LIBRARY_DIR = Path(__file__).with_name("campaigns")
 MAX_RUNS = 1_000_000
 MAX_FILE_BYTES = 256 * 1024
+
+
+def worker_name() -> str:
+    """Who runs: host and process id (a result row says which worker process made it)."""
+    return f"{socket.gethostname()}:{os.getpid()}"
 
 
 class CampaignError(ValueError):
@@ -678,12 +685,25 @@ OUTCOMES: dict[str, str] = {
     "simulated_s": "float",
     "wall_s": "float",
     "error": "str",
+    "worker": "str",
 }
 """Outcome columns of a result row and their types. ``success``: the mission did not fail
 (every landing landed, no leg timed out or failed, no divergence). ``landed``: every landing
 landed (None when the mission has none). Landing figures are the worst over the landings."""
-FIGURES = tuple(k for k in OUTCOMES if k not in ("wall_s",))
-"""Outcomes a rerun must reproduce exactly (all but the wall time)."""
+FIGURES = tuple(k for k in OUTCOMES if k not in ("wall_s", "worker"))
+"""Outcomes a rerun must reproduce exactly (all but the wall time and who ran it)."""
+
+
+def same_figure(a: object, b: object) -> bool:
+    """Two values of a figure are the same (NaN is the same as NaN: no figure either time)."""
+    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
+        return True
+    return a == b
+
+
+def same_figures(a: dict, b: dict) -> bool:
+    """Two rows have the same outcome figures (``FIGURES``)."""
+    return all(same_figure(a[k], b[k]) for k in FIGURES)
 
 
 def outcome_row(result: MissionResult, simulated_s: float, wall_s: float) -> dict:
@@ -717,6 +737,7 @@ def outcome_row(result: MissionResult, simulated_s: float, wall_s: float) -> dic
         "simulated_s": simulated_s,
         "wall_s": wall_s,
         "error": error,
+        "worker": worker_name(),
     }
 
 
@@ -734,6 +755,7 @@ def failed_row(inputs: RunInputs, message: str) -> dict:
     """The row of a run that raised: no figures, the error text."""
     row = dict.fromkeys(OUTCOMES)
     row.update(
+        worker=worker_name(),
         success=False,
         diverged=False,
         timed_out=False,

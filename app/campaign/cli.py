@@ -11,7 +11,6 @@
 from __future__ import annotations
 
 import json
-import math
 import time
 from pathlib import Path
 from typing import Annotated, Any
@@ -96,6 +95,13 @@ def run_command(
     except cm.CampaignError as err:
         _fail(str(err))
         return
+    except KeyboardInterrupt:
+        typer.echo(
+            f"interrupted: {len(store.done_runs(out))} of {campaign.runs} runs have rows in "
+            f"{out}; run again with --resume to run the rest",
+            err=True,
+        )
+        raise typer.Exit(code=130) from None
     except OSError as err:
         if scheduler:
             _fail(f"--scheduler {scheduler}: cannot reach the scheduler: {err}")
@@ -153,12 +159,6 @@ def _print_report(rep, out: Path) -> None:
     console.print(f"written: {out / 'report.md'}" + (f", {rep.figure}" if rep.figure else ""))
 
 
-def _same(a: object, b: object) -> bool:
-    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
-        return True
-    return a == b
-
-
 @campaign_app.command("rerun")
 def rerun_command(
     results: Annotated[Path, typer.Argument(help="a campaign's results folder")],
@@ -194,7 +194,9 @@ def rerun_command(
             _write_new_events(driver, recorder)
             recorder.close()
     figures = cm.outcome_row(driver.result(), sim.t_s, time.perf_counter() - t0)
-    compare = {k: (stored[k], figures[k], _same(stored[k], figures[k])) for k in cm.FIGURES}
+    compare = {
+        k: (stored[k], figures[k], cm.same_figure(stored[k], figures[k])) for k in cm.FIGURES
+    }
     same = all(ok for _, _, ok in compare.values())
     if json_out:
         typer.echo(

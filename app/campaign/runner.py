@@ -24,6 +24,8 @@ from missions import schema
 
 from . import store
 
+POLL_S = 0.1
+"""How often the client looks for finished runs [s]."""
 LOST_RETRIES = 3
 """Times a run whose worker was lost is submitted again before it counts as an error."""
 
@@ -50,7 +52,7 @@ def _cluster_client(scheduler: str | None, workers: int | None) -> Any:
         n_workers=workers or os.cpu_count() or 1,
         threads_per_worker=1,
         processes=True,
-        dashboard_address=None,
+        dashboard_address=":0",
         silence_logs=logging.ERROR,
     )
     return Client(cluster), cluster
@@ -101,42 +103,48 @@ def run_campaign(
                 for i in todo
             }
             pending = as_completed(list(futures))
-            for future in pending:
-                index = futures[future]
-                try:
-                    row = future.result()
-                except Exception as err:  # the task itself never raises: a worker was lost
-                    lost[index] = lost.get(index, 0) + 1
-                    future.release()
-                    if lost[index] <= LOST_RETRIES:
-                        retry = client.submit(
-                            cm.run_one,
-                            campaign,
-                            base,
-                            index,
-                            key=f"{task_key(text, index)}-retry{lost[index]}",
-                            pure=False,
+            while not pending.is_empty():
+                # poll, so that Ctrl-C reaches this thread between polls
+                finished = pending.next_batch(block=False)
+                if not finished:
+                    time.sleep(POLL_S)
+                    continue
+                for future in finished:
+                    index = futures[future]
+                    try:
+                        row = future.result()
+                    except Exception as err:  # the task itself never raises: a worker was lost
+                        lost[index] = lost.get(index, 0) + 1
+                        future.release()
+                        if lost[index] <= LOST_RETRIES:
+                            retry = client.submit(
+                                cm.run_one,
+                                campaign,
+                                base,
+                                index,
+                                key=f"{task_key(text, index)}-retry{lost[index]}",
+                                pure=False,
+                            )
+                            futures[retry] = index
+                            pending.add(retry)
+                            progress.resubmitted += 1
+                            continue
+                        row = cm.failed_row(
+                            cm.run_inputs(campaign, base, index),
+                            f"lost {lost[index]} workers: {type(err).__name__}: {err}",
                         )
-                        futures[retry] = index
-                        pending.add(retry)
-                        progress.resubmitted += 1
-                        continue
-                    row = cm.failed_row(
-                        cm.run_inputs(campaign, base, index),
-                        f"lost {lost[index]} workers: {type(err).__name__}: {err}",
-                    )
-                future.release()
-                if index in written:
-                    continue  # a run counts once
-                written.add(index)
-                writer.add(row)
-                progress.done += 1
-                progress.failed += not row["success"]
-                progress.errors += row["simulated_s"] is None
-                progress.simulated_s += row["simulated_s"] or 0.0
-                bar(progress)
-                if on_row is not None:
-                    on_row(row, client)
+                    future.release()
+                    if index in written:
+                        continue  # a run counts once
+                    written.add(index)
+                    writer.add(row)
+                    progress.done += 1
+                    progress.failed += not row["success"]
+                    progress.errors += row["simulated_s"] is None
+                    progress.simulated_s += row["simulated_s"] or 0.0
+                    bar(progress)
+                    if on_row is not None:
+                        on_row(row, client)
     finally:
         writer.close()
         progress.wall_s = time.perf_counter() - t0
