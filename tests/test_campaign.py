@@ -318,6 +318,29 @@ def test_envelope_is_the_largest_current_up_to_which_95_percent_succeed():
     assert "below the lowest" in env[("model-scale", 100.0)].verdict()
 
 
+def test_the_report_writes_its_tables_and_figure(tmp_path):
+    path = write_campaign(
+        tmp_path, "runs_per_point = 20\n[grid]\ncurrent_speed_mps = [0.1, 0.2, 0.3]\n"
+    )
+    c, base, _ = cm.load_campaign(path)
+    rows = []
+    for i in range(c.runs):
+        row = cm.input_row(cm.run_inputs(c, base, i))
+        ok = {0: 20, 1: 19, 2: 12}[row["point"]] > row["repetition"]
+        rows.append(
+            {**row, **dict.fromkeys(cm.OUTCOMES), "success": ok, "landed": None}
+            | {"diverged": False, "simulated_s": 3.0}
+        )
+    rep = report.make_report(c, rows, tmp_path)
+    assert (rep.overall.successes, rep.overall.runs) == (51, 60)
+    assert [e.largest_mps for e in rep.envelope] == [0.2]
+    text = (tmp_path / "report.md").read_text()
+    lo, hi = cm.wilson_interval(19, 20)
+    assert f"95.0 % [{100 * lo:.1f}, {100 * hi:.1f}]" in text
+    assert "| model-scale | 100 | 0.2 m/s | 0.1: 20/20; 0.2: 19/20; 0.3: 12/20 |" in text
+    assert rep.figure is not None and rep.figure.stat().st_size > 10_000
+
+
 def test_random_currents_are_binned_for_the_envelope():
     values = [0.1 + 0.4 * k / 99 for k in range(100)]
     lv = report.levels(values)

@@ -141,7 +141,10 @@ def _print_report(rep, out: Path) -> None:
     console = Console(width=160)
     table = Table(title="runs per point")
     for col in report.POINT_COLUMNS:
-        table.add_column(col, justify="right")
+        if col == "point":
+            table.add_column(col, overflow="fold", min_width=24)
+        else:
+            table.add_column(col, justify="right")
     for row in rep.points:
         table.add_row(*row)
     console.print(table)

@@ -197,8 +197,12 @@ def envelope_figure(env: list[EnvelopeRow], path: Path, title: str) -> Path:
     """Left: success rate against current with 95 % Wilson intervals, one line per parameter
     set and depth. Right: the envelope's largest current against depth, per parameter set."""
     fig, (ax, ax_env) = plt.subplots(1, 2, figsize=(12, 4.8))
-    for e in env:
-        cs = np.array(e.currents)
+    all_cs = [c for e in env for c in e.currents]
+    span = (max(all_cs) - min(all_cs)) if all_cs else 0.0
+    for k, e in enumerate(env):
+        # side by side, so the bars of series at the same current do not hide each other
+        dodge = (k - (len(env) - 1) / 2) * 0.008 * (span or 1.0)
+        cs = np.array(e.currents) + dodge
         rate = np.array([r.rate for r in e.rates])
         ci = np.array([r.interval for r in e.rates])
         ax.errorbar(
