@@ -153,6 +153,12 @@ def _print_report(rep, out: Path) -> None:
         "(95 % Wilson interval)",
         markup=False,
     )
+    causes = Table(title="failed runs by cause (and the runs that succeeded)")
+    for col in report.FAILURE_COLUMNS:
+        causes.add_column(col)
+    for row in report.failure_table(rep.rows):
+        causes.add_row(*row)
+    console.print(causes)
     env = Table(title="operability envelope: largest current with >= 95 % success")
     for col in report.ENVELOPE_COLUMNS:
         env.add_column(col)

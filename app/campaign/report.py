@@ -127,6 +127,49 @@ def point_table(campaign: cm.Campaign, rows: list[dict]) -> list[list[str]]:
     return out
 
 
+def failure_cause(row: dict) -> str:
+    """Why a run failed, from its row (the first that applies)."""
+    if row["simulated_s"] is None:
+        return "run raised: " + str(row["error"]).split(":")[0]
+    if row["diverged"]:
+        return "diverged"
+    if row["timed_out"]:
+        return "a leg timed out"
+    if row["landed"] is False:
+        if "posts" in str(row.get("rests_on") or ""):
+            return "landing: a funnel missed its post"
+        return "landing: too fast"
+    if row["error"]:
+        return "leg failed: " + str(row["error"])[:60]
+    return "other"
+
+
+FAILURE_COLUMNS = ("cause", "runs", "saturated s (mean)", "max utilisation (mean)", "miss m (mean)")
+
+
+def failure_table(rows: list[dict]) -> list[list[str]]:
+    """Failed runs by cause, with how hard the thrusters worked in them; the last line gives
+    the same for the runs that succeeded, to compare."""
+    by_cause: dict[str, list[dict]] = defaultdict(list)
+    for r in rows:
+        if not r["success"]:
+            by_cause[failure_cause(r)].append(r)
+    ok = [r for r in rows if r["success"]]
+    out = []
+    ranked = sorted(by_cause.items(), key=lambda kv: -len(kv[1]))
+    for cause, rs in [*ranked, ("(succeeded)", ok)]:
+        out.append(
+            [
+                cause,
+                str(len(rs)),
+                _stat(rs, "saturated_time_s", "mean"),
+                _stat(rs, "max_thruster_utilisation", "mean"),
+                _stat(rs, "miss_m", "mean"),
+            ]
+        )
+    return out
+
+
 @dataclass(frozen=True)
 class EnvelopeRow:
     params: str
@@ -262,6 +305,7 @@ class Report:
     envelope: list[EnvelopeRow]
     markdown: str
     figure: Path | None
+    rows: list[dict]
 
 
 def make_report(campaign: cm.Campaign, rows: list[dict], out: Path) -> Report:
@@ -286,6 +330,10 @@ def make_report(campaign: cm.Campaign, rows: list[dict], out: Path) -> Report:
         "",
         markdown_table(POINT_COLUMNS, points),
         "",
+        "## Failures by cause",
+        "",
+        markdown_table(FAILURE_COLUMNS, failure_table(rows)),
+        "",
         "## Operability envelope (largest current with >= 95 % success)",
         "",
         markdown_table(ENVELOPE_COLUMNS, envelope_table(env)),
@@ -295,4 +343,4 @@ def make_report(campaign: cm.Campaign, rows: list[dict], out: Path) -> Report:
         lines.append(f"![envelope]({figure.name})")
     markdown = "\n".join(lines) + "\n"
     (out / "report.md").write_text(markdown)
-    return Report(overall, points, env, markdown, figure)
+    return Report(overall, points, env, markdown, figure, rows)
