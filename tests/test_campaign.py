@@ -341,6 +341,24 @@ def test_the_report_writes_its_tables_and_figure(tmp_path):
     assert rep.figure is not None and rep.figure.stat().st_size > 10_000
 
 
+def test_failure_causes_come_from_the_row():
+    base = {"simulated_s": 100.0, "diverged": False, "timed_out": False, "landed": None}
+    assert report.failure_cause({**base, "simulated_s": None, "error": "ValueError: x"}) == (
+        "run raised: ValueError"
+    )
+    assert report.failure_cause({**base, "diverged": True, "error": ""}) == "diverged"
+    missed = {**base, "landed": False, "rests_on": "posts", "error": ""}
+    assert report.failure_cause(missed) == "landing: a funnel missed its post"
+    fast = {**base, "landed": False, "rests_on": "frame", "error": ""}
+    assert report.failure_cause(fast) == "landing: too fast"
+    table = report.failure_table(
+        [{**missed, "success": False, "saturated_time_s": 80.0, "max_thruster_utilisation": 1.0}]
+        + [{**base, "success": True, "saturated_time_s": 2.0, "max_thruster_utilisation": 0.5}]
+    )
+    assert table[0][:3] == ["landing: a funnel missed its post", "1", "80"]
+    assert table[-1][:3] == ["(succeeded)", "1", "2"]
+
+
 def test_random_currents_are_binned_for_the_envelope():
     values = [0.1 + 0.4 * k / 99 for k in range(100)]
     lv = report.levels(values)
