@@ -12,6 +12,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
+from app.campaign.cli import campaign_app
 from app.log_cli import log_app
 
 app = typer.Typer(
@@ -168,6 +169,7 @@ def simulation_summary(sim, rows, wall_s: float) -> dict:
 
 
 app.add_typer(log_app, name="log")
+app.add_typer(campaign_app, name="campaign")
 
 LIST_HELP = "list the library's missions and exit"
 

@@ -21,10 +21,12 @@ def build_simulation(
     allocation: Allocation | None = None,
     feedback: Feedback | None = None,
     feedforward: bool | None = None,
+    params: params_mod.ParameterSet | None = None,
 ) -> Simulation:
-    """The Simulation a mission's set-up describes (options override the file)."""
+    """The Simulation a mission's set-up describes (options override the file; ``params``
+    replaces the parameter set the file names, e.g. a campaign's with scaled sensor noise)."""
     s = mission.setup
-    ps = params_mod.load(s.params)
+    ps = params_mod.load(s.params) if params is None else params
     plant_ps = None
     if s.plant.mass_scale != 1.0 or s.plant.weight_scale != 1.0:
         plant_ps = vary_tree(ps, s.plant.mass_scale, s.plant.weight_scale)

@@ -1,0 +1,210 @@
+"""Run a campaign on Dask distributed: an embedded LocalCluster (one single-threaded worker
+process per core) or an existing cluster at a scheduler address.
+
+Each run is one task (``missions.campaign.run_one``); its row is written as it comes back.
+Tasks of a worker that dies are rescheduled by Dask on the others; a task that keeps killing
+workers (Dask's ``KilledWorker``) is submitted again up to ``LOST_RETRIES`` times, then counted
+as a run with an error. The client keeps one row per run whatever happens (a late duplicate is
+dropped), and ``--resume`` submits only the runs without a row.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from missions import campaign as cm
+from missions import schema
+
+from . import store
+
+POLL_S = 0.1
+"""How often the client looks for finished runs [s]."""
+LOST_RETRIES = 3
+"""Times a run whose worker was lost is submitted again before it counts as an error."""
+
+
+@dataclass
+class CampaignProgress:
+    """What the campaign has done so far (runs in this session and in earlier ones)."""
+
+    total: int
+    done: int = 0
+    failed: int = 0
+    errors: int = 0
+    resubmitted: int = 0
+    simulated_s: float = 0.0
+    wall_s: float = 0.0
+
+
+def _cluster_client(scheduler: str | None, workers: int | None) -> Any:
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        return Client(scheduler, timeout="20s"), None
+    cluster = LocalCluster(
+        n_workers=workers or os.cpu_count() or 1,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=":0",
+        silence_logs=logging.ERROR,
+    )
+    return Client(cluster), cluster
+
+
+def task_key(text: str, index: int) -> str:
+    """The Dask key of a run: the campaign text's digest and the run index."""
+    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
+    return f"campaign-run-{digest}-{index}"
+
+
+def run_campaign(
+    campaign: cm.Campaign,
+    base: schema.Mission,
+    text: str,
+    out: Path,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    resume: bool = False,
+    show_progress: bool = True,
+    on_row: Callable[[dict, Any], None] | None = None,
+    batch: int = 50,
+    flush_s: float = 5.0,
+) -> CampaignProgress:
+    """Run every run of the campaign that has no row in ``out`` yet; rows go to Parquet parts
+    as they finish. ``on_row(row, client)`` is called after each row (tests use it)."""
+    from distributed import as_completed
+
+    store.create(out, text, base, resume)
+    done = store.done_runs(out)
+    todo = [i for i in range(campaign.runs) if i not in done]
+    progress = CampaignProgress(total=campaign.runs, done=len(done))
+    if resume and done:
+        prior = store.read_rows(out)
+        progress.failed = sum(not r["success"] for r in prior)
+        progress.errors = sum(r["simulated_s"] is None for r in prior)
+    if not todo:
+        return progress
+    writer = store.PartWriter(out, batch=batch, flush_s=flush_s)
+    client, cluster = _cluster_client(scheduler, workers)
+    written: set[int] = set()
+    lost: dict[int, int] = {}
+    t0 = time.perf_counter()
+    try:
+        with _progress_bar(show_progress, campaign.name, progress) as bar:
+            futures = {
+                client.submit(cm.run_one, campaign, base, i, key=task_key(text, i), pure=False): i
+                for i in todo
+            }
+            pending = as_completed(list(futures))
+            while not pending.is_empty():
+                # poll, so that Ctrl-C reaches this thread between polls
+                finished = pending.next_batch(block=False)
+                if not finished:
+                    time.sleep(POLL_S)
+                    continue
+                for future in finished:
+                    index = futures[future]
+                    try:
+                        row = future.result()
+                    except Exception as err:  # the task itself never raises: a worker was lost
+                        lost[index] = lost.get(index, 0) + 1
+                        future.release()
+                        if lost[index] <= LOST_RETRIES:
+                            retry = client.submit(
+                                cm.run_one,
+                                campaign,
+                                base,
+                                index,
+                                key=f"{task_key(text, index)}-retry{lost[index]}",
+                                pure=False,
+                            )
+                            futures[retry] = index
+                            pending.add(retry)
+                            progress.resubmitted += 1
+                            continue
+                        row = cm.failed_row(
+                            cm.run_inputs(campaign, base, index),
+                            f"lost {lost[index]} workers: {type(err).__name__}: {err}",
+                        )
+                    future.release()
+                    if index in written:
+                        continue  # a run counts once
+                    written.add(index)
+                    writer.add(row)
+                    progress.done += 1
+                    progress.failed += not row["success"]
+                    progress.errors += row["simulated_s"] is None
+                    progress.simulated_s += row["simulated_s"] or 0.0
+                    bar(progress)
+                    if on_row is not None:
+                        on_row(row, client)
+    finally:
+        writer.close()
+        progress.wall_s = time.perf_counter() - t0
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return progress
+
+
+class _Bar:
+    def __init__(self, show: bool, name: str, progress: CampaignProgress) -> None:
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self.progress = Progress(
+            TextColumn("{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("runs, failed {task.fields[failed]}"),
+            TimeElapsedColumn(),
+            TextColumn("left"),
+            TimeRemainingColumn(),
+            disable=not show,
+            transient=False,
+        )
+        self.task = self.progress.add_task(
+            name, total=progress.total, completed=progress.done, failed=progress.failed
+        )
+
+    def __enter__(self) -> Callable[[CampaignProgress], None]:
+        self.progress.start()
+        return self.update
+
+    def update(self, p: CampaignProgress) -> None:
+        self.progress.update(self.task, completed=p.done, failed=p.failed)
+
+    def __exit__(self, *exc: object) -> None:
+        self.progress.stop()
+
+
+def _progress_bar(show: bool, name: str, progress: CampaignProgress) -> _Bar:
+    return _Bar(show, name, progress)
+
+
+def rerun(out: Path, index: int) -> tuple[dict, dict, Any, Any]:
+    """Prepare run ``index`` of a results folder again: (stored row, inputs row, mission,
+    simulation). The caller drives it (with a recorder, for ``--log``)."""
+    campaign, base, _ = store.open_results(out)
+    rows = {int(r["run"]): r for r in store.read_rows(out)}
+    if index not in rows:
+        have = f"0 to {campaign.runs - 1}" if campaign.runs else "none"
+        raise cm.CampaignError(
+            f"run {index} has no row in {out} (runs of this campaign: {have}; "
+            f"{len(rows)} have rows)"
+        )
+    inputs, mission, sim = cm.prepare_run(campaign, base, index)
+    return rows[index], cm.input_row(inputs), mission, sim
