@@ -330,22 +330,34 @@ def _landing_result(
     layout: DockingLayout,
     contact: tuple[int, FloatArray, FloatArray] | None,
 ) -> LandingResult:
+    """The landing as it happened: the funnels over the posts when they reached the post tops,
+    and where the tree rests after settling. A success ends on the landing surface with every
+    funnel around its own post (so with the frame's heading) and touched down slower than the
+    limit."""
     if contact is None:
         return LandingResult(False, math.inf, math.nan, 0.0, "nothing", cl.t_s)
     _, row, prev = contact
     pose = LAYOUT.take(row, "tree_eta_n")
     chk = docking.check_alignment(pose, frame, layout)
     speed = float((pose[2] - LAYOUT.take(prev, "tree_eta_n")[2]) / cl.dt_s)
+    rest = docking.check_alignment(cl.tree_eta_n, frame, layout)
     bottom = cl.tree_eta_n[2] + float(cl.plant_ps.tree.dimensions_m[2]) / 2.0
-    on_frame = bottom > frame.landing_depth_m - 0.2 * layout.post_height_m
-    success = chk.captured and speed <= layout.max_landing_speed_mps and on_frame
+    down = bottom > frame.landing_depth_m - 0.2 * layout.post_height_m
+    on_posts = abs(bottom - frame.post_top_depth_m(layout)) < 0.2 * layout.post_height_m
+    in_funnels = rest.miss_m <= layout.tolerance_m
+    rests_on = (
+        "frame" if down and in_funnels else "posts" if on_posts else "seabed" if down else "wire"
+    )
+    success = rests_on == "frame" and speed <= layout.max_landing_speed_mps
     return LandingResult(
         bool(success),
         chk.miss_m,
         chk.heading_error_deg,
         speed,
-        "frame" if on_frame else "posts",
+        rests_on,
         float(LAYOUT.take(row, "t_s")),
+        rest.miss_m,
+        rest.heading_error_deg,
     )
 
 
