@@ -12,6 +12,7 @@ import argparse
 import json
 import sys
 from dataclasses import asdict
+from itertools import zip_longest
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -28,13 +29,18 @@ def main() -> None:
     args = ap.parse_args()
     if args.full < 0 or args.model < 0:
         ap.error("--full and --model must be >= 0")
-    cases = landing_study.random_cases(args.full, "full", args.seed) + landing_study.random_cases(
-        args.model, "model", args.seed + 1
-    )
+    full = landing_study.random_cases(args.full, "full", args.seed)
+    model = landing_study.random_cases(args.model, "model", args.seed + 1)
+    # interleaved, so that a run cut short still covers both scales
+    cases = [c for pair in zip_longest(full, model) for c in pair if c is not None]
     outcomes = []
+    lines = args.out.with_suffix(".jsonl").open("w") if args.out else None
     for k, case in enumerate(cases, 1):
         o = landing_study.run_case(case)
         outcomes.append(o)
+        if lines:
+            lines.write(json.dumps(asdict(o)) + "\n")
+            lines.flush()
         print(
             f"{k:4d}/{len(cases)} {case.scale:5s} {case.speed_mps:.3f} m/s -> "
             f"{case.direction_deg:5.1f} deg, frame {case.frame_heading_deg:6.1f} deg "

@@ -56,13 +56,17 @@ class PoseLoad:
 
     def words(self) -> str:
         n, a = self.needed_xyn, self.available_xyn
-        force = math.hypot(n[0], n[1]) / 1e3
-        force_a = math.hypot(a[0], a[1]) / 1e3
         return (
-            f"{force:.2f} kN and {abs(n[2]) / 1e3:.2f} kN m of yaw moment needed, "
-            f"{force_a:.2f} kN and {abs(a[2]) / 1e3:.2f} kN m available in that direction "
-            f"({100.0 * self.utilisation:.0f} % of the thrust)"
+            f"{_newtons(math.hypot(n[0], n[1]), 'N')} and {_newtons(n[2], 'N m')} of yaw moment "
+            f"needed, {_newtons(math.hypot(a[0], a[1]), 'N')} and {_newtons(a[2], 'N m')} "
+            f"available in that direction ({100.0 * self.utilisation:.0f} % of the thrust)"
         )
+
+
+def _newtons(value: float, unit: str) -> str:
+    """A force or moment in words: kilo from 1000 up."""
+    v = abs(value)
+    return f"{v / 1e3:.2f} k{unit}" if v >= 1e3 else f"{v:.0f} {unit}"
 
 
 @dataclass(frozen=True)

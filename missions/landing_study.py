@@ -18,22 +18,26 @@ import numpy as np
 
 from missions import runner, schema
 
+
+@dataclass(frozen=True)
+class ScaleSpec:
+    speed_mps: tuple[float, float]
+    """Current speed range [m/s]."""
+    offset_m: tuple[float, float]
+    """Range of the frame's distance from the crane tip [m]."""
+    params: str
+    depth_m: float
+    landing_depth_m: float
+    hold_s: float
+    lower_rate_mps: float
+    timeout_s: float
+
+
 SCALES = {
-    # current speed range [m/s], frame offset range from the crane tip [m], set-up, dock leg
-    "full": dict(
-        speed_mps=(0.02, 0.5),
-        offset_m=(1.0, 5.0),
-        setup=dict(params="full-scale", depth_m=390.0, landing_depth_m=400.0, hold_s=120.0),
-        dock=dict(lower_rate_mps=0.05, timeout_s=2400.0),
-    ),
+    "full": ScaleSpec((0.02, 0.5), (1.0, 5.0), "full-scale", 390.0, 400.0, 120.0, 0.05, 2400.0),
     # the sea trial: 0.014 m/s (HIL) to 0.1 m/s, the frame within 1.5 m of the crane tip
     # (Minerva pushes 40 N sideways against the wire's 50 N per metre at 170 m)
-    "model": dict(
-        speed_mps=(0.014, 0.1),
-        offset_m=(0.2, 1.5),
-        setup=dict(params="model-scale", depth_m=170.0, landing_depth_m=180.0, hold_s=60.0),
-        dock=dict(lower_rate_mps=0.02, timeout_s=1800.0),
-    ),
+    "model": ScaleSpec((0.014, 0.1), (0.2, 1.5), "model-scale", 170.0, 180.0, 60.0, 0.02, 1800.0),
 }
 CRANE_TIP_NE_M = (1.0, 1.0)
 
@@ -69,8 +73,8 @@ def random_cases(n: int, scale: str, seed: int) -> list[Case]:
         raise ValueError(f"scale must be one of {', '.join(SCALES)}, got {scale!r}")
     rng = np.random.default_rng(seed)
     spec = SCALES[scale]
-    lo, hi = spec["speed_mps"]
-    olo, ohi = spec["offset_m"]
+    lo, hi = spec.speed_mps
+    olo, ohi = spec.offset_m
     return [
         Case(
             scale,
@@ -88,8 +92,7 @@ def random_cases(n: int, scale: str, seed: int) -> list[Case]:
 def case_mission(case: Case) -> schema.Mission:
     """The mission of one case: the library's docking mission's shape, with its current
     wandering as the library's does (speed band a sixth of the speed, direction +-10 deg)."""
-    spec = SCALES[case.scale]
-    s = spec["setup"]
+    s = SCALES[case.scale]
     b = math.radians(case.bearing_deg)
     center = [
         round(CRANE_TIP_NE_M[0] + case.offset_m * math.cos(b), 3),
@@ -99,8 +102,8 @@ def case_mission(case: Case) -> schema.Mission:
         "format_version": 1,
         "name": f"landing-{case.scale}-{case.seed}",
         "setup": {
-            "params": s["params"],
-            "depth_m": s["depth_m"],
+            "params": s.params,
+            "depth_m": s.depth_m,
             "crane_tip_n": list(CRANE_TIP_NE_M),
             "feedback": "ekf",
             "allocation": "priority",
@@ -118,12 +121,18 @@ def case_mission(case: Case) -> schema.Mission:
             "docking_frame": {
                 "center_ne_m": center,
                 "heading_deg": case.frame_heading_deg,
-                "landing_depth_m": s["landing_depth_m"],
+                "landing_depth_m": s.landing_depth_m,
             },
         },
         "legs": [
-            {"type": "hold", "name": "observer converges", "duration_s": s["hold_s"]},
-            {"type": "dock", "name": "land", "settle_s": 60.0, **spec["dock"]},
+            {"type": "hold", "name": "observer converges", "duration_s": s.hold_s},
+            {
+                "type": "dock",
+                "name": "land",
+                "settle_s": 60.0,
+                "lower_rate_mps": s.lower_rate_mps,
+                "timeout_s": s.timeout_s,
+            },
         ],
     }
     return schema.parse_mission(data)
