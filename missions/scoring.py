@@ -51,8 +51,15 @@ class LandingResult:
     contact_speed_mps: float
     """Vertical speed of the tree at that moment [m/s]."""
     rests_on: str
-    """"frame" (funnels over the posts, down on the landing surface) or "posts"."""
+    """Where the tree rests after settling: "frame" (down on the landing surface, every funnel
+    around its own post), "posts" (on the post tops), "seabed" (down, but not with its funnels
+    around their posts: beside the frame or turned), "wire" (still hanging) or "nothing" (it
+    never reached the post tops)."""
     t_contact_s: float
+    rest_miss_m: float = math.nan
+    """Largest funnel-to-own-post distance at rest [m]."""
+    rest_heading_error_deg: float = math.nan
+    """Tree heading minus frame heading at rest [deg]."""
 
 
 @dataclass
