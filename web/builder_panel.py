@@ -401,6 +401,7 @@ class BuilderPanel:
                     "/builder_preview/start",
                     "start",
                     position=(pv.path_ne[0][0], pv.path_ne[0][1], depth),
+                    anchor="bottom-left",  # targets' labels hang below: both readable
                 )
             )
             for k, (n, e, tag) in enumerate(pv.targets[:MAX_PREVIEW_LABELS]):

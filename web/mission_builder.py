@@ -341,7 +341,7 @@ def build_mission(name: str, setup: schema.Setup, legs: list[dict[str, Any]]) ->
 
 def describe_leg(leg: dict[str, Any]) -> str:
     """One line for the builder's leg list."""
-    values = ", ".join(f"{k}={v}" for k, v in leg.items() if k != "type")
+    values = ", ".join(f"{k}={v}" for k, v in leg.items() if k != "type" and v != "")
     return f"{leg['type']}({values})"
 
 
