@@ -62,6 +62,10 @@ def parse_polar(text: str, what: str, unit: str) -> tuple[float, float]:
     return value, math.radians(direction)
 
 
+DEFAULT_SCORES_DB = Path("recordings") / "scores.sqlite"
+"""Where scores go by default: beside the console's recordings (``serve --recordings``)."""
+
+
 def _fail(message: str) -> None:
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(code=2)
@@ -201,6 +205,12 @@ def run(
         ),
     ] = None,
     progress: Annotated[bool, typer.Option(help="show a progress bar")] = True,
+    trainee: Annotated[
+        str | None, typer.Option(help="store this run's scores under this trainee's name")
+    ] = None,
+    scores_db: Annotated[
+        Path, typer.Option(help="the scores database (SQLite) --trainee writes to")
+    ] = DEFAULT_SCORES_DB,
 ) -> None:
     """Run a mission headless, faster than real time; exit 1 if it failed."""
     from control.config import ALLOCATIONS, FEEDBACKS, LAWS
@@ -258,6 +268,13 @@ def run(
         docking = None if charted is None else (charted, sim.ps.spec.docking.to_numeric())
         figures = mission_figures(result, Path(plots), sim.crane_tip_n, docking)
         summary["plots"] = [str(p) for p in figures]
+    if trainee is not None:
+        from app import scores
+
+        try:
+            summary["score_id"] = scores.record(scores_db, trainee, result, "run", log)
+        except (ValueError, OSError) as err:
+            _fail(f"--trainee: cannot store the scores in {scores_db}: {err}")
     if json_out:
         typer.echo(json.dumps(summary, indent=2, default=_json_default))
     else:
@@ -297,43 +314,18 @@ def _print_result_table(summary: dict) -> None:
     from rich.console import Console
     from rich.table import Table
 
+    from missions.scoring import LEG_TABLE_COLUMNS, leg_table_rows
+
     table = Table(
         title=f"{summary['name']}  (simulated {summary['simulated_s']:.0f} s, "
         f"{summary['real_time_factor']}x real time)"
     )
-    for col in (
-        "leg",
-        "type",
-        "duration s",
-        "RMS N m",
-        "RMS E m",
-        "RMS psi deg",
-        "max util",
-        "saturated s",
-    ):
+    for col in LEG_TABLE_COLUMNS:
         table.add_column(col, justify="right")
-    for leg in summary["legs"]:
-        table.add_row(
-            f"{leg['index']} {leg['name']}",
-            leg["type"],
-            f"{leg['duration_s']:.0f}",
-            f"{leg['rms_north_m']:.4f}",
-            f"{leg['rms_east_m']:.4f}",
-            f"{leg['rms_heading_deg']:.3f}",
-            f"{leg['max_utilisation']:.2f}",
-            f"{leg['saturated_s']:.1f}" + _leg_flag(leg),
-        )
-    table.add_row(
-        "scored",
-        "",
-        "",
-        f"{summary['rms_north_m']:.4f}",
-        f"{summary['rms_east_m']:.4f}",
-        f"{summary['rms_heading_deg']:.3f}",
-        f"{summary['max_thruster_utilisation']:.2f}",
-        f"{summary['saturated_time_s']:.1f}",
-        style="bold",
-    )
+    *legs, scored = leg_table_rows(summary)
+    for row in legs:
+        table.add_row(*row)
+    table.add_row(*scored, style="bold")
     console = Console(width=120)
     console.print(table)
     final = summary["final_eta_n"]
@@ -353,12 +345,6 @@ def _print_result_table(summary: dict) -> None:
             )
     if summary.get("error"):
         console.print("ERROR: " + summary["error"], style="bold red", markup=False)
-
-
-def _leg_flag(leg: dict) -> str:
-    if leg.get("error"):
-        return " FAILED"
-    return " TIMEOUT" if leg["timed_out"] else ""
 
 
 def _validate_choice(name: str, value: str | None, allowed: tuple[str, ...]) -> None:
@@ -430,15 +416,107 @@ def _open_recorder(path: str, spec, sim, seed):
 
 
 def _print_landings(summary: dict) -> None:
-    for i, landing in enumerate(summary.get("landings", []), start=1):
-        verdict = "LANDED" if landing["success"] else "FAILED"
-        typer.echo(
-            f"landing {i}: {verdict} - miss {landing['miss_m']:.3f} m, heading error "
-            f"{landing['heading_error_deg']:.2f} deg, contact speed "
-            f"{landing['contact_speed_mps']:.3f} m/s, rests on the {landing['rests_on']}"
-        )
+    from missions.scoring import landing_lines
+
+    for line in landing_lines(summary):
+        typer.echo(line)
     if summary.get("failed"):
         typer.echo("mission FAILED", err=True)
+
+
+@app.command()
+def scores(
+    trainee: Annotated[str | None, typer.Option(help="only this trainee's runs")] = None,
+    mission: Annotated[str | None, typer.Option(help="only this mission's runs")] = None,
+    best: Annotated[bool, typer.Option("--best", help="the best run of each mission")] = False,
+    db: Annotated[Path, typer.Option(help="the scores database (SQLite)")] = DEFAULT_SCORES_DB,
+    json_out: Annotated[bool, typer.Option("--json", help="JSON instead of a table")] = False,
+) -> None:
+    """List stored scores (newest first): who flew which mission when, landed or not, miss,
+    heading error and contact speed at the landing, RMS errors, time saturated."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from app import scores as store
+
+    try:
+        rows = store.history(db, trainee, mission)
+    except ValueError as err:
+        _fail(str(err))
+        return
+    if best:
+        rows = store.best(rows)
+    if json_out:
+        typer.echo(store.as_json(rows))
+        return
+    if not rows:
+        typer.echo(f"no scores in {db}" + (f" for {trainee}" if trainee else ""))
+        return
+    table = Table(title=f"scores ({db})")
+    for col in (
+        "id",
+        "when (UTC)",
+        "trainee",
+        "mission",
+        "result",
+        "miss m",
+        "psi err deg",
+        "contact m/s",
+        "RMS N m",
+        "RMS E m",
+        "RMS psi deg",
+        "saturated s",
+    ):
+        table.add_column(col, justify="right")
+
+    def num(v: float | None, fmt: str) -> str:
+        return "-" if v is None else format(v, fmt)
+
+    for r in rows:
+        verdict = "PASS" if r.passed else "FAIL"
+        if r.landed is not None:
+            verdict += ", landed" if r.landed else ", not landed"
+        table.add_row(
+            str(r.id),
+            r.utc.replace("T", " ").rstrip("Z"),
+            r.trainee,
+            r.mission,
+            verdict,
+            num(r.miss_m, ".3f"),
+            num(r.heading_error_deg, ".2f"),
+            num(r.contact_speed_mps, ".3f"),
+            f"{r.rms_north_m:.4f}",
+            f"{r.rms_east_m:.4f}",
+            f"{r.rms_heading_deg:.3f}",
+            f"{r.saturated_s:.1f}",
+        )
+    Console(width=160).print(table)
+
+
+@app.command()
+def report(
+    log: Annotated[
+        Path, typer.Argument(help="a session log (.mcap) from run --log or the console")
+    ],
+    out: Annotated[
+        Path, typer.Option("-o", "--out", help="HTML file to write (its folder is made)")
+    ] = Path("report.html"),
+) -> None:
+    """Write a self-contained debrief of a recorded session: scores per leg, landings, pose
+    against reference, the track over the docking frame, forces and thrusters, and every event
+    with who did it."""
+    from app.report import write_report
+
+    if not log.is_file():
+        _fail(f"no log file {log}")
+    try:
+        d = write_report(log, out)
+    except ValueError as err:
+        _fail(str(err))
+    typer.echo(
+        f"{out}: debrief of {d.name} ({d.duration_s:.0f} s, {len(d.result.legs)} legs, "
+        f"{len(d.events)} events)"
+    )
 
 
 @app.command()

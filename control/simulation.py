@@ -44,6 +44,7 @@ from control.config import (
     control_arrays,
     system_thruster_config,
 )
+from control.faults import Fault
 from control.startup import StartupReport, check_mount_vector
 from sim import environment as envmod
 from sim import plant, sensors, site
@@ -51,6 +52,7 @@ from sim import wire as wm
 from sim.docking import DockingFrame
 from sim.gnc import Rzyx, ssa
 from sim.params import ParameterSet
+from sim.sensors import SENSOR_NAMES
 
 FloatArray = NDArray[np.float64]
 DT_RANGE_S = (1e-4, 0.05)
@@ -59,6 +61,13 @@ WIRE_LENGTH_RANGE_M = (1.0, 5000.0)
 WINCH_RATE_MAX_MPS = 2.0
 VESSEL_SPEED_MAX_MPS = 5.0
 HEAVE_FORCE_MAX_NEWTON = 1.0e5
+GRIP_REACH_M = 0.3
+"""Farthest the ROV's origin may be from its mount on the tree for the gripper to close [m]:
+the reach of a work-class manipulator's jaw around the tree's grab bar is a few decimetres, and
+the hook-up leg's tolerance (at most 1 m in the schema) is tighter in every library mission."""
+GRIP_REACH_DEG = 10.0
+"""Largest heading difference from the mount at which the gripper closes [deg]: beyond it the
+spring would yank the tree round (12 deg from 100 deg off, in the console defect report)."""
 
 
 class SimulationDiverged(RuntimeError):
@@ -222,6 +231,12 @@ class Simulation:
         self.wire_target_m = self.wire_length_m
         self.wire_rate_mps = 0.0
         self.docking_frame: DockingFrame | None = None
+        self.faults: list[Fault] = []
+        """Injected faults, past, present and scheduled (control.faults)."""
+        self._slipped: set[int] = set()
+        self._faults_on: set[int] = set()
+        self._fault_log: list[tuple[float, str]] = []
+        self._mount_flipped = False
         tree_pos = np.array([self.crane_tip_n[0], self.crane_tip_n[1], tree_depth_m])
         self.x = initial_state(ps, tree_pos, tree_heading_rad, self.has_rov)
         self.held_y = sensors.true_outputs(self.x)
@@ -343,6 +358,11 @@ class Simulation:
             ]
         )
 
+    @property
+    def free_setpoint_n(self) -> FloatArray:
+        """The free-flying ROV's set point [north, east, down, psi] (a copy)."""
+        return self.cs[loop.CS_FSP : loop.CS_FSP + 4].copy()
+
     def check_mount(self) -> StartupReport:
         """The start-up check of the mount vector against the measured geometry."""
         return check_mount_vector(
@@ -418,7 +438,22 @@ class Simulation:
         """Physically grip (True) or release (False) the tree."""
         if not isinstance(gripping, bool | np.bool_):
             raise ValueError(f"grip must be true or false, got {gripping!r}")
+        if gripping and not self.gripping:
+            miss_m, miss_deg = self.grip_miss()
+            if miss_m > GRIP_REACH_M or miss_deg > GRIP_REACH_DEG:
+                raise ValueError(
+                    f"grip: the ROV is {miss_m:.2f} m and {miss_deg:.0f} deg from its mount on "
+                    f"the tree; the gripper closes within {GRIP_REACH_M:g} m and "
+                    f"{GRIP_REACH_DEG:g} deg (fly it there first: a hook-up leg does)"
+                )
         self.gripping = bool(gripping)
+
+    def grip_miss(self) -> tuple[float, float]:
+        """How far the ROV is from its mount on the tree: (distance [m], heading [deg])."""
+        mount = self.mount_pose_n()
+        rov = self.x[12:18]
+        miss_m = float(np.linalg.norm(rov[0:3] - mount[0:3]))
+        return miss_m, abs(math.degrees(ssa(float(rov[5] - mount[3]))))
 
     def set_allocation(self, kind: Allocation) -> None:
         kinds = {
@@ -442,13 +477,53 @@ class Simulation:
     def set_free_setpoint(
         self, north_m: float, east_m: float, down_m: float, psi_rad: float
     ) -> None:
-        """Where the free-flying ROV should hold station (supervisor's free mode)."""
+        """Where the free-flying ROV should hold station (supervisor's free mode). The step
+        that switches to free mode holds the ROV where it is (bumpless), so a set point for
+        the free ROV is given after that step."""
         values = finite_vector("free-ROV set point", [north_m, east_m, down_m, psi_rad], 4)
         self.cs[loop.CS_FSP : loop.CS_FSP + 4] = values
 
     def reset_observer(self) -> None:
-        """Restart the EKF from the present measurements (after hook-up)."""
-        self.xhat, self.P_cov = self._initial_estimate()
+        """Restart the EKF at hook-up from the ROV's own measurements moved to the tree with
+        the mounting vector r (see ``_hookup_estimate``)."""
+        self.xhat, self.P_cov = self._hookup_estimate()
+
+    def _hookup_estimate(self) -> tuple[FloatArray, FloatArray]:
+        """EKF start at the grip: the tree's pose and velocity are the ROV's, moved to the
+        tree's origin through r (eq. 3.4-3.6), each with the variance of the sensor it comes
+        from; the bias starts at zero with its configured spread.
+
+        The held position fix can be up to one fix interval old: it is carried forward over
+        its age with the DVL's velocity, and its variance grows by the DVL's over that age.
+        A start with loose pose variances but the gyro's tight rate variance is what made the
+        filter run away at the grip: the wire spring couples the position to the yaw
+        acceleration (the tree and ROV's mass matrix has sway-yaw terms), so after a few steps
+        the gyro's corrections moved the east estimate by metres."""
+        C, y = self.C, self.held_y
+        psi_hat = y[4] - C.psi_rel
+        ne, psi, uv, rate = loop.tree_measurements(y, psi_hat, C)
+        c, s = math.cos(psi), math.sin(psi)
+        vel_n = np.array([c * uv[0] - s * uv[1], s * uv[0] + c * uv[1]])
+        last_fix_s = float(self.Q.last_t[sensors.POSITION])
+        age_s = max(self.t_s - last_fix_s, 0.0) if last_fix_s >= 0.0 else 0.0
+        x0 = np.zeros(9)
+        x0[0:2] = ne + age_s * vel_n
+        x0[2] = psi
+        x0[3:5] = uv
+        x0[5] = rate
+        pos_var = C.r_pos + age_s**2 * C.r_dvl
+        p0 = np.diag(
+            [
+                pos_var,
+                pos_var,
+                C.r_psi,
+                C.r_dvl,
+                C.r_dvl,
+                C.r_gyro,
+                *(np.asarray(self.ps.spec.observer.process_force_std) ** 2),
+            ]
+        )
+        return x0, p0
 
     # ------------------------------------------------------------------ plant commands
     def set_thruster_speeds(self, n_rps: FloatArray) -> None:
@@ -511,7 +586,7 @@ class Simulation:
         out = np.empty((int(n), N_LOG))
         done = 0
         while done < n:
-            k = min(self.chunk_steps, int(n) - done)
+            k = min(self.chunk_steps, int(n) - done, self._steps_to_fault_edge())
             out[done : done + k] = self._chunk(k)
             done += k
         return LogRows(out, self.n_thrusters, self.Q.counters.copy())
@@ -530,9 +605,117 @@ class Simulation:
     def _chunk_inputs(self, n: int) -> tuple[FloatArray, sensors.NoiseChunk]:
         """Environment rows and sensor noise for the next n steps. Injected faults (sensor
         dropouts, biases, winch slip, current surges) change these before the kernel runs."""
+        if self.faults:
+            self._faults_before_chunk()
         env = self._environment_chunk(n)
         noise = sensors.draw_noise(self.sensor_cfg, self.rng, self.step_index, n)
+        if self.faults:
+            self._faults_in_chunk(env, noise)
         return env, noise
+
+    # ------------------------------------------------------------------ injected faults
+    def inject_fault(self, fault: Fault) -> None:
+        """Schedule a fault (control.faults); one that starts in the past starts now."""
+        if not isinstance(fault, Fault):
+            raise ValueError(f"fault must be a control.faults.Fault, got {type(fault).__name__}")
+        self.faults.append(fault)
+
+    def clear_faults(self) -> None:
+        """End every fault now (a slipped winch stays where it slipped to)."""
+        for k in sorted(self._faults_on):
+            self._fault_log.append((self.t_s, f"fault cleared: {self.faults[k].kind}"))
+        self.faults, self._faults_on, self._slipped = [], set(), set()
+        self._apply_mount_sign(False)
+
+    def take_fault_log(self) -> list[tuple[float, str]]:
+        """Faults that started or ended since the last call: (time [s], what)."""
+        out, self._fault_log = self._fault_log, []
+        return out
+
+    def active_faults(self) -> list[Fault]:
+        """Faults whose window covers the present time."""
+        return [f for f in self.faults if f.active(self.t_s)]
+
+    def _steps_to_fault_edge(self) -> int:
+        """Steps until the next fault starts or ends (chunks end there, so a fault acts from
+        its own step; without faults, chunks are as before)."""
+        if not self.faults:
+            return self.chunk_steps
+        edges = [e for f in self.faults for e in (f.start_s, f.end_s) if e > self.t_s + 1e-9]
+        if not edges:
+            return self.chunk_steps
+        return max(1, round((min(edges) - self.t_s) / self.dt_s))
+
+    def _faults_before_chunk(self) -> None:
+        """Faults that act once at their start (winch slip) and those that reconfigure the
+        control system while active (mount sign)."""
+        t = self.t_s + 1e-9
+        active = {k for k, f in enumerate(self.faults) if f.active(t)}
+        for k in sorted(active - self._faults_on):
+            self._fault_log.append((self.t_s, f"fault: {self.faults[k].describe()}"))
+        for k in sorted(self._faults_on - active):
+            self._fault_log.append((self.t_s, f"fault over: {self.faults[k].kind}"))
+        self._faults_on = active
+        for k, f in enumerate(self.faults):
+            if f.kind == "winch_slip" and f.active(t) and k not in self._slipped:
+                self._slipped.add(k)
+                self.wire_length_m += f.value  # the tree drops at once
+                self.wire_target_m += f.value
+        flipped = any(f.kind == "mount_sign" and f.active(t) for f in self.faults)
+        self._apply_mount_sign(flipped)
+
+    def _apply_mount_sign(self, flipped: bool) -> None:
+        """The control system's mounting vector: as configured, or mirrored."""
+        if flipped == self._mount_flipped:
+            return
+        self._mount_flipped = flipped
+        r = self.sysm.r_rov_from_tree_tree_m
+        self.sysm = model.system_model(self.ps, self.wire_length_m, -r)
+        self.thruster_config = system_thruster_config(self.ps, self.sysm)
+        alloc, heave = self.C.alloc_kind, self.C.heave_newton
+        self.C = control_arrays(
+            self.ps, self.sysm, self.settings, self.gains, self.crane_tip_n[0:2], self.dt_s
+        )._replace(alloc_kind=alloc, heave_newton=heave)
+
+    def _faulted_current(
+        self, speeds: FloatArray, dirs: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """The current's speed and direction over the chunk's steps with surges and turns
+        added (at the tree and along the wire alike)."""
+        t = self.t_s + self.dt_s * np.arange(len(speeds))
+        speeds, dirs = np.array(speeds, float), np.array(dirs, float)
+        for f in self.faults:
+            on = (t >= f.start_s - 1e-9) & (t < f.end_s - 1e-9)
+            if f.kind == "current_surge":
+                speeds[on] = np.maximum(speeds[on] + f.value, 0.0)
+            elif f.kind == "current_turn":
+                dirs[on] += math.radians(f.value)
+        return speeds, dirs
+
+    def _faults_in_chunk(self, env: FloatArray, noise: sensors.NoiseChunk) -> None:
+        """Sensor and environment faults over the chunk's steps."""
+        n = len(env)
+        t = self.t_s + self.dt_s * np.arange(n)
+        for f in self.faults:
+            on = (t >= f.start_s - 1e-9) & (t < f.end_s - 1e-9)
+            if not on.any():
+                continue
+            if f.kind == "dvl_lost":
+                noise.fresh[on, SENSOR_NAMES.index("dvl")] = False
+            elif f.kind == "position_dropout":
+                noise.fresh[on, SENSOR_NAMES.index("position")] = False
+            elif f.kind == "position_wild_points":
+                fixes = np.flatnonzero(on & noise.fresh[:, SENSOR_NAMES.index("position")])
+                noise.noise[fixes[::2], 0] += f.value  # every second fix jumps north
+            elif f.kind == "compass_bias":
+                noise.noise[on, 4] += math.radians(f.value)
+            elif f.kind == "vessel_drift":
+                d = math.radians(f.direction_deg)
+                step = f.value * self.dt_s * np.array([math.cos(d), math.sin(d), 0.0])
+                drift = np.cumsum(on)[:, None] * step[None, :]
+                env[:, plant.E_CT : plant.E_CT + 3] += drift
+                self.crane_tip_n = env[-1, plant.E_CT : plant.E_CT + 3].copy()
+                self.crane_target_n = self.crane_tip_n.copy()
 
     def _chunk(self, n: int) -> FloatArray:
         if self.control_on:
@@ -651,6 +834,8 @@ class Simulation:
         self.current_state, speeds, dirs = envmod.advance_current(
             self.current_state, self.current_params, self.dt_s, n, self.rng
         )
+        if self.faults:
+            speeds, dirs = self._faulted_current(speeds, dirs)
         water_n = envmod.current_velocity_n(speeds, dirs)
         accel_n = np.zeros_like(water_n)
         if self.wave_field is not None:

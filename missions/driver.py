@@ -167,6 +167,10 @@ class MissionDriver:
                 break
             out.append(rows)
             self._request_parts.append(rows)
+            for t_s, text in self.sim.take_fault_log():
+                self.ctx.events.append(
+                    {"t_s": round(t_s, 3), "kind": "fault", "text": text, "data": {}}
+                )
             self._pending -= k
             if self._pending == 0:
                 self._finish_request()

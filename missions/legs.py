@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from control.columns import LAYOUT, LogRows
 from control.config import Gains
 from control.simulation import Simulation
-from missions import schema
+from missions import landing, schema
 from missions.scoring import LandingResult
 from sim import docking
 from sim.docking import DockingFrame, DockingLayout
@@ -287,9 +287,36 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
     layout = cl.ps.spec.docking.to_numeric()
     half_h = float(cl.plant_ps.tree.dimensions_m[2]) / 2.0
     post_top = frame.post_top_depth_m(layout)
-    cl.winch_to(cl.wire_length_for_depth(post_top - leg.hover_m - half_h), 0.1)
-    psi = ctx.target[2] + ssa(frame.heading_rad - ctx.target[2])
-    ok = yield from ctx.go_and_settle(frame.center_n[0], frame.center_n[1], psi, 0.0, deadline)
+    hover_depth = post_top - leg.hover_m - half_h
+    plan = landing.plan_landing(cl, frame, ctx.target, hover_depth)
+    if not plan.feasible:
+        ctx.event("landing", plan.reason)
+        raise ValueError(plan.reason)
+    way = "where it is, then over the frame" if plan.turn_first else "over the frame"
+    ctx.event(
+        "dock",
+        f"{plan.reason}; turning {math.degrees(plan.turn_rad):+.0f} deg {way} "
+        f"(at most {100 * plan.worst_utilisation:.0f} % of the thrust on the way)",
+        utilisation=plan.at_frame.utilisation,
+        turn_deg=math.degrees(plan.turn_rad),
+        turn_first=plan.turn_first,
+    )
+    cl.winch_to(cl.wire_length_for_depth(hover_depth), 0.1)
+    psi = ctx.target[2] + plan.turn_rad
+    if plan.turn_first:
+        t = ctx.target
+        ok = yield from ctx.go_and_settle(t[0], t[1], psi, 0.0, deadline)
+        if ok:
+            ok = yield from ctx.go_and_settle(
+                frame.center_n[0], frame.center_n[1], psi, 0.0, deadline
+            )
+    else:
+        t = ctx.target
+        ok = yield from ctx.go_and_settle(frame.center_n[0], frame.center_n[1], t[2], 0.0, deadline)
+        if ok:
+            ok = yield from ctx.go_and_settle(
+                frame.center_n[0], frame.center_n[1], psi, 0.0, deadline
+            )
     if ok:
         ok = yield from ctx.run_until(
             lambda: cl.winch_idle and _aligned(cl, frame, layout, leg), deadline
@@ -330,22 +357,34 @@ def _landing_result(
     layout: DockingLayout,
     contact: tuple[int, FloatArray, FloatArray] | None,
 ) -> LandingResult:
+    """The landing as it happened: the funnels over the posts when they reached the post tops,
+    and where the tree rests after settling. A success ends on the landing surface with every
+    funnel around its own post (so with the frame's heading) and touched down slower than the
+    limit."""
     if contact is None:
         return LandingResult(False, math.inf, math.nan, 0.0, "nothing", cl.t_s)
     _, row, prev = contact
     pose = LAYOUT.take(row, "tree_eta_n")
     chk = docking.check_alignment(pose, frame, layout)
     speed = float((pose[2] - LAYOUT.take(prev, "tree_eta_n")[2]) / cl.dt_s)
+    rest = docking.check_alignment(cl.tree_eta_n, frame, layout)
     bottom = cl.tree_eta_n[2] + float(cl.plant_ps.tree.dimensions_m[2]) / 2.0
-    on_frame = bottom > frame.landing_depth_m - 0.2 * layout.post_height_m
-    success = chk.captured and speed <= layout.max_landing_speed_mps and on_frame
+    down = bottom > frame.landing_depth_m - 0.2 * layout.post_height_m
+    on_posts = abs(bottom - frame.post_top_depth_m(layout)) < 0.2 * layout.post_height_m
+    in_funnels = rest.miss_m <= layout.tolerance_m
+    rests_on = (
+        "frame" if down and in_funnels else "posts" if on_posts else "seabed" if down else "wire"
+    )
+    success = rests_on == "frame" and speed <= layout.max_landing_speed_mps
     return LandingResult(
         bool(success),
         chk.miss_m,
         chk.heading_error_deg,
         speed,
-        "frame" if on_frame else "posts",
+        rests_on,
         float(LAYOUT.take(row, "t_s")),
+        rest.miss_m,
+        rest.heading_error_deg,
     )
 
 

@@ -26,6 +26,7 @@ from pydantic import (
 )
 
 from control.config import Allocation, Feedback, Mode, Reference
+from control.faults import Fault
 from sim.params import KdVector, KiVector, KpVector
 
 FORMAT_VERSION = 1
@@ -289,7 +290,9 @@ class HookupLeg(_Leg):
     switches to the tree controller (appendix C step 4)."""
 
     type: Literal["hookup"]
-    grip_tolerance_m: float = Field(default=0.05, gt=0.0, le=1.0)
+    grip_tolerance_m: float = Field(default=0.05, gt=0.0, le=0.3)
+    """How close the ROV must come to its mount before it grips [m]; at most the gripper's
+    reach (control.simulation.GRIP_REACH_M)."""
 
 
 class HeaveLeg(_Leg):
@@ -341,12 +344,35 @@ LEG_TYPES = (
 )
 
 
+class FaultSpec(_Model):
+    """A fault injected while the mission runs (control.faults: what each kind does and what
+    its value means), e.g. the sea trial's broken DVL cable or the winch that slipped."""
+
+    kind: str = Field(description="one of control.faults.FAULT_KINDS")
+    start_s: Finite = Field(ge=0.0, description="simulation time it starts [s]")
+    duration_s: Finite = Field(gt=0.0, le=MAX_MISSION_S, description="how long it lasts [s]")
+    value: Finite = Field(default=0.0, description="size, in the kind's unit")
+    direction_deg: Finite = Field(default=0.0, ge=-360.0, le=360.0)
+
+    @model_validator(mode="after")
+    def _known(self) -> FaultSpec:
+        self.fault()  # the kind and its value's range (ValueError names them)
+        return self
+
+    def fault(self) -> Fault:
+        return Fault(self.kind, self.start_s, self.duration_s, self.value, self.direction_deg)
+
+
+MAX_FAULTS = 50
+
+
 class Mission(_Model):
     format_version: Literal[1] = Field(description="mission file format version")
     name: str = Field(description="1 to 80 printable characters, no slashes")
     description: str = Field(default="", max_length=2000)
     setup: Setup
     legs: list[Leg] = Field(min_length=1, max_length=MAX_LEGS)
+    faults: list[FaultSpec] = Field(default_factory=list, max_length=MAX_FAULTS)
 
     @field_validator("name")
     @classmethod

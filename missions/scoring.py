@@ -51,8 +51,15 @@ class LandingResult:
     contact_speed_mps: float
     """Vertical speed of the tree at that moment [m/s]."""
     rests_on: str
-    """"frame" (funnels over the posts, down on the landing surface) or "posts"."""
+    """Where the tree rests after settling: "frame" (down on the landing surface, every funnel
+    around its own post), "posts" (on the post tops), "seabed" (down, but not with its funnels
+    around their posts: beside the frame or turned), "wire" (still hanging) or "nothing" (it
+    never reached the post tops)."""
     t_contact_s: float
+    rest_miss_m: float = math.nan
+    """Largest funnel-to-own-post distance at rest [m]."""
+    rest_heading_error_deg: float = math.nan
+    """Tree heading minus frame heading at rest [deg]."""
 
 
 @dataclass
@@ -225,3 +232,63 @@ def score(
         quality_counters=counters_by_name(rows.quality_counters),
         log=rows,
     )
+
+
+# ------------------------------------------------------------------ result tables (CLI, console)
+LEG_TABLE_COLUMNS = (
+    "leg",
+    "type",
+    "duration s",
+    "RMS N m",
+    "RMS E m",
+    "RMS psi deg",
+    "max util",
+    "saturated s",
+)
+"""Columns of the per-leg table that ``rov-console run`` prints and the console shows."""
+
+
+def leg_table_rows(summary: dict) -> list[tuple[str, ...]]:
+    """Rows of the per-leg table from ``MissionResult.summary()``: one a leg, then the scored
+    figures of the whole mission."""
+    rows: list[tuple[str, ...]] = []
+    for leg in summary["legs"]:
+        flag = " FAILED" if leg.get("error") else " TIMEOUT" if leg["timed_out"] else ""
+        rows.append(
+            (
+                f"{leg['index']} {leg['name']}".strip(),
+                leg["type"],
+                f"{leg['duration_s']:.0f}",
+                f"{leg['rms_north_m']:.4f}",
+                f"{leg['rms_east_m']:.4f}",
+                f"{leg['rms_heading_deg']:.3f}",
+                f"{leg['max_utilisation']:.2f}",
+                f"{leg['saturated_s']:.1f}{flag}",
+            )
+        )
+    rows.append(
+        (
+            "scored",
+            "",
+            "",
+            f"{summary['rms_north_m']:.4f}",
+            f"{summary['rms_east_m']:.4f}",
+            f"{summary['rms_heading_deg']:.3f}",
+            f"{summary['max_thruster_utilisation']:.2f}",
+            f"{summary['saturated_time_s']:.1f}",
+        )
+    )
+    return rows
+
+
+def landing_lines(summary: dict) -> list[str]:
+    """One sentence a landing: verdict, miss, heading error, contact speed, where it rests."""
+    lines = []
+    for i, landing in enumerate(summary.get("landings", []), start=1):
+        verdict = "LANDED" if landing["success"] else "FAILED"
+        lines.append(
+            f"landing {i}: {verdict} - miss {landing['miss_m']:.3f} m, heading error "
+            f"{landing['heading_error_deg']:.2f} deg, contact speed "
+            f"{landing['contact_speed_mps']:.3f} m/s, rests on the {landing['rests_on']}"
+        )
+    return lines

@@ -79,6 +79,8 @@ def build_simulation(
     if s.docking_frame is not None and chart is not None:
         real_center = chart.center_n + np.asarray(s.docking_frame.survey_error_ne_m, float)
         sim.set_docking_frame(DockingFrame(real_center, chart.heading_rad, chart.landing_depth_m))
+    for fault in mission.faults:
+        sim.inject_fault(fault.fault())
     return sim
 
 

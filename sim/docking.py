@@ -34,6 +34,10 @@ class DockingLayout:
     """[m]"""
     funnel_mouth_radius_m: float
     """Capture radius of a funnel's mouth [m]."""
+    funnel_bore_radius_m: float
+    """Radius of the funnel's bore above its cone [m]."""
+    funnel_cone_height_m: float
+    """Height of the cone from the mouth up to the bore [m]."""
     max_landing_speed_mps: float
     """Largest vertical speed at contact for a good landing [m/s]."""
     frame_size_m: FloatArray
@@ -43,6 +47,18 @@ class DockingLayout:
     def tolerance_m(self) -> float:
         """How far off a funnel may be and still catch its post [m]."""
         return self.funnel_mouth_radius_m - self.post_radius_m
+
+    @property
+    def clearance_m(self) -> float:
+        """How far a landed post can move in its funnel's bore [m]."""
+        return self.funnel_bore_radius_m - self.post_radius_m
+
+    @property
+    def heading_clearance_rad(self) -> float:
+        """How far a landed tree can turn before a post meets its bore: the clearance over
+        the distance of the nearest post from the tree's centre [rad] (small angle)."""
+        arm = float(np.min(np.hypot(self.post_xy_m[:, 0], self.post_xy_m[:, 1])))
+        return self.clearance_m / arm if arm > 0.0 else math.inf
 
 
 @dataclass(frozen=True)

@@ -278,6 +278,18 @@ class DockingSpec(_Strict):
     post_height_m: float = Field(gt=0.0, le=10.0)
     post_radius_m: float = Field(gt=0.0, le=1.0)
     funnel_mouth_radius_m: float = Field(gt=0.0, le=2.0)
+    funnel_bore_radius_m: float = Field(
+        gt=0.0,
+        le=2.0,
+        description="radius of the funnel's bore above its cone: a landed post can move this "
+        "minus the post radius [m]",
+    )
+    funnel_cone_height_m: float = Field(
+        gt=0.0,
+        le=5.0,
+        description="height of the cone from the mouth to the bore [m]; the cone must be no "
+        "flatter than 45 deg (mouth minus bore radius at most this height)",
+    )
     max_landing_speed_mps: float = Field(gt=0.0, le=2.0)
     frame_size_m: Annotated[
         list[Annotated[float, Field(gt=0.0, le=50.0)]], Field(min_length=2, max_length=2)
@@ -287,6 +299,19 @@ class DockingSpec(_Strict):
     def _mouth_wider_than_post(self) -> DockingSpec:
         if self.funnel_mouth_radius_m <= self.post_radius_m:
             raise ValueError("funnel_mouth_radius_m must be larger than post_radius_m")
+        if not self.post_radius_m < self.funnel_bore_radius_m <= self.funnel_mouth_radius_m:
+            raise ValueError(
+                "funnel_bore_radius_m must be larger than post_radius_m and at most "
+                "funnel_mouth_radius_m"
+            )
+        # the contact model picks the nearer of the cone wall and the bottom plate at the
+        # mouth's lip; the two agree there (no jump in contact energy) only if the wall's
+        # horizontal run per metre of height is at most 1
+        if self.funnel_mouth_radius_m - self.funnel_bore_radius_m > self.funnel_cone_height_m:
+            raise ValueError(
+                "funnel_cone_height_m must be at least funnel_mouth_radius_m - "
+                "funnel_bore_radius_m (a cone no flatter than 45 deg)"
+            )
         return self
 
     def to_numeric(self):
@@ -297,6 +322,8 @@ class DockingSpec(_Strict):
             self.post_height_m,
             self.post_radius_m,
             self.funnel_mouth_radius_m,
+            self.funnel_bore_radius_m,
+            self.funnel_cone_height_m,
             self.max_landing_speed_mps,
             np.asarray(self.frame_size_m, float),
         )

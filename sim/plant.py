@@ -56,9 +56,6 @@ E_FRAME_PSI = 20  # docking frame heading [rad]
 E_LAND = 21  # depth of the frame's landing surface and the seabed around it [m]; 0: no bottom
 N_ENV = 22
 
-# Contact outcome codes (see contact_state)
-CONTACT_NONE, CONTACT_GUIDED, CONTACT_ON_POSTS, CONTACT_LANDED = 0, 1, 2, 3
-
 
 class PlantArrays(NamedTuple):
     """Everything the compiled plant needs, as plain arrays and floats."""
@@ -90,14 +87,16 @@ class PlantArrays(NamedTuple):
     has_rov: bool
     dock_xy: np.ndarray  # (k, 2) funnels in tree axes = posts in frame axes [m]
     dock_post_height: float  # post top above the landing surface [m]
-    dock_tolerance: float  # capture radius of a funnel around its post [m]
-    dock_skirt: float  # outer radius of a funnel's skirt: a miss inside it lands on the post [m]
+    dock_post_radius: float  # [m]
+    dock_mouth_radius: float  # funnel mouth, at the tree's bottom [m]
+    dock_bore_radius: float  # funnel bore above the cone [m]
+    dock_cone_height: float  # cone from the mouth up to the bore [m]
     tree_half_height: float  # [m]
     tree_footprint: np.ndarray  # (2,) length and width of the tree's bottom [m]
-    contact_k: float  # vertical contact stiffness [N/m]
-    contact_c: float  # vertical contact damping [N s/m]
-    guide_k: float  # post guidance stiffness per funnel [N/m]
-    guide_c: float  # post guidance damping per funnel [N s/m]
+    contact_k: float  # support stiffness under the whole tree [N/m]
+    contact_c: float  # support damping under the whole tree [N s/m]
+    post_k: float  # stiffness of one post against the tree (funnel wall, bottom, side) [N/m]
+    post_c: float  # damping of one post contact [N s/m]
     friction_mu: float  # friction coefficient on the landing surface / post tops [-]
 
 
@@ -141,31 +140,34 @@ def plant_arrays(
 
 
 def _contact_params(ps: ParameterSet) -> dict:
-    """Contact with the docking frame: stiff enough that the tree sinks 2 % of its height into
-    the contact under its own weight, damped at zeta 0.7 on the tree's heave mass; the
-    resulting contact mode (about 9 rad/s full scale, 15 rad/s model scale) is resolved by RK4
-    at 100 Hz. The posts guide the funnels with a spring of 5 % of the height per W0, damped
-    at zeta 0.7."""
+    """Contact with the docking frame and the seabed, as penalty springs with damping.
+
+    The support under the whole tree is stiff enough that the tree sinks 2 % of its height
+    into it under its own weight, damped at zeta 0.7 on the tree's heave mass (about 9 rad/s
+    full scale, 15 rad/s model scale: resolved by RK4 at 100 Hz); it acts at the four corners
+    of the tree's bottom, a quarter each. Each post pushes on the tree (its funnel's wall, the
+    bottom plate, the side) with the support's stiffness and damping shared among the posts,
+    so a tree standing on the post tops sinks as far as one on the landing surface."""
     layout = ps.spec.docking.to_numeric()
     m_heave = ps.tree.M_rb[2, 2] + ps.tree.M_a[2, 2]
     height = float(ps.tree.dimensions_m[2])
     k = ps.tree.submerged_weight_newton / (0.02 * height)
     omega = (k / m_heave) ** 0.5
-    # a post in its funnel: the same stiffness sideways, damped like the support
-    k_guide = ps.tree.submerged_weight_newton / (0.05 * height)
-    m_surge = ps.tree.M_rb[0, 0] + ps.tree.M_a[0, 0]
+    c = 2.0 * 0.7 * omega * m_heave
     n_posts = layout.post_xy_m.shape[0]
     return dict(
         dock_xy=np.ascontiguousarray(layout.post_xy_m, dtype=float),
         dock_post_height=float(layout.post_height_m),
-        dock_tolerance=float(layout.tolerance_m),
-        dock_skirt=float(3.0 * layout.funnel_mouth_radius_m),
+        dock_post_radius=float(layout.post_radius_m),
+        dock_mouth_radius=float(layout.funnel_mouth_radius_m),
+        dock_bore_radius=float(layout.funnel_bore_radius_m),
+        dock_cone_height=float(layout.funnel_cone_height_m),
         tree_half_height=height / 2.0,
         tree_footprint=np.array(ps.tree.dimensions_m[0:2], dtype=float),
         contact_k=float(k),
-        contact_c=float(2.0 * 0.7 * omega * m_heave),
-        guide_k=float(k_guide),
-        guide_c=float(2.0 * 0.7 * (k_guide * m_surge / n_posts) ** 0.5),
+        contact_c=float(c),
+        post_k=float(k / n_posts),
+        post_c=float(c / n_posts),
         friction_mu=0.3,
     )
 
@@ -265,90 +267,211 @@ def _kinematics(eta: np.ndarray, nu: np.ndarray, R_nb: np.ndarray) -> np.ndarray
     return out
 
 
+FRICTION_SLIP_MPS = 0.005
+"""Sliding speed at which friction reaches 76 % (tanh 1) of mu N: a smooth Coulomb law."""
+
+# kinds of post contact (see post_penetration)
+POST_FREE, POST_WALL, POST_PLATE, POST_SIDE = 0, 1, 2, 3
+
+
 @njit(**JIT)
-def contact_state(x: np.ndarray, env: np.ndarray, P: PlantArrays) -> tuple[int, float, float]:
-    """Where the tree's bottom is against the docking frame: (code, penetration [m], largest
-    funnel miss [m]). GUIDED: every funnel is within the capture tolerance of its post and the
-    bottom is below the post tops (the posts steer it); ON_POSTS: a funnel is off its post but
-    over it and the bottom reached the post tops; LANDED: the bottom reached the landing
-    surface (or the seabed away from the posts)."""
-    if env[E_LAND] <= 0.0:
-        return CONTACT_NONE, 0.0, 0.0
-    bottom = x[2] + P.tree_half_height
-    post_top = env[E_LAND] - P.dock_post_height
-    c, s = np.cos(x[5]), np.sin(x[5])
+def post_penetration(q: np.ndarray, P: PlantArrays) -> tuple[int, float, np.ndarray]:
+    """How far one post's top is into the tree: (kind, penetration [m], gradient).
+
+    ``q`` is the post's top from the tree's centre, in level axes turned to the tree's heading
+    (x fore, y starboard, z down); the tree is taken level (roll and pitch are fractions of a
+    degree on the wire), so the post stands along the tree's vertical. Its tip is
+    ``e = H/2 - q_z`` above the tree's bottom plane. With the post's axis under a funnel's
+    mouth, the post meets the funnel's wall: a cone from the mouth radius at the bottom
+    narrowing to the bore radius ``cone height`` higher, then the bore; penetration
+    ``rho + r_post - R(e)`` (rho: the post's axis from the funnel's centre). Where the post's
+    top also overlaps the bottom plate around the mouth, the nearer of the wall and the plate
+    (penetration ``e``) takes it. Away from the mouths and under the tree's footprint, the post
+    pushes up on the bottom; anywhere under the footprint, out through the nearest side when
+    that is nearer still (a post beside a tree that came down next to it). Choosing the
+    nearer surface keeps the penetration continuous (the cone is no flatter than 45 deg, so
+    wall and plate agree at the lip), so the contact energy ``0.5 k p^2`` has no jumps.
+
+    The gradient is d(penetration)/dq: the force of the post on the tree is ``N * gradient``
+    (level axes turned to the tree's heading) at the post's top, ``N`` the normal force."""
+    grad = np.zeros(3)
+    e = P.tree_half_height - q[2]
+    if e <= 0.0:
+        return POST_FREE, 0.0, grad
+    # nearest funnel
+    best, dx, dy = 1e300, 0.0, 0.0
+    for j in range(P.dock_xy.shape[0]):
+        ddx = q[0] - P.dock_xy[j, 0]
+        ddy = q[1] - P.dock_xy[j, 1]
+        r2 = ddx * ddx + ddy * ddy
+        if r2 < best:
+            best, dx, dy = r2, ddx, ddy
+    rho = np.sqrt(best)
+    rp = P.dock_post_radius
+    slope = (P.dock_mouth_radius - P.dock_bore_radius) / P.dock_cone_height
+    if e < P.dock_cone_height:
+        radius, d_radius_de = P.dock_mouth_radius - slope * e, -slope
+    else:
+        radius, d_radius_de = P.dock_bore_radius, 0.0
+    p_wall = rho + rp - radius
+    ux, uy = (dx / rho, dy / rho) if rho > 1e-12 else (1.0, 0.0)
+    half_l, half_w = 0.5 * P.tree_footprint[0] + rp, 0.5 * P.tree_footprint[1] + rp
+    under = abs(q[0]) < half_l and abs(q[1]) < half_w
+    if rho < P.dock_mouth_radius:
+        # under the mouth: free in the funnel, or against its wall, or against the plate if
+        # the post's top reaches past the lip
+        if p_wall <= 0.0:
+            return POST_FREE, 0.0, grad
+        p, kind = p_wall, POST_WALL
+        if rho + rp > P.dock_mouth_radius and e < p:
+            p, kind = e, POST_PLATE
+    elif under:
+        # under the bottom plate: up through the bottom or into the funnel's lip
+        p, kind = e, POST_PLATE
+        if p_wall < p:
+            p, kind = p_wall, POST_WALL
+    else:
+        return POST_FREE, 0.0, grad
+    # or out through the nearest side, if that is nearer (a post beside a tree that came down
+    # next to it); taken under the mouth too, so nothing jumps where the mouth meets a side
+    side_x = half_l - abs(q[0])
+    side_y = half_w - abs(q[1])
+    if under and side_x < p:
+        p, kind = side_x, POST_SIDE
+    if under and side_y < p:
+        p, kind = side_y, POST_SIDE
+    if kind == POST_PLATE:
+        grad[2] = -1.0
+    elif kind == POST_WALL:
+        grad[0], grad[1] = ux, uy
+        grad[2] = d_radius_de  # de/dq_z = -1 and dp/de = -dR/de
+    elif p == side_x:
+        grad[0] = -1.0 if q[0] > 0.0 else 1.0
+    else:
+        grad[1] = -1.0 if q[1] > 0.0 else 1.0
+    return kind, p, grad
+
+
+@njit(**JIT)
+def _post_top(x: np.ndarray, env: np.ndarray, P: PlantArrays, i: int) -> np.ndarray:
+    """Post i's top from the tree's centre: north and east turned into the tree's heading
+    (x fore, y starboard, level), and down."""
     cf, sf = np.cos(env[E_FRAME_PSI]), np.sin(env[E_FRAME_PSI])
-    worst = 0.0
-    nearest = 1e9
-    for i in range(P.dock_xy.shape[0]):
-        fx = x[0] + c * P.dock_xy[i, 0] - s * P.dock_xy[i, 1]
-        fy = x[1] + s * P.dock_xy[i, 0] + c * P.dock_xy[i, 1]
-        px = env[E_FRAME] + cf * P.dock_xy[i, 0] - sf * P.dock_xy[i, 1]
-        py = env[E_FRAME + 1] + sf * P.dock_xy[i, 0] + cf * P.dock_xy[i, 1]
-        d = np.sqrt((fx - px) ** 2 + (fy - py) ** 2)
-        worst = max(worst, d)
-        nearest = min(nearest, d)
-    if bottom <= post_top:
-        return CONTACT_NONE, 0.0, worst
-    # captured: within the tolerance at the post tops, or already deeper in the funnels than a
-    # tree standing on the post tops ever sinks (three times its static contact penetration,
-    # 0.02 of its height): a state reachable only through the funnels, so no memory is needed
-    deep = bottom - post_top > 0.06 * 2.0 * P.tree_half_height
-    if worst <= P.dock_tolerance or (deep and worst <= P.dock_skirt):
-        pen = bottom - env[E_LAND]
-        return (CONTACT_LANDED if pen > 0.0 else CONTACT_GUIDED), pen, worst
-    if nearest <= P.dock_skirt:
-        return CONTACT_ON_POSTS, bottom - post_top, worst
-    pen = bottom - env[E_LAND]
-    return (CONTACT_LANDED if pen > 0.0 else CONTACT_NONE), pen, worst
+    dn = env[E_FRAME] + cf * P.dock_xy[i, 0] - sf * P.dock_xy[i, 1] - x[0]
+    de = env[E_FRAME + 1] + sf * P.dock_xy[i, 0] + cf * P.dock_xy[i, 1] - x[1]
+    c, s = np.cos(x[5]), np.sin(x[5])
+    q = np.empty(3)
+    q[0] = c * dn + s * de
+    q[1] = -s * dn + c * de
+    q[2] = env[E_LAND] - P.dock_post_height - x[2]
+    return q
 
 
 @njit(**JIT)
-def contact_force_n(x: np.ndarray, env: np.ndarray, P: PlantArrays) -> np.ndarray:
-    """Force (NED, 0:3) and moment (NED axes, about the centre, 3:6) of the frame on the tree:
-    a stiff, damped support under the bottom with smooth Coulomb friction on it, and, while the
-    funnels ride down the posts, a guidance spring pulling each funnel onto its post."""
+def _corner_body(P: PlantArrays, j: int) -> np.ndarray:
+    c = np.empty(3)
+    c[0] = 0.5 * P.tree_footprint[0] * (1.0 if j % 2 == 0 else -1.0)
+    c[1] = 0.5 * P.tree_footprint[1] * (1.0 if j < 2 else -1.0)
+    c[2] = P.tree_half_height
+    return c
+
+
+@njit(**JIT)
+def _friction(v: np.ndarray, normal: float, mu: float) -> tuple[float, float]:
+    """Smooth Coulomb friction against the sliding velocity (v[0], v[1]): never adds energy."""
+    speed = np.sqrt(v[0] * v[0] + v[1] * v[1])
+    if speed < 1e-12:
+        return 0.0, 0.0
+    scale = mu * normal * np.tanh(speed / FRICTION_SLIP_MPS) / speed
+    return -scale * v[0], -scale * v[1]
+
+
+@njit(**JIT)
+def contact_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarray) -> np.ndarray:
+    """Force (0:3) and moment about the centre (3:6) of the frame and the seabed on the tree,
+    tree body axes.
+
+    Seabed and landing surface: a penalty spring with damping under each corner of the tree's
+    bottom, with smooth Coulomb friction at the corner's sliding speed. Posts: the penetration
+    of ``post_penetration`` against a spring with damping along its gradient (the normal force
+    never pulls), friction where a post's top carries the bottom plate. Springs store what
+    they take (``contact_energy``); damping and friction only remove energy (the normal force
+    is clipped at zero only while the penetration shrinks, which removes energy too)."""
     out = np.zeros(6)
-    code, pen, worst = contact_state(x, env, P)
-    if code == CONTACT_NONE:
+    if env[E_LAND] <= 0.0:
         return out
-    R = Rzyx(x[3], x[4], x[5])
-    v_n = mv(R, x[6:9])
-    captured = worst <= P.dock_skirt  # guided or landed inside the funnels
-    if captured and (code == CONTACT_GUIDED or code == CONTACT_LANDED):
-        c, s = np.cos(x[5]), np.sin(x[5])
-        cf, sf = np.cos(env[E_FRAME_PSI]), np.sin(env[E_FRAME_PSI])
-        for i in range(P.dock_xy.shape[0]):
-            ax_, ay = (
-                c * P.dock_xy[i, 0] - s * P.dock_xy[i, 1],
-                s * P.dock_xy[i, 0] + c * P.dock_xy[i, 1],
-            )
-            px = env[E_FRAME] + cf * P.dock_xy[i, 0] - sf * P.dock_xy[i, 1]
-            py = env[E_FRAME + 1] + sf * P.dock_xy[i, 0] + cf * P.dock_xy[i, 1]
-            vfx = v_n[0] - x[11] * ay
-            vfy = v_n[1] + x[11] * ax_
-            fx = -P.guide_k * (x[0] + ax_ - px) - P.guide_c * vfx
-            fy = -P.guide_k * (x[1] + ay - py) - P.guide_c * vfy
-            out[0] += fx
-            out[1] += fy
-            out[5] += ax_ * fy - ay * fx
-    if pen > 0.0:
-        normal = P.contact_k * pen + P.contact_c * v_n[2]
-        if normal > 0.0:
-            out[2] -= normal
-            speed = np.sqrt(v_n[0] ** 2 + v_n[1] ** 2)
-            scale = P.friction_mu * normal * np.tanh(speed / 0.005) / max(speed, 1e-9)
-            out[0] -= scale * v_n[0]
-            out[1] -= scale * v_n[1]
-            r_turn = np.tanh(x[11] / 0.002)
-            out[5] -= P.friction_mu * normal * 0.5 * P.tree_half_height * r_turn
-            # a flat bottom on a flat support resists roll and pitch: the support's stiffness
-            # spread over the footprint gives k W^2 / 12 (roll) and k L^2 / 12 (pitch)
-            roll_k = P.tree_footprint[1] ** 2 / 12.0
-            pitch_k = P.tree_footprint[0] ** 2 / 12.0
-            out[3] -= roll_k * (P.contact_k * x[3] + P.contact_c * x[9])
-            out[4] -= pitch_k * (P.contact_k * x[4] + P.contact_c * x[10])
+    nu = x[6:12]
+    w = nu[3:6]
+    k4, c4 = 0.25 * P.contact_k, 0.25 * P.contact_c
+    for j in range(4):
+        r = _corner_body(P, j)
+        pen = x[2] + mv(R_t, r)[2] - env[E_LAND]
+        if pen <= 0.0:
+            continue
+        v_n = mv(R_t, nu[0:3] + cross(w, r))
+        normal = k4 * pen + c4 * v_n[2]
+        if normal <= 0.0:
+            continue
+        f_n = np.empty(3)
+        f_n[0], f_n[1] = _friction(v_n, normal, P.friction_mu)
+        f_n[2] = -normal
+        f_b = mtv(R_t, f_n)
+        out[0:3] += f_b
+        out[3:6] += cross(r, f_b)
+    # posts: their energy depends on north, east, down and heading only (the tree taken level,
+    # as in sim.docking), so they push through the centre and turn the tree about the vertical;
+    # its generalized force on the heading, as a body moment, is Q_psi * d(psi_dot)/d(omega_b)
+    v_n = mv(R_t, nu[0:3])
+    cphi, sphi, cth = np.cos(x[3]), np.sin(x[3]), np.cos(x[4])
+    psi_dot = (sphi * w[1] + cphi * w[2]) / cth
+    c, s = np.cos(x[5]), np.sin(x[5])
+    for i in range(P.dock_xy.shape[0]):
+        q = _post_top(x, env, P, i)
+        kind, pen, grad = post_penetration(q, P)
+        if kind == POST_FREE or pen <= 0.0:
+            continue
+        # the post's top as the tree sees it move; the tree slides over it at minus this
+        q_dot = np.empty(3)
+        q_dot[0] = -(c * v_n[0] + s * v_n[1]) + psi_dot * q[1]
+        q_dot[1] = -(-s * v_n[0] + c * v_n[1]) - psi_dot * q[0]
+        q_dot[2] = -v_n[2]
+        pen_rate = grad[0] * q_dot[0] + grad[1] * q_dot[1] + grad[2] * q_dot[2]
+        normal = P.post_k * pen + P.post_c * pen_rate
+        if normal <= 0.0:
+            continue
+        f = normal * grad
+        if kind == POST_PLATE:
+            # the bottom plate slides over the post's top: friction in the plate's plane
+            fx, fy = _friction(-q_dot, normal, P.friction_mu)
+            f[0] += fx
+            f[1] += fy
+        f_n = np.empty(3)
+        f_n[0] = c * f[0] - s * f[1]
+        f_n[1] = s * f[0] + c * f[1]
+        f_n[2] = f[2]
+        out[0:3] += mtv(R_t, f_n)
+        m_psi = q[0] * f[1] - q[1] * f[0]
+        out[4] += m_psi * sphi / cth
+        out[5] += m_psi * cphi / cth
     return out
+
+
+@njit(**JIT)
+def contact_energy(x: np.ndarray, env: np.ndarray, P: PlantArrays) -> float:
+    """Energy stored in the contact springs [J] (what ``contact_wrench`` would give back)."""
+    if env[E_LAND] <= 0.0:
+        return 0.0
+    R_t = Rzyx(x[3], x[4], x[5])
+    energy = 0.0
+    for j in range(4):
+        pen = x[2] + mv(R_t, _corner_body(P, j))[2] - env[E_LAND]
+        if pen > 0.0:
+            energy += 0.5 * 0.25 * P.contact_k * pen * pen
+    for i in range(P.dock_xy.shape[0]):
+        kind, pen, _ = post_penetration(_post_top(x, env, P, i), P)
+        if kind != POST_FREE and pen > 0.0:
+            energy += 0.5 * P.post_k * pen * pen
+    return energy
 
 
 @njit(**JIT)
@@ -365,12 +488,7 @@ def tree_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarray)
     tau[0:3] += f_wire_b
     tau[3:6] += cross(P.tree_r_att, f_wire_b)
     if env[E_LAND] > 0.0:
-        contact = contact_force_n(x, env, P)
-        # the support acts at the bottom: its horizontal friction also tilts the tree
-        f_b = mtv(R_t, contact[0:3])
-        tau[0:3] += f_b
-        bottom = np.array([0.0, 0.0, P.tree_half_height])
-        tau[3:6] += cross(bottom, f_b) + mtv(R_t, contact[3:6])
+        tau += contact_wrench(x, env, P, R_t)
     return tau
 
 

@@ -3,151 +3,35 @@ the page loads, the camera presets show the scene (screenshots go to docs/screen
 gain set in the panel reaches the controller, a mission built and started in the panel moves
 the tree, and a session recorded in the panel is replayed in the same view.
 
-One server and one browser for the module (start-up costs seconds); each test leaves the
-console running live.
+One server and one browser for the module (fixtures in ``tests/browser.py``; start-up costs
+seconds); each test leaves the console running live.
 """
 
 from __future__ import annotations
 
 import io
 import time
-from collections.abc import Callable, Iterator
-from pathlib import Path
 
 import httpx
 import numpy as np
-import pytest
 from PIL import Image
 
-from app.console import ConsoleSettings
-from app.server import RunningServer, serve_in_thread
-
-CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
-SCREENSHOTS = Path(__file__).resolve().parents[1] / "docs" / "screenshots"
-
-pytestmark = pytest.mark.skipif(not CHROMIUM.exists(), reason="Debian's chromium is missing")
-playwright_api = pytest.importorskip("playwright.sync_api")
+from app.server import RunningServer
+from tests.browser import (
+    _dismiss_notifications,
+    button,
+    choose,
+    click,
+    field,
+    image,
+    save,
+    scene_part,
+    tab,
+    unlock,
+    wait_for,
+)
 
 
-@pytest.fixture(scope="module")
-def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningServer]:
-    settings = ConsoleSettings(
-        port=0, viser_port=0, recordings_dir=tmp_path_factory.mktemp("recordings")
-    )
-    with serve_in_thread(settings) as srv:
-        yield srv
-
-
-@pytest.fixture(scope="module")
-def page(server: RunningServer, tmp_path_factory: pytest.TempPathFactory):
-    with playwright_api.sync_playwright() as pw:
-        context = pw.chromium.launch_persistent_context(
-            str(tmp_path_factory.mktemp("chromium-profile")),
-            executable_path=str(CHROMIUM),
-            args=CHROMIUM_ARGS,
-            headless=True,
-            viewport={"width": 1400, "height": 900},
-        )
-        try:
-            pg = context.new_page()
-            pg.goto(server.view_url)
-            pg.get_by_text("Unlock controls").wait_for(timeout=60_000)
-            time.sleep(1.0)
-            _dismiss_notifications(pg)
-            yield pg
-        finally:
-            context.close()
-
-
-@pytest.fixture(scope="module")
-def api(server: RunningServer) -> Iterator[httpx.Client]:
-    with httpx.Client(base_url=server.base_url, headers=server.auth, timeout=30.0) as client:
-        yield client
-
-
-# ---------------------------------------------------------------------- helpers
-def _dismiss_notifications(pg) -> None:
-    """Close viser's 'software WebGL' notice so it does not cover the scene."""
-    time.sleep(1.0)
-    for button in pg.locator(".mantine-Notification-root button").all():
-        try:
-            button.click(timeout=1000)
-        except Exception:
-            pass
-
-
-def field(pg, label: str):
-    """The text/number input of a viser control, found by its label."""
-    inputs = "*[self::input[not(@type='hidden')] or self::select or self::textarea]"
-    return pg.locator(
-        f"xpath=//label[normalize-space(.)='{label}']/ancestor::div[.//{inputs}][1]//{inputs}"
-    ).first
-
-
-def choose(pg, label: str, option: str) -> None:
-    """Pick an option of a viser dropdown (a combobox with a list of options)."""
-    field(pg, label).click()
-    pg.locator(f"xpath=//*[@role='option'][normalize-space(.)='{option}']").filter(
-        visible=True
-    ).first.click()
-
-
-def button(pg, name: str):
-    """A button by its text (XPath: role queries are slow on viser's large page)."""
-    return pg.locator(f"xpath=//button[normalize-space(.)='{name}']").first
-
-
-def click(pg, name: str) -> None:
-    button(pg, name).click()
-
-
-def tab(pg, name: str) -> None:
-    pg.locator(f"xpath=//*[@role='tab'][normalize-space(.)='{name}']").first.click()
-
-
-def unlock(pg, token: str) -> None:
-    field(pg, "Token").fill(token)
-    click(pg, "Unlock controls")
-    pg.get_by_text("controls unlocked").wait_for(timeout=10_000)
-
-
-def wait_for(predicate: Callable[[], bool], timeout_s: float, what: str) -> None:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(0.1)
-    raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
-
-
-def image(pg) -> np.ndarray:
-    """The page as an RGB array."""
-    return np.asarray(Image.open(io.BytesIO(pg.screenshot())).convert("RGB"), dtype=float)
-
-
-def scene_part(img: np.ndarray) -> np.ndarray:
-    """The 3D view without the control panel on the right."""
-    return img[:, : int(0.6 * img.shape[1])]
-
-
-def save(img_bytes: bytes, name: str) -> Path:
-    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
-    path = SCREENSHOTS / name
-    path.write_bytes(img_bytes)
-    return path
-
-
-# ---------------------------------------------------------------------- tests
 def test_page_loads_with_live_state_and_locked_controls(page, server: RunningServer) -> None:
     page.get_by_text("ROV console").first.wait_for()
     page.get_by_text("live").first.wait_for()
@@ -162,17 +46,17 @@ def test_page_loads_with_live_state_and_locked_controls(page, server: RunningSer
 
 def test_camera_presets_show_different_views_and_are_saved(page) -> None:
     shots = {}
-    for button, name in (
+    for preset, name in (
         ("Overview", "console-overview.png"),
         ("Top-down", "console-top-down.png"),
         ("ROV camera", "console-rov-camera.png"),
     ):
-        click(page, button)
+        click(page, preset)
         time.sleep(2.0)
         _dismiss_notifications(page)
         data = page.screenshot()
         save(data, name)
-        shots[button] = scene_part(
+        shots[preset] = scene_part(
             np.asarray(Image.open(io.BytesIO(data)).convert("RGB"), dtype=float)
         )
     for name, img in shots.items():
@@ -192,9 +76,10 @@ def test_gain_change_in_the_panel_is_applied(
     tab(page, "Control")
     before = api.get("/api/gains").json()
     target = before["kp"][0] * 1.5
-    box = field(page, "kp surge")
-    box.fill(f"{target:g}")
-    box.press("Enter")
+    kp = ", ".join(f"{v:g}" for v in [target, *before["kp"][1:]])
+    field(page, "kp [surge, sway, yaw]").fill(kp)
+    time.sleep(0.2)  # viser sends an input's value at most every 50 ms
+    click(page, "Apply gains")
     wait_for(
         lambda: abs(api.get("/api/gains").json()["kp"][0] - target) < 1e-6,
         10.0,
@@ -214,8 +99,8 @@ def test_mission_built_in_the_panel_moves_the_tree(
     tab(page, "Mission")
     choose(page, "Set-up from", "full-square-400")
     choose(page, "Leg type", "move")
-    field(page, "north_m").fill("3")
-    field(page, "settle_s").fill("2")
+    field(page, "North [m]").fill("3")
+    field(page, "Settle [s]").fill("2")
     click(page, "Add leg")
     page.get_by_text("added move leg").wait_for(timeout=5000)
     click(page, "Validate")
@@ -227,7 +112,7 @@ def test_mission_built_in_the_panel_moves_the_tree(
         "the built mission to start",
     )
     start = api.get("/api/state").json()["tree_eta_n"]["north_m"]
-    tab(page, "Plots")
+    tab(page, "Run")
     time.sleep(1.5)
     _dismiss_notifications(page)
     before = scene_part(image(page))
@@ -265,7 +150,11 @@ def test_recording_from_the_panel_is_written_and_replayed(
         10.0,
         "the recording to start",
     )
-    time.sleep(2.0)
+    time.sleep(1.0)
+    # an event while recording: a gain change (a mark on the replay's scrub bar)
+    gains = api.get("/api/gains").json()
+    api.put("/api/gains", json={k: gains[k] for k in ("kp", "ki", "kd")}).raise_for_status()
+    time.sleep(1.0)
     click(page, "Stop recording")
     wait_for(
         lambda: api.get("/api/state").json()["recording"] is None, 10.0, "the recording to stop"
@@ -279,6 +168,8 @@ def test_recording_from_the_panel_is_written_and_replayed(
     wait_for(lambda: api.get("/api/state").json()["source"] == "replay", 20.0, "replay mode")
     replay = api.get("/api/replay").json()["replay"]
     assert replay["end_s"] - replay["start_s"] > 5.0
+    assert replay["marks"], "the gain change is marked on the scrub bar"
+    page.locator(".mantine-Slider-mark").first.wait_for(timeout=5000)
     click(page, "Play replay")
     t0 = api.get("/api/state").json()["t_s"]
     wait_for(lambda: api.get("/api/state").json()["t_s"] > t0 + 1.0, 15.0, "the replay to play")

@@ -177,3 +177,65 @@ def test_published_snapshots_cannot_be_changed_by_readers(tmp_path: Path) -> Non
         snap.trend[0, 0] = 1.0
     with pytest.raises(AttributeError):
         snap.t_s = 0.0  # type: ignore[misc]
+
+
+def test_operations_log_names_who_did_what_and_goes_into_the_recording(tmp_path: Path) -> None:
+    """Who paused, who set a gain the console refused: in the snapshot every viewer reads and
+    in the recording's events (a review can tell whose pause stopped the run)."""
+    from app.recording import load_session
+
+    async def scenario() -> str:
+        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
+        console = PacedLoop(eng)
+        task = asyncio.create_task(console.run())
+        name = (await console.call(cmd.StartRecording("ops")))["name"]
+        await asyncio.to_thread(console.call_blocking, cmd.Pause(), 10.0, "viewer 2 (Anna)")
+        too_big = Gains((99999.0, 2000.0, 2000.0), (175.0, 175.0, 75.0), (8e3, 8e3, 38500.0))
+        with pytest.raises(ValueError, match=r"gain kp surge must be in \[0, 8000\]"):
+            await console.call(cmd.SetGains(too_big))
+        await console.call(cmd.Resume())
+        await asyncio.sleep(0.1)
+        ops = console.snapshot.operations
+        assert [(op.who, op.action, op.outcome[:7]) for op in ops[-3:]] == [
+            ("viewer 2 (Anna)", "pause", "done"),
+            ("console", ops[-2].action, "refused"),
+            ("console", "resume", "done"),
+        ]
+        assert "99999" in ops[-2].action and "8000]" in ops[-2].outcome
+        await console.call(cmd.StopRecording())
+        console.stop()
+        await task
+        return name
+
+    name = asyncio.run(scenario())
+    data = load_session(tmp_path / name)
+    operations = [e for e in data.events if e.get("kind") == "operation"]
+    assert any(
+        e["data"]["who"] == "viewer 2 (Anna)" and e["data"]["action"] == "pause" for e in operations
+    ), operations
+
+
+def test_a_run_started_while_recording_goes_on_in_the_same_file(tmp_path: Path) -> None:
+    """Defect: starting a mission while recording split the recording in two files. Same
+    parameter set: one file, its time going on past the first run, the new run marked; another
+    parameter set (another log layout): a second file, and a notice that says so."""
+    from app.recording import load_session
+
+    eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
+    name = eng.start_recording("split")
+    eng.advance(150)
+    eng.replace_run(prepare_run(schema.parse_mission(MOVE), True))
+    eng.advance(120)
+    assert eng.recording_name == name
+    eng.replace_run(prepare_run(station_keeping_mission("model-scale", 10.0), False))
+    other = eng.recording_name
+    assert other != name and any("parameter set" in n for n in eng.notices)
+    eng.advance(10)
+    eng.stop_recording()
+    data = load_session(tmp_path / name)
+    t = np.asarray(data.rows)[:, 0]
+    assert np.all(np.diff(t) > 0), "one file, time going on"
+    assert t[-1] == pytest.approx(2.70, abs=1e-9), "150 + 120 steps (recorded at 20 Hz)"
+    runs = [e for e in data.events if e.get("kind") == "run"]
+    assert len(runs) == 1 and runs[0]["t_s"] == pytest.approx(1.51, abs=1e-9)
+    assert "loop-test" in runs[0]["text"]

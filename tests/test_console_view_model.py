@@ -86,10 +86,130 @@ def test_camera_presets_look_at_the_job() -> None:
     top = geo.top_down_camera(np.array([1.0, 1.0]), 405.0, tree, 3.6)
     np.testing.assert_allclose(top.position_n[:2], [1.0, 1.0])
     assert top.position_n[2] < tree[2] - 3.6
-    rov = np.array([-1.0, 1.0, 400.0, 0.0, 0.0, 0.0])
-    cam = geo.rov_camera(rov, np.array([2.0, 1.2, 1.2]), tree, 2.8)
-    assert cam.position_n[2] < rov[2] and cam.position_n[0] < rov[0]
-    assert np.linalg.norm(cam.look_at_n[:2] - tree[:2]) < 1e-9
+
+
+def test_overview_keeps_tree_and_frame_in_its_field_of_view() -> None:
+    """Both the tree and the frame's centre lie inside the overview's cone (half angle 25 deg)
+    with a margin, whether they are together or 18 m (five tree lengths) apart."""
+    frame = np.array([1.0, 1.0, 404.3])
+    for north in (1.0, 19.0, -30.0):
+        tree = np.array([north, 1.0, 400.0, 0.0, 0.0, 0.0])
+        cam = geo.overview_camera(tree, 3.6, frame)
+        axis = (cam.look_at_n - cam.position_n) / np.linalg.norm(cam.look_at_n - cam.position_n)
+        for point in (tree[:3], frame):
+            ray = (point - cam.position_n) / np.linalg.norm(point - cam.position_n)
+            angle = math.degrees(math.acos(float(np.clip(ray @ axis, -1.0, 1.0))))
+            assert angle < 0.8 * 25.0, (north, angle)
+        # the distance grows with the separation: half of it plus two tree sizes over sin 25
+        radius = 0.5 * np.linalg.norm(frame - tree[:3]) + 2.0 * 3.6
+        expected = max(radius / math.sin(math.radians(25.0)), 4.0 * 3.6)
+        assert np.linalg.norm(cam.look_at_n - cam.position_n) == pytest.approx(expected)
+    # it moves with the tree: a small move of the tree is a small move of the camera
+    a = geo.overview_camera(np.array([5.0, 1.0, 400.0, 0, 0, 0]), 3.6, frame)
+    b = geo.overview_camera(np.array([5.01, 1.0, 400.0, 0, 0, 0]), 3.6, frame)
+    assert np.linalg.norm(a.position_n - b.position_n) < 0.05
+
+
+def test_rov_camera_sits_ahead_of_the_bow_and_keeps_the_rov_out_of_view() -> None:
+    """Lens ahead of the ROV's bow, under the tree's bottom; every corner ray of the frustum
+    (60 deg vertical, up to 2.1:1 wide) points forward, so the ROV (all behind the lens)
+    cannot be seen, whatever the posts' places."""
+    size = np.array([2.18, 1.36, 1.23])
+    tree = np.array([1.0, 1.0, 400.0, 0.0, 0.0, 0.0])
+    rng = np.random.default_rng(3)
+    tan_v = math.tan(math.radians(30.0))
+    for psi in (0.0, 0.7, -2.5, 3.1):
+        rov = np.array([1.0 - 2.0 * math.cos(psi), 1.0 - 2.0 * math.sin(psi), 400.0, 0, 0, psi])
+        forward = np.array([math.cos(psi), math.sin(psi), 0.0])
+        for _ in range(20):
+            tops = np.column_stack([rng.uniform(-6, 8, (2, 2)), rng.uniform(400.5, 420.0, 2)])
+            cam = geo.rov_camera(rov, size, tree, 2.808, tops)
+            assert (cam.position_n - rov[:3]) @ forward == pytest.approx(0.5 * size[0] + 0.05)
+            assert cam.position_n[2] > tree[2] + 0.5 * 2.808, "below the tree's bottom"
+            axis = cam.look_at_n - cam.position_n
+            look = axis / np.linalg.norm(axis)
+            right = np.cross(np.array([0.0, 0.0, -1.0]), look)
+            right /= np.linalg.norm(right)
+            down = np.cross(look, right)
+            down *= np.sign(down[2])
+            for sv in (-1.0, 1.0):
+                for sh in (-1.0, 1.0):
+                    corner = look + sv * tan_v * down + sh * 2.1 * tan_v * right
+                    assert corner @ forward > 0.0
+    # a post ahead within the turn and tilt limits: the camera looks straight at its top
+    rov = np.array([-1.0, 1.5, 400.0, 0.0, 0.0, 0.0])  # that top 20 deg down, 10 deg to starboard
+    tops = np.array([[2.4, 1.9, 402.8], [-0.4, 0.1, 402.8]])
+    cam = geo.rov_camera(rov, size, tree, 2.808, tops)
+    look = cam.look_at_n - cam.position_n
+    to_top = tops[0] - cam.position_n
+    np.testing.assert_allclose(look / np.linalg.norm(look), to_top / np.linalg.norm(to_top))
+
+
+def test_follow_rov_camera_is_behind_and_above_along_the_heading() -> None:
+    rov = np.array([3.0, -2.0, 400.0, 0.0, 0.0, math.radians(90.0)])
+    cam = geo.follow_rov_camera(rov, np.array([2.0, 1.2, 1.2]), 3.6)
+    assert cam.position_n[1] < rov[1] - 2.0 and abs(cam.position_n[0] - rov[0]) < 1e-9
+    assert cam.position_n[2] < rov[2] - 1.0
+    assert cam.look_at_n[1] > rov[1]
+
+
+@pytest.mark.parametrize(
+    ("tree_psi_deg", "frame_psi_deg", "error_deg"),
+    [
+        (10.0, 0.0, 10.0),
+        (179.0, -179.0, -2.0),
+        (-179.0, 179.0, 2.0),
+        (90.0, 270.0, -180.0),
+        (0.0, 360.0, 0.0),
+        (-170.0, 30.0, 160.0),
+    ],
+)
+def test_readout_heading_error_wraps_to_plus_minus_180(
+    tree_psi_deg: float, frame_psi_deg: float, error_deg: float
+) -> None:
+    tree = np.array([0.0, 0.0, 100.0, 0.0, 0.0, math.radians(tree_psi_deg)])
+    r = geo.pilot_readout(tree, 2.8, np.zeros(2), math.radians(frame_psi_deg), 102.0, None)
+    assert math.degrees(r.heading_error_rad) == pytest.approx(error_deg, abs=1e-9)
+
+
+def test_readout_height_distance_and_text() -> None:
+    """Tree centre at 99.8 m, 2.8 m tall: bottom at 101.2 m; post tops at 102.5 m: 1.3 m above.
+    Centre 3 m north and 4 m east of the frame's centre: 5 m away (3-4-5)."""
+    tree = np.array([4.0, 5.0, 99.8, 0.0, 0.0, math.radians(3.0)])
+    r = geo.pilot_readout(tree, 2.8, np.array([1.0, 1.0]), 0.0, 102.5, 306_800.0)
+    assert r.height_above_posts_m == pytest.approx(1.3)
+    assert r.distance_to_frame_m == pytest.approx(5.0)
+    assert geo.readout_markdown(r) == (
+        "above posts 1.30 m | to frame 5.00 m | heading error +3.0 deg | wire 306.8 kN"
+    )
+    assert geo.readout_markdown(
+        geo.pilot_readout(tree, 2.8, np.array([1.0, 1.0]), 0.0, 100.0, None)
+    ).startswith("above posts -1.20 m")
+    no_tension = geo.pilot_readout(tree, 2.8, np.array([1.0, 1.0]), 0.0, 102.5, None)
+    assert geo.readout_markdown(no_tension).endswith("wire -")
+
+
+def test_current_arrow_has_a_readable_minimum_and_a_label() -> None:
+    still = geo.current_arrow(0.0, 1.0, 3.6)
+    assert (still.length_m, still.label) == (0.0, "no current")
+    slow = geo.current_arrow(0.1, math.radians(225.0), 3.6)
+    assert slow.label == "current 0.10 m/s towards 225 deg"
+    assert slow.length_m == pytest.approx(3.6 * (1.0 + 4.0 * 0.1))
+    assert slow.length_m >= 3.6, "at least a tree size long"
+    west = geo.current_arrow(0.33, math.radians(-90.0), 3.6)
+    assert west.label == "current 0.33 m/s towards 270 deg" and west.length_m > slow.length_m
+    center = np.array([1.0, 1.0, 404.0])
+    tail, head = geo.current_arrow_ends_n(center, 5.0, math.radians(225.0), slow.length_m)
+    along = (head - tail) / np.linalg.norm(head - tail)
+    np.testing.assert_allclose(along, [-math.sqrt(0.5), -math.sqrt(0.5), 0.0], atol=1e-12)
+    middle = 0.5 * (tail + head)
+    assert np.linalg.norm(middle - center) == pytest.approx(5.0)
+    assert (middle - center) @ along == pytest.approx(0.0, abs=1e-12), "beside, not in line"
+
+
+@pytest.mark.parametrize(("size", "bar"), [(3.6, 2.0), (0.9, 0.5), (12.0, 10.0), (5.0, 5.0)])
+def test_scale_bar_is_a_round_length_within_the_tree_size(size: float, bar: float) -> None:
+    assert geo.scale_bar_length_m(size) == pytest.approx(bar)
 
 
 # ---------------------------------------------------------------------- mission builder
@@ -202,3 +322,55 @@ def test_position_slack_innovation_and_dropout_alarms() -> None:
     e.update(rows(t + 4.0), 300e3)
     assert {"dropout"} <= active(e) and "innovation" not in active(e)
     assert any("dvl" in a.message or "position" in a.message for a in e.state if a.active)
+
+
+def test_a_tree_resting_on_the_frame_is_not_a_slack_wire() -> None:
+    """Defect: the slack alarm went red after a good landing. The frame's post tops are at
+    99 m; a tree 2 m high (bottom 1 m below its centre) resting there has a slack wire."""
+    limits = AlarmLimits(position_error_m=0.25, sample_period_s=(1.0,) * 5)
+    m = AlarmMonitor(
+        limits, 4, 300e3, uses_sensors=False, support_depth_m=99.0, tree_half_height_m=1.0
+    )
+    hanging = rows(np.array([0.01]))
+    hanging["tree_eta_n"][:, 2] = 97.5  # bottom 0.5 m above the post tops
+    m.update(hanging, 10e3)
+    assert active(m) == {"wire_slack"}, "a slack wire under a hanging tree is an alarm"
+    landed = rows(np.array([0.02]))
+    landed["tree_eta_n"][:, 2] = 98.02  # bottom 0.02 m into the contact
+    m.update(landed, 0.0)
+    assert active(m) == set()
+
+
+def test_free_mode_position_alarm_compares_the_rov_with_its_set_point() -> None:
+    """Defect: in free mode the alarm still compared the (released) tree with the tree's
+    reference. Now the ROV against its free-flying set point, with the same 0.25 m limit."""
+    m = monitor()
+    free = rows(np.array([0.01]), err_m=5.0)  # the tree is 5 m off its old reference
+    free["mode"][:] = 1.0
+    free["rov_eta_n"][:, 0:2] = (10.0, 2.0)
+    m.update(free, 300e3, free_setpoint_n=np.array([10.1, 2.0, 50.0, 0.0]))
+    assert active(m) == set()
+    m.update(free, 300e3, free_setpoint_n=np.array([10.5, 2.0, 50.0, 0.0]))
+    assert active(m) == {"position_error"}
+    assert "ROV 0.50 m" in m.state[1].message and "set point" in m.state[1].message
+
+
+def test_replay_marks_name_legs_runs_and_landings_and_tick_commands_and_alarms() -> None:
+    from app.console.replay import event_marks
+
+    events = [
+        {"t_s": 1.0, "kind": "mission", "text": "leg 1 (move) started", "data": {"leg": 1}},
+        {"t_s": 2.0, "kind": "command", "text": "gains", "data": {}},
+        {"t_s": 3.0, "kind": "alarm", "text": "saturation on", "data": {"active": True}},
+        {"t_s": 4.0, "kind": "alarm", "text": "saturation off", "data": {"active": False}},
+        {"t_s": 5.0, "kind": "landing", "text": "landed", "data": {}},
+        {"t_s": 6.0, "kind": "mission", "text": "mission m completed", "data": {"state": "done"}},
+        {"t_s": 99.0, "kind": "landing", "text": "after the end", "data": {}},
+    ]
+    assert event_marks(events, 0.0, 10.0) == (
+        (1.0, "L1"),
+        (2.0, ""),
+        (3.0, ""),
+        (5.0, "landing"),
+        (6.0, "done"),
+    )

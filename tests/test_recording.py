@@ -26,8 +26,11 @@ from scipy.spatial.transform import Rotation
 from typer.testing import CliRunner
 
 from app import cli, recording
+from app.console.replay import Replay
+from app.console.snapshot import scene_info
 from app.log_cli import log_app
 from app.recording import channels, messages
+from app.recording.reader import read_scan
 from control.columns import COLUMN_NAMES, LAYOUT, N_LOG, Layout, LogRows
 from control.config import ControlSettings
 from control.simulation import Simulation
@@ -392,7 +395,7 @@ def test_metadata_holds_the_setup(session):
     }
     assert setup["recorder"]["software_version"] == recording.software_version()
     assert setup["recorder"]["numeric_rate_hz"] == NUMERIC_HZ
-    assert setup["recorder"]["format_version"] == recording.FORMAT_VERSION == 2
+    assert setup["recorder"]["format_version"] == recording.FORMAT_VERSION == 3
 
 
 def test_load_session_returns_the_decimated_rows_exactly(session):
@@ -412,6 +415,37 @@ def test_load_session_returns_the_decimated_rows_exactly(session):
     frame = recording.recorded_docking_frame(data.metadata)
     assert frame is not None and frame.center_n.tolist() == [1.5, 1.0]
     assert frame.heading_rad == math.radians(20.0) and frame.landing_depth_m == 101.0
+
+
+def test_session_log_holds_each_number_once_and_replay_rebuilds_the_rows(session):
+    """/session/log leaves out what the plot channels carry exactly; the reader and the
+    console's replay put every row back together, bit for bit."""
+    path, source = session
+    expected = source[first_in_each_slot(block(source, "t_s"), NUMERIC_HZ)]
+    scan, data = read_scan(path)
+    meta = next(c.metadata for c in scan.channels.values() if c.topic == "/session/log")
+    written, carried = json.loads(meta["columns"]), json.loads(meta["carried"])
+    assert written == channels.session_columns(5)
+    assert not set(written) & set(carried)
+    assert sorted([*written, *carried]) == sorted(recording.COLUMNS)
+    # each carried column is its plot channel's field, exactly (same value, same log time)
+    first = json.loads(scan.messages[carried["tree_north_m"][0]][0].data)
+    assert first[carried["tree_north_m"][1]] == expected[0, COLUMN_NAMES.index("tree_north_m")]
+    # the numbers stored once: whole rows were a quarter of this file's message bytes (27 % of
+    # a full-scale square run's); the columns no channel carries are 13 % of them
+    size = {t: sum(len(m.data) for m in msgs) for t, msgs in scan.messages.items()}
+    whole_rows = sum(len(messages.json_bytes(messages.session_row_message(r))) for r in expected)
+    share = size["/session/log"] / sum(size.values())
+    share_whole = whole_rows / (sum(size.values()) - size["/session/log"] + whole_rows)
+    assert share_whole > 0.24 and share < 0.15, (share, share_whole)
+    assert np.array_equal(data.rows, expected)
+    # replay shows the recorded rows in the live layout
+    ps = params.load("model-scale")
+    frame = DockingFrame(np.array([1.5, 1.0]), 0.0, 101.0)
+    replay = Replay("session.mcap", data, scene_info(ps, frame, 1), 0.01)
+    for k in (0, len(expected) // 2, len(expected) - 1):
+        replay.seek(float(expected[k, 0]))
+        assert np.array_equal(replay.row(), expected[k])
 
 
 def columns_before_control_columns() -> list[str]:

@@ -335,3 +335,32 @@ def test_held_sensor_values_are_the_rows_y():
     # the gyro's values are the present truth plus its noise
     truth = sensors.true_outputs(sim.plant_state)
     assert np.abs(rows["y"][-1, 8:11] - truth[8:11]).max() < 5 * MODEL.spec.sensors.gyro.noise_std
+
+
+def test_grip_closes_only_within_reach_of_the_mount():
+    """Defect: the ROV re-gripped the tree from 1 m and 100 deg away and the gripper spring
+    yanked the tree round 12 deg. Released, flown 1 m off (and turned), it is refused with the
+    distance and the reach; flown back onto its mount, it grips, and the tree does not jump."""
+    sim = closed_loop()
+    sim.run_for(1.0)
+    sim.set_grip(False)
+    sim.set_mode("free")
+    sim.step(1)  # the switch to free mode holds the ROV where it is (bumpless)
+    mount = sim.mount_pose_n()
+    sim.set_free_setpoint(mount[0] + 1.0, mount[1], mount[2], mount[3] + math.radians(100.0))
+    sim.run_for(30.0)
+    miss_m, miss_deg = sim.grip_miss()
+    assert miss_m > 0.5 and miss_deg > 50.0, "the ROV did fly away from its mount"
+    with pytest.raises(ValueError, match=r"gripper closes within 0\.3 m and 10 deg"):
+        sim.set_grip(True)
+    assert sim.gripping is False
+    sim.set_free_setpoint(*sim.mount_pose_n())
+    sim.run_for(40.0)
+    assert sim.grip_miss()[0] < 0.3
+    psi_before = sim.tree_eta_n[5]
+    sim.set_grip(True)
+    assert sim.gripping is True
+    sim.set_mode("tree")
+    sim.run_for(2.0)
+    # the gripper spring pulls the last few centimetres and degrees together, no more
+    assert abs(math.degrees(sim.tree_eta_n[5] - psi_before)) < 2.0

@@ -7,6 +7,7 @@ wire's attachment point come from the core (one implementation, re-exported by
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,14 +17,24 @@ from app.console import Rzyx, attachment_point_n, quaternion_wxyz_from_rpy_radia
 
 __all__ = [
     "CameraPose",
+    "CurrentArrow",
+    "PilotReadout",
+    "Rzyx",
     "attachment_point_n",
+    "current_arrow",
+    "current_arrow_ends_n",
+    "follow_rov_camera",
     "funnel_points_b",
     "loaded_wire_points_n",
     "overview_camera",
+    "pilot_readout",
     "polyline_segments",
     "quaternion_wxyz_from_rpy_radians",
+    "readout_markdown",
     "rov_camera",
+    "scale_bar_length_m",
     "top_down_camera",
+    "wrap_pi",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -81,12 +92,41 @@ class CameraPose:
 UP_N = np.array([0.0, 0.0, -1.0])
 
 
-def overview_camera(tree_eta_n: FloatArray, tree_size_m: float) -> CameraPose:
-    """Up and to the south-west of the tree, looking at it and the frame below."""
+OVERVIEW_DIRECTION_N = np.array([-1.0, -0.8, -0.9]) / np.linalg.norm([-1.0, -0.8, -0.9])
+"""From the overview's target to its camera: up and to the south-west."""
+OVERVIEW_FOV_RAD = np.radians(50.0)
+"""Vertical field of view of the overview and top-down presets."""
+ROV_CAMERA_FOV_RAD = np.radians(60.0)
+"""Vertical field of view of the ROV's camera."""
+ROV_CAMERA_PITCH_RAD = (math.radians(10.0), math.radians(35.0))
+"""Tilt range of the ROV's camera below the horizontal."""
+ROV_CAMERA_YAW_RAD = math.radians(20.0)
+"""Largest turn of the ROV's camera off the ROV's heading. With the lens ahead of the ROV's
+bow, every ray of a 60 deg (vertical) frustum up to 2.1:1 wide, tilted at most 35 deg and
+turned at most 20 deg, still points forward (the worst corner keeps cos 35 cos 20 -
+tan 30 sin 35 cos 20 - 2.1 tan 30 sin 20 = 0.04 of its length forward), so no part of the
+ROV (all behind the lens) can be in the picture."""
+
+
+def overview_camera(
+    tree_eta_n: FloatArray, tree_size_m: float, frame_point_n: FloatArray | None = None
+) -> CameraPose:
+    """Up and to the south-west, looking at the middle between the tree and the docking frame
+    (``frame_point_n``: its centre on the landing surface) from far enough that a sphere holding
+    both, two tree sizes around each (room for the north arrow and the current), fits the
+    vertical field of view. Without a frame point, at the tree. The pose moves continuously
+    with the tree, so following it each frame is smooth."""
     eta = np.asarray(tree_eta_n, float)
-    d = 4.0 * tree_size_m
-    target = eta[0:3] + np.array([0.0, 0.0, 0.5 * tree_size_m])
-    return CameraPose(target + np.array([-d, -0.8 * d, -0.9 * d]), target, UP_N)
+    tree = eta[0:3]
+    if frame_point_n is None:
+        target = tree + np.array([0.0, 0.0, 0.5 * tree_size_m])
+        radius = 1.5 * tree_size_m
+    else:
+        frame = np.asarray(frame_point_n, float)
+        target = 0.5 * (tree + frame)
+        radius = 0.5 * float(np.linalg.norm(frame - tree)) + 2.0 * tree_size_m
+    distance = max(radius / math.sin(0.5 * OVERVIEW_FOV_RAD), 4.0 * tree_size_m)
+    return CameraPose(target + distance * OVERVIEW_DIRECTION_N, target, UP_N)
 
 
 def top_down_camera(
@@ -101,17 +141,152 @@ def top_down_camera(
 
 
 def rov_camera(
-    rov_eta_n: FloatArray, rov_size_m: FloatArray, tree_eta_n: FloatArray, tree_height_m: float
+    rov_eta_n: FloatArray,
+    rov_size_m: FloatArray,
+    tree_eta_n: FloatArray,
+    tree_height_m: float,
+    post_tops_n: FloatArray,
 ) -> CameraPose:
-    """The pilot's camera: on a mast over the ROV's stern, tilted down past the tree to where
-    its funnels meet the posts (the view the pilot aligns the landing with)."""
+    """The pilot's camera: on a skid just ahead of the ROV's bow, below the tree's bottom (its
+    funnels' skirts end 0.12 tree heights below it), turned and tilted towards the post top
+    farthest ahead (``post_tops_n``: (k, 3)), so a funnel coming down over its post is in the
+    picture. Turn and tilt stay within ``ROV_CAMERA_YAW_RAD`` and ``ROV_CAMERA_PITCH_RAD``
+    so the ROV stays out of it; with no post ahead, it looks straight ahead at the least tilt.
+    The skid hangs at most one tree height below the ROV's bottom."""
     eta = np.asarray(rov_eta_n, float)
-    rot = Rzyx(*eta[3:6])
     size = np.asarray(rov_size_m, float)
-    lens_b = np.array([-0.5 * size[0], 0.0, -(0.5 * size[2] + 0.8 * tree_height_m)])
     tree = np.asarray(tree_eta_n, float)
-    look_n = tree[0:3] + np.array([0.0, 0.0, 0.6 * tree_height_m])
-    return CameraPose(eta[0:3] + rot @ lens_b, look_n, rot @ np.array([0.0, 0.0, -1.0]))
+    psi = float(eta[5])
+    forward = np.array([math.cos(psi), math.sin(psi), 0.0])
+    starboard = np.array([-math.sin(psi), math.cos(psi), 0.0])
+    below_tree = tree[2] + 0.7 * tree_height_m - eta[2]
+    drop = min(max(below_tree, 0.5 * size[2] + 0.05), 0.5 * size[2] + tree_height_m)
+    lens = eta[0:3] + (0.5 * size[0] + 0.05) * forward + np.array([0.0, 0.0, drop])
+    tops = np.asarray(post_tops_n, float).reshape(-1, 3)
+    ahead_each = (tops - lens) @ forward
+    far = int(np.argmax(ahead_each))
+    yaw, pitch = 0.0, ROV_CAMERA_PITCH_RAD[0]
+    if ahead_each[far] > 0.0:
+        to_top = tops[far] - lens
+        yaw = math.atan2(float(to_top @ starboard), float(ahead_each[far]))
+        yaw = min(max(yaw, -ROV_CAMERA_YAW_RAD), ROV_CAMERA_YAW_RAD)
+        pitch = math.atan2(float(to_top[2]), float(np.hypot(to_top[0], to_top[1])))
+        pitch = min(max(pitch, ROV_CAMERA_PITCH_RAD[0]), ROV_CAMERA_PITCH_RAD[1])
+    heading = forward * math.cos(yaw) + starboard * math.sin(yaw)
+    look = heading * math.cos(pitch) + np.array([0.0, 0.0, math.sin(pitch)])
+    return CameraPose(lens, lens + tree_height_m * look, UP_N)
+
+
+def follow_rov_camera(
+    rov_eta_n: FloatArray, rov_size_m: FloatArray, tree_size_m: float
+) -> CameraPose:
+    """Behind and above the ROV along its heading (roll and pitch ignored, so the picture does
+    not rock), looking at a point one ROV length ahead of it."""
+    eta = np.asarray(rov_eta_n, float)
+    size = np.asarray(rov_size_m, float)
+    psi = float(eta[5])
+    forward = np.array([math.cos(psi), math.sin(psi), 0.0])
+    back = 2.0 * size[0] + tree_size_m
+    up = 1.5 * size[2] + 0.6 * tree_size_m
+    look = eta[0:3] + size[0] * forward
+    return CameraPose(eta[0:3] - back * forward - np.array([0.0, 0.0, up]), look, UP_N)
+
+
+def wrap_pi(angle_rad: float) -> float:
+    """The angle in [-pi, pi)."""
+    return (float(angle_rad) + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@dataclass(frozen=True)
+class PilotReadout:
+    """What a pilot reads while landing the tree."""
+
+    height_above_posts_m: float
+    """Tree's bottom above the post tops (negative: below them) [m]."""
+    distance_to_frame_m: float
+    """Horizontal distance from the tree's centre to the frame's centre [m]."""
+    heading_error_rad: float
+    """Tree heading minus frame heading, wrapped to [-pi, pi) [rad]."""
+    wire_tension_newton: float | None
+
+
+def pilot_readout(
+    tree_eta_n: FloatArray,
+    tree_height_m: float,
+    frame_center_n: FloatArray,
+    frame_heading_rad: float,
+    post_top_depth_m: float,
+    wire_tension_newton: float | None,
+) -> PilotReadout:
+    """The readout from the tree's pose and the frame (the tree's bottom is half its height
+    below its centre, depth positive down)."""
+    eta = np.asarray(tree_eta_n, float)
+    center = np.asarray(frame_center_n, float)
+    return PilotReadout(
+        height_above_posts_m=float(post_top_depth_m - (eta[2] + 0.5 * tree_height_m)),
+        distance_to_frame_m=float(math.hypot(eta[0] - center[0], eta[1] - center[1])),
+        heading_error_rad=wrap_pi(float(eta[5]) - float(frame_heading_rad)),
+        wire_tension_newton=wire_tension_newton,
+    )
+
+
+def readout_markdown(r: PilotReadout) -> str:
+    """The readout as one markdown line (tension in kN)."""
+    tension = "-" if r.wire_tension_newton is None else f"{r.wire_tension_newton / 1000.0:.1f} kN"
+    return (
+        f"above posts {r.height_above_posts_m:.2f} m | to frame {r.distance_to_frame_m:.2f} m"
+        f" | heading error {math.degrees(r.heading_error_rad):+.1f} deg | wire {tension}"
+    )
+
+
+@dataclass(frozen=True)
+class CurrentArrow:
+    """How the current is drawn."""
+
+    length_m: float
+    """Arrow length [m]; 0 with no current."""
+    label: str
+
+
+CURRENT_ARROW_MIN_SIZES = 1.0
+"""Shortest current arrow, in tree sizes (readable at the overview's distance)."""
+CURRENT_ARROW_SIZES_PER_MPS = 4.0
+"""Arrow growth, in tree sizes per m/s."""
+
+
+def current_arrow(speed_mps: float, direction_rad: float, tree_size_m: float) -> CurrentArrow:
+    """Arrow length and label for the current: at least ``CURRENT_ARROW_MIN_SIZES`` tree sizes
+    long, growing with speed; "no current" when still (speeds under 0.5 mm/s show as 0.00)."""
+    if round(speed_mps, 2) <= 0.0:
+        return CurrentArrow(0.0, "no current")
+    deg = math.degrees(direction_rad) % 360.0
+    length = tree_size_m * (CURRENT_ARROW_MIN_SIZES + CURRENT_ARROW_SIZES_PER_MPS * speed_mps)
+    return CurrentArrow(length, f"current {speed_mps:.2f} m/s towards {deg:.0f} deg")
+
+
+def current_arrow_ends_n(
+    center_n: FloatArray, reach_m: float, direction_rad: float, length_m: float
+) -> tuple[FloatArray, FloatArray]:
+    """Tail and head of the current arrow: centred ``reach_m`` to the side of ``center_n``
+    (square to the current, on the side towards the overview camera), pointing along the
+    current. With no current (length 0), both at that point."""
+    along = np.array([math.cos(direction_rad), math.sin(direction_rad), 0.0])
+    side = np.array([-along[1], along[0], 0.0])
+    if side @ OVERVIEW_DIRECTION_N < 0.0:
+        side = -side
+    middle = np.asarray(center_n, float) + reach_m * side
+    return middle - 0.5 * length_m * along, middle + 0.5 * length_m * along
+
+
+def scale_bar_length_m(tree_size_m: float) -> float:
+    """A round length (1, 2 or 5 times a power of ten) no longer than the tree's size, for the
+    scale bar."""
+    exponent = math.floor(math.log10(tree_size_m))
+    for mult in (5.0, 2.0, 1.0):
+        length = mult * 10.0**exponent
+        if length <= tree_size_m:
+            return length
+    return 10.0**exponent
 
 
 def funnel_points_b(post_xy_m: FloatArray, tree_height_m: float) -> FloatArray:

@@ -22,15 +22,17 @@ from app.console import (
     ConsoleError,
     Gains,
     Snapshot,
+    counters_markdown,
     list_recordings,
     load_replay,
     prepare_run,
+    result_markdown,
     station_keeping_mission,
 )
 from app.console import commands as cmd
 from missions import schema
 from web import geometry as geo
-from web import mission_builder as mb
+from web.builder_panel import BuilderPanel
 
 if TYPE_CHECKING:
     from app.console import Console
@@ -39,10 +41,20 @@ SPEEDS = ("0.25", "0.5", "1", "2", "5", "10", "20", "50")
 STATUS_EVERY_S = 0.2
 PLOTS_EVERY_S = 0.5
 PLOT_WINDOW_S = 120.0
-GAIN_RANGE_FACTOR = 4.0
-"""Gain sliders run from 0 to this many times the parameter set's gain (a safe band)."""
+PLOT_MIN_SPAN = (0.2, 0.2, 2.0)
+"""Smallest vertical span of the north, east [m] and heading [deg] plots."""
+PLOT_POINTS_PER_S = 2.0
+"""Points a second of simulated time drawn in the plots."""
+EDIT_HOLD_S = 30.0
+"""An input the operator has edited keeps the edit this long before it follows the live value
+again (unless its command is sent first)."""
 AXES = ("surge", "sway", "yaw")
-CAMERAS = ("Overview", "Top-down", "ROV camera")
+CAMERAS = ("Overview", "Top-down", "ROV camera", "Follow ROV")
+FOLLOWING = ("Overview", "ROV camera", "Follow ROV")
+"""Presets that follow the scene each frame (the overview only until the user moves it)."""
+CAMERA_SETTLE_S = 1.5
+"""After a preset is pressed (or the first pose is sent), camera reports are not taken for
+the user's: the browser may still report the camera it had."""
 
 
 BarColor = Literal["red", "orange", "blue"]
@@ -65,14 +77,13 @@ class ClientPanel:
         self.camera_mode = "Overview"
         self._camera_pending = True
         self._guarded: list[Any] = []
+        self._edited: dict[str, float] = {}
+        self.last_error = ""
+        """What went wrong with the last command this browser sent ('' when it was done)."""
         self._status_wall = 0.0
         self._plots_wall = 0.0
-        self._gain_touch = 0.0
         self._scene_version = -1
         self._replay_name: str | None = None
-        self.legs: list[dict[str, Any]] = []
-        self._leg_inputs: dict[str, tuple[mb.FieldSpec, Any]] = {}
-        self._leg_folder: Any = None
         snap = console.loop.snapshot
         self._build_header()
         tabs = self.gui.add_tab_group()
@@ -82,34 +93,73 @@ class ClientPanel:
             self._build_missions()
         with tabs.add_tab("Control"):
             self._build_control(snap)
-        with tabs.add_tab("Plots"):
-            self._build_plots()
         with tabs.add_tab("Record"):
             self._build_record()
+        # not a tab: a hidden tab is drawn 0 px wide, and uPlot's charts came back blank from
+        # one (a collapsed folder keeps its width, so the charts stay valid while folded)
+        with self.gui.add_folder("Plots", expand_by_default=True):
+            self._build_plots()
         self._set_enabled(False)
 
     # ================================================================== building
     def _build_header(self) -> None:
         gui = self.gui
         self.status_md = gui.add_markdown("starting...")
+        self.readout_md = gui.add_markdown("")
         self.alarms_html = gui.add_html("")
         self.message_md = gui.add_markdown("")
         with gui.add_folder("View"):
             self.camera_buttons = gui.add_button_group("Camera", CAMERAS)
             self.camera_buttons.on_click(self._on_camera)
+            self.camera_md = gui.add_markdown("")
+        self._camera_sent: list[tuple[np.ndarray, np.ndarray]] = []
+        self._camera_settle = 0.0
+        self.client.camera.on_update(self._on_camera_moved)
         with gui.add_folder("Access", expand_by_default=True):
+            self.name_text = gui.add_text(
+                "Your name", initial_value="", hint="shown in the operations log beside what you do"
+            )
             self.token_text = gui.add_text("Token", initial_value="")
+            # viser has no password input: this page's style draws the token's characters as
+            # dots (the field is found by its label's 'for', which is the input's uuid)
+            gui.add_html(_masked_input_style(self.token_text))
             self.unlock_button = gui.add_button("Unlock controls")
             self.unlock_button.on_click(self._on_unlock)
-        with gui.add_folder("Thrusters"):
+            self.lock_button = gui.add_button("Lock controls", visible=False)
+            self.lock_button.on_click(self._on_lock)
+        with gui.add_folder("Operations log", expand_by_default=False):
+            self.operations_md = gui.add_markdown("*nothing done yet*")
+        with gui.add_folder("Thrusters") as self.thruster_folder:
             self.thruster_md = gui.add_markdown("")
-            n = self.console.loop.snapshot.scene.n_thrusters
-            self.bars = [gui.add_progress_bar(0.0, color="blue") for _ in range(n)]
+        self.bars: list[Any] = []
+        self._make_bars(self.console.loop.snapshot.scene.n_thrusters)
+
+    def _make_bars(self, n: int) -> None:
+        """One bar a thruster (the ROV of a new set-up may have another number of them)."""
+        for bar in self.bars:
+            bar.remove()
+        with self.thruster_folder:
+            self.bars = [self.gui.add_progress_bar(0.0, color="blue") for _ in range(n)]
 
     def _guard(self, handle: Any) -> Any:
         """A control that needs the token."""
         self._guarded.append(handle)
         return handle
+
+    def _live_input(self, group: str, handle: Any) -> Any:
+        """An input (guarded) that shows the live value of ``group`` until the operator edits
+        it; it follows the live value again ``EDIT_HOLD_S`` after the last edit or once the
+        group's command has been sent."""
+
+        def edited(event: Any) -> None:
+            if event.client is not None:
+                self._edited[group] = time.monotonic()
+
+        handle.on_update(edited)
+        return self._guard(handle)
+
+    def _editing(self, group: str) -> bool:
+        return time.monotonic() - self._edited.get(group, -math.inf) < EDIT_HOLD_S
 
     def _build_run(self) -> None:
         gui = self.gui
@@ -120,10 +170,19 @@ class ClientPanel:
         self.speed.on_update(self._on_speed)
         self.reset_button = self._guard(gui.add_button("Reset to station keeping"))
         self.reset_button.on_click(self._on_reset)
+        snap = self.console.loop.snapshot
+        goal = snap.target or snap.eta_ref
         with gui.add_folder("Target (no mission)"):
-            self.target_n = self._guard(gui.add_number("Target north m", 0.0, step=0.1))
-            self.target_e = self._guard(gui.add_number("Target east m", 0.0, step=0.1))
-            self.target_psi = self._guard(gui.add_number("Target heading deg", 0.0, step=1.0))
+            self.target_n = self._live_input(
+                "target", gui.add_number("Target north m", round(goal[0], 2), step=0.1)
+            )
+            self.target_e = self._live_input(
+                "target", gui.add_number("Target east m", round(goal[1], 2), step=0.1)
+            )
+            self.target_psi = self._live_input(
+                "target",
+                gui.add_number("Target heading deg", round(math.degrees(goal[2]), 1), step=1.0),
+            )
             self._action(
                 self._guard(gui.add_button("Go to target")),
                 lambda: cmd.SetTarget(
@@ -131,6 +190,7 @@ class ClientPanel:
                     float(self.target_e.value),
                     float(self.target_psi.value),
                 ),
+                done="target",
             )
 
     def _build_missions(self) -> None:
@@ -142,27 +202,16 @@ class ClientPanel:
         self.mission_start.on_click(self._on_start_library)
         self._action(self._guard(gui.add_button("Abort mission", color="red")), cmd.AbortMission)
         self.mission_md = gui.add_markdown("")
+        self.counters_md = gui.add_markdown("")
         with gui.add_folder("Mission builder"):
-            self.setup_pick = gui.add_dropdown("Set-up from", names, initial_value=names[0])
-            types = tuple(schema.leg_models())
-            self.leg_type = gui.add_dropdown("Leg type", types, initial_value=types[0])
-            self.leg_type.on_update(lambda _: self._rebuild_leg_inputs())
-            self._leg_anchor = gui.add_markdown("**Leg values**")
-            self._rebuild_leg_inputs()
-            self.add_leg = gui.add_button("Add leg", order=self._leg_anchor.order + 0.2)
-            self.add_leg.on_click(self._on_add_leg)
-            self.leg_edit = gui.add_button_group(
-                "Legs", ("Remove last", "Clear"), order=self._leg_anchor.order + 0.3
+            self.builder = BuilderPanel(
+                self.client,
+                self.console,
+                self._guard,
+                self._start,
+                lambda: self.unlocked,
+                (self.mission_pick,),
             )
-            self.leg_edit.on_click(self._on_leg_edit)
-            self.legs_md = gui.add_markdown("*no legs yet*", order=self._leg_anchor.order + 0.4)
-            self.validate_button = gui.add_button("Validate", order=self._leg_anchor.order + 0.5)
-            self.validate_button.on_click(self._on_validate)
-            self.build_start = self._guard(
-                gui.add_button("Start built mission", order=self._leg_anchor.order + 0.6)
-            )
-            self.build_start.on_click(self._on_start_built)
-            self.builder_md = gui.add_markdown("", order=self._leg_anchor.order + 0.7)
 
     def _build_control(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -181,72 +230,95 @@ class ClientPanel:
         self.grip = self._guard(gui.add_checkbox("Grip", bool(snap.grip)))
         self.grip.on_update(self._when_client(lambda: cmd.SetGrip(bool(self.grip.value))))
         with gui.add_folder("Gains"):
-            self.gain_sliders: dict[str, list[Any]] = {}
             preset = snap.scene.preset_gains
             live = snap.gains or preset
-            for term in ("kp", "ki", "kd"):
-                row = []
-                for i, axis in enumerate(AXES):
-                    hi = _slider_max(getattr(preset, term)[i], getattr(live, term)[i])
-                    slider = self._guard(
-                        gui.add_slider(
-                            f"{term} {axis}",
-                            min=0.0,
-                            max=hi,
-                            step=hi / 200.0,
-                            initial_value=float(getattr(live, term)[i]),
-                        )
-                    )
-                    slider.on_update(self._on_gain)
-                    row.append(slider)
-                self.gain_sliders[term] = row
+            self.gain_md = gui.add_markdown(_gain_band_text(preset))
+            self.gain_rows = {
+                term: self._live_input(
+                    "gains",
+                    gui.add_text(
+                        f"{term} [surge, sway, yaw]",
+                        _gain_row_text(getattr(live, term)),
+                        hint=f"three numbers, each within its band (see above); {term} of "
+                        "the parameter set: " + _gain_row_text(getattr(preset, term)),
+                    ),
+                )
+                for term in ("kp", "ki", "kd")
+            }
+            self._action(self._guard(gui.add_button("Apply gains")), self._typed_gains, "gains")
             self._action(
                 self._guard(gui.add_button("Preset gains")),
                 lambda: cmd.SetGains(self.console.loop.snapshot.scene.preset_gains),
+                done="gains",
             )
         with gui.add_folder("Current"):
-            self.current_speed = self._guard(
-                gui.add_number("Speed m/s", 0.0, min=0.0, max=3.0, step=0.01)
+            self.current_speed = self._live_input(
+                "current",
+                gui.add_number(
+                    "Speed m/s", round(snap.current_speed_mps, 3), min=0.0, max=3.0, step=0.01
+                ),
             )
-            self.current_dir = self._guard(
-                gui.add_number("Towards deg", 0.0, min=-360.0, max=360.0, step=1.0)
+            self.current_dir = self._live_input(
+                "current",
+                gui.add_number(
+                    "Towards deg",
+                    round(math.degrees(snap.current_direction_rad), 1),
+                    min=-360.0,
+                    max=360.0,
+                    step=1.0,
+                ),
             )
             self._action(
                 self._guard(gui.add_button("Set current")),
                 lambda: cmd.SetCurrent(
                     float(self.current_speed.value), float(self.current_dir.value)
                 ),
+                done="current",
             )
         with gui.add_folder("Vessel (crane tip)"):
             ct = snap.crane_tip_n
-            self.vessel_n = self._guard(
-                gui.add_number("North m", round(ct[0], 2), min=-1000.0, max=1000.0, step=0.1)
+            self.vessel_n = self._live_input(
+                "vessel",
+                gui.add_number("North m", round(ct[0], 2), min=-1000.0, max=1000.0, step=0.1),
             )
-            self.vessel_e = self._guard(
-                gui.add_number("East m", round(ct[1], 2), min=-1000.0, max=1000.0, step=0.1)
+            self.vessel_e = self._live_input(
+                "vessel",
+                gui.add_number("East m", round(ct[1], 2), min=-1000.0, max=1000.0, step=0.1),
             )
             self._action(
                 self._guard(gui.add_button("Move vessel")),
                 lambda: cmd.MoveVessel(float(self.vessel_n.value), float(self.vessel_e.value), 0.5),
+                done="vessel",
             )
 
     def _build_plots(self) -> None:
         gui = self.gui
         self.plots = []
         for title, unit in (("North", "m"), ("East", "m"), ("Heading", "deg")):
-            empty = np.zeros(2)
+            empty = np.array([-PLOT_WINDOW_S, 0.0])
             series = (
-                {"label": "t [s]"},
+                {"label": "t - now [s]"},
                 {"label": f"tree {unit}", "stroke": "#1f5fd0", "width": 2},
                 {"label": f"reference {unit}", "stroke": "#d03030", "width": 1.5, "dash": (6, 4)},
+                # an invisible pair of points that keeps the vertical scale at least
+                # PLOT_MIN_SPAN wide: otherwise millimetre ringing about 1 m is drawn over the
+                # whole height with every tick labelled "1"
+                {
+                    "label": "min. span",
+                    "stroke": "rgba(0,0,0,0)",
+                    "width": 0,
+                    "points": {"show": False},
+                },
             )
             self.plots.append(
                 gui.add_uplot(
-                    (empty, empty, empty),
+                    (empty, empty, empty, empty),
                     series,  # type: ignore[arg-type]
-                    title=f"{title} [{unit}]",
+                    title=f"{title} [{unit}], last {PLOT_WINDOW_S:.0f} s",
                     aspect=2.0,
-                    scales={"x": {"time": False}},
+                    # a fixed window in time before now: the x scale never depends on the
+                    # chart's size or on earlier data, so nothing stale is kept between updates
+                    scales={"x": {"time": False, "range": (-PLOT_WINDOW_S, 0.0)}},
                 )
             )
 
@@ -258,7 +330,7 @@ class ClientPanel:
         stop = self._guard(gui.add_button("Stop recording"))
         stop.on_click(lambda event: self._on_record(False))
         self.record_md = gui.add_markdown("")
-        with gui.add_folder("Replay"):
+        with gui.add_folder("Replay") as self.replay_folder:
             self.recordings = gui.add_dropdown("Recording", self._recording_names())
             refresh = gui.add_button("Refresh list")
             refresh.on_click(lambda _: self._refresh_recordings())
@@ -267,42 +339,32 @@ class ClientPanel:
             self._action(self._guard(gui.add_button("Play replay")), lambda: cmd.PlayReplay(True))
             self._action(self._guard(gui.add_button("Pause replay")), lambda: cmd.PlayReplay(False))
             self._action(self._guard(gui.add_button("Close replay")), cmd.CloseReplay)
+        self._make_replay_slider(0.0, 1.0, ())  # enters the folder itself
+
+    def _make_replay_slider(
+        self, start_s: float, end_s: float, marks: tuple[tuple[float, str], ...]
+    ) -> None:
+        """The scrub bar, with the recording's events as marks (legs, runs, landings named;
+        commands and alarms as ticks); made anew for each replay opened."""
+        old = getattr(self, "replay_time", None)
+        if old is not None:
+            self._guarded = [h for h in self._guarded if h is not old]
+            old.remove()
+        with self.replay_folder:
             self.replay_time = self._guard(
-                gui.add_slider("Replay time s", min=0.0, max=1.0, step=0.1, initial_value=0.0)
+                self.gui.add_slider(
+                    "Replay time s",
+                    min=start_s,
+                    max=max(end_s, start_s + 0.1),
+                    step=0.1,
+                    initial_value=start_s,
+                    marks=tuple((t, label) if label else t for t, label in marks) or None,
+                )
             )
-            self.replay_time.on_update(
-                self._when_client(lambda: cmd.SeekReplay(float(self.replay_time.value)))
-            )
-
-    def _rebuild_leg_inputs(self) -> None:
-        """Inputs for the chosen leg type, from its pydantic model's fields."""
-        if self._leg_folder is not None:
-            self._leg_folder.remove()
-        model = schema.leg_models()[self.leg_type.value]
-        self._leg_inputs = {}
-        with self.gui.add_folder(
-            f"{self.leg_type.value} leg", order=self._leg_anchor.order + 0.1
-        ) as folder:
-            for spec in mb.field_specs(model):
-                self._leg_inputs[spec.name] = (spec, self._leg_input(spec))
-        self._leg_folder = folder
-
-    def _leg_input(self, spec: mb.FieldSpec) -> Any:
-        gui, value = self.gui, mb.initial_value(spec)
-        hint = spec.description or None
-        if spec.kind == "bool":
-            return gui.add_checkbox(spec.label, bool(value), hint=hint)
-        if spec.kind in ("choice", "tristate"):
-            return gui.add_dropdown(
-                spec.label,
-                spec.choices,
-                initial_value=str(value if value is not None else spec.choices[0]),
-                hint=hint,
-            )
-        if spec.kind in ("number", "integer") and not spec.optional:
-            step = 1.0 if spec.kind == "integer" else _step_for(spec)
-            return gui.add_number(spec.label, value, min=spec.lo, max=spec.hi, step=step, hint=hint)
-        return gui.add_text(spec.label, mb.text_of(spec, value), hint=hint)
+        self.replay_time.disabled = not self.unlocked
+        self.replay_time.on_update(
+            self._when_client(lambda: cmd.SeekReplay(float(self.replay_time.value)))
+        )
 
     # ================================================================== callbacks
     def _set_enabled(self, enabled: bool) -> None:
@@ -314,22 +376,42 @@ class ClientPanel:
 
     def _run(self, make: Callable[[], Any]) -> Any:
         """Build a command and have the loop apply it; show the outcome."""
+        self.last_error = ""
         if not self.unlocked:
-            self._say("**locked**: enter the console token under Access")
+            self.last_error = "locked: enter the console token under Access"
+            self._say(f"**{self.last_error}**")
             return None
         try:
-            result = self.console.loop.call_blocking(make(), timeout_s=15.0)
+            result = self.console.loop.call_blocking(make(), timeout_s=15.0, who=self.who)
         except (ConsoleError, ValueError, FileNotFoundError, KeyError) as err:
-            self._say(f"**error**: {err}")
-            return None
+            self.last_error = str(err)
         except Exception as err:
-            self._say(f"**error**: {type(err).__name__}: {err}")
+            self.last_error = f"{type(err).__name__}: {err}"
+        if self.last_error:
+            self._say(f"**error**: {self.last_error}")
             return None
         self._say("")
         return result
 
-    def _action(self, button: Any, make: Callable[[], Any]) -> None:
-        button.on_click(lambda event: self._run(make) if event.client is not None else None)
+    def _action(self, button: Any, make: Callable[[], Any], done: str | None = None) -> None:
+        """A button that runs a command; ``done``: the input group it sends, which follows
+        the live value again once sent."""
+
+        feedback = self.gui.add_markdown("") if done is not None else None
+
+        def clicked(event: Any) -> None:
+            if event.client is None:
+                return
+            self._run(make)
+            if done is None or feedback is None:
+                return
+            if self.last_error:  # the typed values stay, to be corrected
+                feedback.content = f"**not applied**: {self.last_error}"
+            else:
+                feedback.content = ""
+                self._edited.pop(done, None)
+
+        button.on_click(clicked)
 
     def _when_client(self, make: Callable[[], Any]) -> Callable[[Any], None]:
         """An input callback that acts on what the operator did, not on our own updates."""
@@ -343,19 +425,52 @@ class ClientPanel:
     def _on_unlock(self, event: Any) -> None:
         # counted for the view as a whole: a new connection does not buy new guesses
         ok, wait = self.console.check_token(str(self.token_text.value).strip(), "view")
+        self.token_text.value = ""  # type: ignore[misc]  # the token does not stay on the page
         if ok:
             self.unlocked = True
             self._set_enabled(True)
+            self.unlock_button.visible = False
+            self.lock_button.visible = True
             self._say("controls unlocked")
         elif wait > 0.0:
             self._say(f"**too many wrong tokens**: try again in {wait:.0f} s")
         else:
             self._say("**wrong token**")
 
+    def _on_lock(self, event: Any) -> None:
+        self.unlocked = False
+        self._set_enabled(False)
+        self.lock_button.visible = False
+        self.unlock_button.visible = True
+        self._say("controls locked")
+
+    @property
+    def who(self) -> str:
+        """This browser in the operations log: 'viewer 3 (Anna)'."""
+        name = " ".join(str(self.name_text.value).split())[:40]
+        return f"viewer {self.client.client_id}" + (f" ({name})" if name else "")
+
     def _on_camera(self, event: Any) -> None:
         self.camera_mode = str(self.camera_buttons.value)
         self._camera_pending = True
+        self._camera_settle = time.monotonic() + CAMERA_SETTLE_S
+        self.camera_md.content = ""
         self._apply_camera(self.console.loop.snapshot)
+
+    def _on_camera_moved(self, camera: viser.CameraHandle) -> None:
+        """The browser reports its camera: one that matches none of the poses sent lately
+        was moved by the user, and the overview stops following until a preset is pressed."""
+        if self.camera_mode != "Overview" or not self._camera_pending or not self._camera_sent:
+            return
+        if time.monotonic() < self._camera_settle:
+            return  # reports of the camera the browser had before
+        pos, look = np.asarray(camera.position), np.asarray(camera.look_at)
+        scale = 1e-3 * (1.0 + float(np.linalg.norm(self._camera_sent[-1][0])))
+        ours_pos = any(np.linalg.norm(pos - p) < scale for p, _ in self._camera_sent)
+        ours_look = any(np.linalg.norm(look - q) < scale for _, q in self._camera_sent)
+        if not (ours_pos and ours_look):
+            self._camera_pending = False
+            self.camera_md.content = "camera moved by hand: press Overview to follow again"
 
     def _on_speed(self, event: Any) -> None:
         if event.client is not None:
@@ -387,12 +502,14 @@ class ClientPanel:
             return
         self._start(mission)
 
-    def _on_gain(self, event: Any) -> None:
-        if event.client is None:
-            return
-        self._gain_touch = time.monotonic()
-        values = {t: tuple(float(s.value) for s in row) for t, row in self.gain_sliders.items()}
-        self._run(lambda: cmd.SetGains(Gains.of(values["kp"], values["ki"], values["kd"])))
+    def _typed_gains(self) -> cmd.SetGains:
+        """The gains typed in the three rows; ValueError naming the row and entry."""
+        rows = {
+            term: _parse_gain_row(term, str(handle.value))
+            for term, handle in self.gain_rows.items()
+        }
+        cmd.check_gain_band(rows, self.console.loop.snapshot.scene.preset_gains)
+        return cmd.SetGains(Gains.of(rows["kp"], rows["ki"], rows["kd"]))
 
     def _on_record(self, start: bool) -> None:
         if start:
@@ -425,86 +542,59 @@ class ClientPanel:
             return
         self._run(lambda: cmd.OpenReplay(name, data))
 
-    # ---------------------------------------------------------------- builder
-    def _on_add_leg(self, event: Any) -> None:
-        try:
-            values = {
-                name: mb.parse_input(spec, handle.value)
-                for name, (spec, handle) in self._leg_inputs.items()
-            }
-            leg = mb.build_leg(str(self.leg_type.value), values)
-            schema.parse_mission(
-                {
-                    "format_version": 1,
-                    "name": "check",
-                    "setup": {"params": "full-scale", "depth_m": 100.0},
-                    "legs": [leg],
-                },
-                "<leg>",
-            )
-        except ValueError as err:
-            self.builder_md.content = f"**invalid leg**: {err}"
-            return
-        self.legs.append(leg)
-        self._show_legs()
-        self.builder_md.content = f"added {leg['type']} leg"
-
-    def _on_leg_edit(self, event: Any) -> None:
-        if self.leg_edit.value == "Clear":
-            self.legs.clear()
-        elif self.legs:
-            self.legs.pop()
-        self._show_legs()
-
-    def _show_legs(self) -> None:
-        lines = [f"{i + 1}. `{mb.describe_leg(leg)}`" for i, leg in enumerate(self.legs)]
-        self.legs_md.content = "\n".join(lines) if lines else "*no legs yet*"
-
-    def _built_mission(self) -> schema.Mission | None:
-        try:
-            base = self.console.find_mission(str(self.setup_pick.value))
-            return mb.build_mission("built mission", base.setup, self.legs)
-        except (KeyError, ValueError) as err:
-            self.builder_md.content = f"**invalid**: {err}"
-            return None
-
-    def _on_validate(self, event: Any) -> None:
-        mission = self._built_mission()
-        if mission is not None:
-            self.builder_md.content = f"valid: {len(mission.legs)} legs"
-
-    def _on_start_built(self, event: Any) -> None:
-        mission = self._built_mission()
-        if mission is not None:
-            self._start(mission)
-
     # ================================================================== updates
     def _apply_camera(self, snap: Snapshot) -> None:
         info = snap.scene
         size = max(info.tree_dimensions_m)
+        tree = np.array(snap.tree_eta_n)
+        frame = info.frame
         if self.camera_mode == "Top-down":
-            pose = geo.top_down_camera(
-                info.frame.center_n, info.frame.landing_depth_m, np.array(snap.tree_eta_n), size
-            )
+            pose = geo.top_down_camera(frame.center_n, frame.landing_depth_m, tree, size)
         elif self.camera_mode == "ROV camera":
+            posts = frame.post_positions_n(info.layout)
+            tops = np.column_stack(
+                [posts, np.full(len(posts), frame.post_top_depth_m(info.layout))]
+            )
             pose = geo.rov_camera(
                 np.array(snap.rov_eta_n),
                 np.array(info.rov_dimensions_m),
-                np.array(snap.tree_eta_n),
+                tree,
                 info.tree_dimensions_m[2],
+                tops,
+            )
+        elif self.camera_mode == "Follow ROV":
+            pose = geo.follow_rov_camera(
+                np.array(snap.rov_eta_n), np.array(info.rov_dimensions_m), size
             )
         else:
-            pose = geo.overview_camera(np.array(snap.tree_eta_n), size)
+            pose = geo.overview_camera(
+                tree, size, np.array([*frame.center_n, frame.landing_depth_m])
+            )
         cam = self.client.camera
+        fov = geo.ROV_CAMERA_FOV_RAD if self.camera_mode == "ROV camera" else geo.OVERVIEW_FOV_RAD
         try:
+            # setting the position carries the look-at point along before it is set: the
+            # browser may report that in-between pose too
+            between = cam.look_at + (pose.position_n - cam.position)
             with self.client.atomic():
                 cam.up_direction = pose.up_n
                 cam.position = pose.position_n
                 cam.look_at = pose.look_at_n
-                cam.fov = math.radians(60.0 if self.camera_mode == "ROV camera" else 50.0)
+                cam.fov = float(fov)
         except AssertionError:
             return  # the browser has not reported its camera yet: try again next frame
-        self._camera_pending = self.camera_mode == "ROV camera"
+        # the last 100 distinct poses sent (5 s of a moving scene at 20 frames a second), to
+        # tell the browser's echoes of them from a camera the user moved
+        sent = self._camera_sent
+        if not sent:
+            self._camera_settle = time.monotonic() + CAMERA_SETTLE_S
+        if not sent or np.any(sent[-1][0] != pose.position_n) or np.any(sent[-1][1] != between):
+            self._camera_sent = [
+                *sent[-98:],
+                (pose.position_n, between),
+                (pose.position_n, pose.look_at_n),
+            ]
+        self._camera_pending = self.camera_mode in FOLLOWING
 
     def update(self, snap: Snapshot) -> None:
         """Refresh from a snapshot (the publisher thread)."""
@@ -534,6 +624,7 @@ class ClientPanel:
         )
         if self.status_md.content != text:
             self.status_md.content = text
+        self._update_readout(snap)
         badges = "".join(
             f"<span style='display:inline-block;margin:1px;padding:1px 5px;border-radius:4px;"
             f"color:white;background:{'#c0392b' if a.active else '#27ae60'}' "
@@ -548,13 +639,33 @@ class ClientPanel:
             self.alarms_html.content = html
         self._update_thrusters(snap)
         self._update_controls(snap)
+        ops = _operations_text(snap)
+        if self.operations_md.content != ops:
+            self.operations_md.content = ops
+
+    def _update_readout(self, snap: Snapshot) -> None:
+        """Height over the post tops, distance and heading error to the frame, wire tension."""
+        info = snap.scene
+        readout = geo.pilot_readout(
+            np.array(snap.tree_eta_n),
+            info.tree_dimensions_m[2],
+            info.frame.center_n,
+            info.frame.heading_rad,
+            info.frame.post_top_depth_m(info.layout),
+            snap.wire_tension_newton,
+        )
+        text = geo.readout_markdown(readout)
+        if self.readout_md.content != text:
+            self.readout_md.content = text
 
     def _update_thrusters(self, snap: Snapshot) -> None:
         util = snap.thruster_utilisation
+        if len(self.bars) != len(util):
+            self._make_bars(len(util))
         for bar, u in zip(self.bars, util, strict=False):
             value = round(100.0 * min(max(u, 0.0), 1.0), 1)
             if bar.value != value:
-                bar.value = value  # type: ignore[misc]  # settable at run time
+                bar.value = value
             color = _bar_color(u)
             if bar.color != color:
                 bar.color = color
@@ -564,24 +675,57 @@ class ClientPanel:
 
     def _update_controls(self, snap: Snapshot) -> None:
         """Keep inputs in step with changes made elsewhere (API, missions, other browsers)."""
-        if snap.gains is not None and time.monotonic() - self._gain_touch > 1.0:
-            for term, row in self.gain_sliders.items():
-                for slider, value in zip(row, getattr(snap.gains, term), strict=True):
-                    if value > slider.max:
-                        slider.max = value
-                    if abs(slider.value - value) > 1e-9 * max(1.0, value):
-                        slider.value = value
+        if snap.gains is not None and not self._editing("gains"):
+            for term, handle in self.gain_rows.items():
+                text = _gain_row_text(getattr(snap.gains, term))
+                if handle.value != text:
+                    handle.value = text
+            band = _gain_band_text(snap.scene.preset_gains)
+            if self.gain_md.content != band:
+                self.gain_md.content = band
         if snap.mode != self.mode.value:
             self.mode.value = snap.mode
         if snap.allocation and snap.allocation != self.allocation.value:
             self.allocation.value = snap.allocation
         if snap.grip is not None and snap.grip != self.grip.value:
             self.grip.value = snap.grip
+        self._follow_live_inputs(snap)
         speed = f"{snap.speed:g}"
         if speed in SPEEDS and speed != self.speed.value:
             self.speed.value = speed
-        self.mission_md.content = _mission_text(snap)
+        text = _mission_text(snap)
+        if self.mission_md.content != text:
+            self.mission_md.content = text
+        counters = counters_markdown(snap.quality_counters)
+        if self.counters_md.content != counters:
+            self.counters_md.content = counters
+        self.builder.update(snap)
         self._update_replay(snap)
+
+    def _follow_live_inputs(self, snap: Snapshot) -> None:
+        """Inputs the operator is not editing show the live values."""
+        goal = snap.target or snap.eta_ref
+        live = {
+            "target": (
+                (self.target_n, round(goal[0], 2)),
+                (self.target_e, round(goal[1], 2)),
+                (self.target_psi, round(math.degrees(goal[2]), 1)),
+            ),
+            "current": (
+                (self.current_speed, round(snap.current_speed_mps, 3)),
+                (self.current_dir, round(math.degrees(snap.current_direction_rad), 1)),
+            ),
+            "vessel": (
+                (self.vessel_n, round(snap.crane_tip_n[0], 2)),
+                (self.vessel_e, round(snap.crane_tip_n[1], 2)),
+            ),
+        }
+        for group, pairs in live.items():
+            if self._editing(group):
+                continue
+            for handle, value in pairs:
+                if handle.value != value:
+                    handle.value = value
 
     def _update_replay(self, snap: Snapshot) -> None:
         rp = snap.replay
@@ -590,8 +734,7 @@ class ClientPanel:
             return
         if rp.name != self._replay_name:
             self._replay_name = rp.name
-            self.replay_time.min = rp.start_s
-            self.replay_time.max = max(rp.end_s, rp.start_s + 0.1)
+            self._make_replay_slider(rp.start_s, rp.end_s, rp.marks)
         if abs(self.replay_time.value - rp.t_s) > 0.05:
             self.replay_time.value = round(rp.t_s, 1)
 
@@ -600,34 +743,80 @@ class ClientPanel:
         if len(trend) < 2:
             return
         recent = trend[trend[:, 0] >= trend[-1, 0] - PLOT_WINDOW_S]
-        t = recent[:, 0]
+        # PLOT_POINTS_PER_S a second (a trace a few hundred pixels wide needs no more): the
+        # whole window goes out at each update (viser's uPlot has no append), so this is what
+        # keeps the message small
+        first_of_bin = np.unique(np.floor(recent[:, 0] * PLOT_POINTS_PER_S), return_index=True)[1]
+        recent = recent[np.union1d(first_of_bin, [len(recent) - 1])]
+        t = recent[:, 0] - trend[-1, 0]
         data = (
             (t, recent[:, 1], recent[:, 4]),
             (t, recent[:, 2], recent[:, 5]),
             (t, np.degrees(recent[:, 3]), np.degrees(recent[:, 6])),
         )
-        for plot, series in zip(self.plots, data, strict=True):
-            plot.data = tuple(np.ascontiguousarray(a) for a in series)
+        for plot, series, span in zip(self.plots, data, PLOT_MIN_SPAN, strict=True):
+            mid = 0.5 * (float(np.min(series[1:])) + float(np.max(series[1:])))
+            frame = np.full(len(t), np.nan)
+            frame[0], frame[-1] = mid - span / 2, mid + span / 2
+            plot.data = tuple(np.ascontiguousarray(a) for a in (*series, frame))
 
 
 def _mission_text(snap: Snapshot) -> str:
     m = snap.mission
     if m.result:
-        r = m.result
-        return (
-            f"**{m.name}** {m.state}: RMS N {r.get('rms_north_m', float('nan')):.3f} m, "
-            f"E {r.get('rms_east_m', float('nan')):.3f} m, heading "
-            f"{r.get('rms_heading_deg', float('nan')):.2f} deg"
-        )
+        return result_markdown(m.name, m.state, m.result)
     if m.leg_index:
         return f"**{m.name}**: leg {m.leg_index}/{m.legs_total} `{m.leg_type}` {m.leg_name or ''}"
     return f"{m.name or 'no mission'} ({m.state})"
 
 
-def _slider_max(preset: float, live: float) -> float:
-    return max(GAIN_RANGE_FACTOR * preset, live, 1.0)
+def _operations_text(snap: Snapshot) -> str:
+    """The latest operations, newest first: time, who, what, outcome."""
+    if not snap.operations:
+        return "*nothing done yet*"
+    lines = [
+        f"- {op.utc[11:19]} (t {op.t_s:.1f} s) **{op.who}**: {op.action} - {op.outcome}"
+        for op in reversed(snap.operations[-10:])
+    ]
+    return "\n".join(lines)
 
 
-def _step_for(spec: mb.FieldSpec) -> float:
-    span = (spec.hi or 1.0) - (spec.lo or 0.0)
-    return 0.01 if span <= 10.0 else 0.1
+def _masked_input_style(handle: Any) -> str:
+    """CSS that draws a text input's characters as dots (Chromium, Firefox, Safari)."""
+    uuid = handle._impl.uuid  # viser labels an input with for="<uuid>"
+    return (
+        "<style>"
+        f'div:has(> div > p > label[for="{uuid}"]) input '
+        "{ -webkit-text-security: disc; }"
+        "</style>"
+    )
+
+
+def _gain_row_text(values: tuple[float, ...]) -> str:
+    return ", ".join(f"{v:g}" for v in values)
+
+
+def _gain_band_text(preset: Gains) -> str:
+    """The band each gain may be set in (commands.gain_band), as a small table."""
+    lines = ["| band | surge | sway | yaw |", "|---|---|---|---|"]
+    for term in ("kp", "ki", "kd"):
+        cells = " | ".join(f"0 - {cmd.gain_band(v):g}" for v in getattr(preset, term))
+        lines.append(f"| {term} | {cells} |")
+    return "\n".join(lines)
+
+
+def _parse_gain_row(term: str, text: str) -> tuple[float, float, float]:
+    """'2000, 2000, 5000' -> three floats; ValueError naming the gain when an entry is not a
+    number or the row does not have three."""
+    parts = [p.strip() for p in text.replace(";", ",").split(",")]
+    if len(parts) != 3:
+        raise ValueError(
+            f"{term}: give three numbers (surge, sway, yaw) separated by commas, got {text!r}"
+        )
+    out = []
+    for axis, part in zip(cmd.AXIS_NAMES, parts, strict=True):
+        try:
+            out.append(float(part))
+        except ValueError:
+            raise ValueError(f"gain {term} {axis}: {part!r} is not a number") from None
+    return out[0], out[1], out[2]

@@ -1,5 +1,7 @@
 """The shared 3D scene: seabed, docking frame with guideposts, the tree with its funnels, the
-ROV, the loaded wire from the crane tip, the current arrow, the reference ghost and the track.
+ROV, the loaded wire from the crane tip, the current arrow with its label, the reference ghost,
+the track, a north arrow and a scale bar beside the frame, and depth labels on the tree and
+the frame.
 
 Drawn in NED (``set_up_direction("-z")``); every pose update of one frame goes out in one
 ``server.atomic()`` block so the browser never shows a half-updated scene.
@@ -27,6 +29,8 @@ WIRE_COLOR = (30, 30, 30)
 TRACK_COLOR = (40, 90, 220)
 CURRENT_COLOR = (20, 160, 90)
 SEABED_COLOR = (194, 178, 128)
+NORTH_COLOR = (30, 60, 160)
+SCALE_COLOR = (20, 20, 20)
 POSE_EPS = 1e-4
 """Changes below this (m, rad) are not sent: a still scene costs the browsers nothing."""
 TRACK_EVERY_S = 1.0
@@ -48,7 +52,6 @@ class SceneView:
         self._current_key: tuple[float, float] | None = None
         self.info: SceneInfo | None = None
         self._handles: list = []
-        self._current: viser.ArrowsHandle | None = None
 
     # ----------------------------------------------------------------- static parts
     def _build(self, info: SceneInfo) -> None:
@@ -149,37 +152,90 @@ class SceneView:
         self._track = sc.add_line_segments(
             "/track", np.zeros((1, 2, 3)), TRACK_COLOR, thickness=2.0, thickness_units="screen"
         )
-        if self._current is not None:
-            self._current.remove()
-        self._current = None
+        # the current: one arrow and one label for the set-up's lifetime, never removed and
+        # re-added (the browser would be sent updates for a node it is between having)
+        self._current = sc.add_arrows(
+            "/current",
+            np.zeros((1, 2, 3)) + center,
+            CURRENT_COLOR,
+            shaft_radius=0.03 * size,
+            head_radius=0.09 * size,
+            head_length=0.25 * size,
+        )
+        self._current_label = sc.add_label(
+            "/current_label", "no current", position=center, anchor="bottom-center"
+        )
         self._current_key = None
+        self._build_marks(sc, info, center, size)
+        self._tree_label = sc.add_label(
+            "/tree/depth_label", "", position=(0.0, 0.0, -0.5 * height - 0.2 * size)
+        )
+        self._tree_label_text = ""
         self._version = info.version
 
+    def _build_marks(self, sc: _Recorder, info: SceneInfo, center: np.ndarray, size: float) -> None:
+        """North arrow and scale bar on the landing surface off the frame's south-west corner,
+        and the frame's depth label."""
+        lay, frame = info.layout, info.frame
+        corner = center + np.array(
+            [-0.5 * lay.frame_size_m[0] - 0.5 * size, -0.5 * lay.frame_size_m[1] - 0.5 * size, 0.0]
+        )
+        north_tip = corner + np.array([size, 0.0, 0.0])
+        sc.add_arrows(
+            "/site/north_arrow",
+            np.array([[corner, north_tip]]),
+            NORTH_COLOR,
+            shaft_radius=0.03 * size,
+            head_radius=0.1 * size,
+            head_length=0.25 * size,
+        )
+        sc.add_label("/site/north_label", "N", position=north_tip, anchor="bottom-center")
+        bar = geo.scale_bar_length_m(size)
+        ends = [corner, corner + np.array([0.0, bar, 0.0])]
+        tick = np.array([0.15 * size, 0.0, 0.0])
+        sc.add_line_segments(
+            "/site/scale_bar",
+            np.array([ends, [ends[0] - tick, ends[0] + tick], [ends[1] - tick, ends[1] + tick]]),
+            SCALE_COLOR,
+            thickness=3.0,
+            thickness_units="screen",
+        )
+        sc.add_label(
+            "/site/scale_label",
+            f"{bar:g} m",
+            position=0.5 * (ends[0] + ends[1]) - 0.2 * tick,
+            anchor="bottom-center",
+        )
+        sc.add_label(
+            "/site/frame_label",
+            f"frame {frame.landing_depth_m:.1f} m depth "
+            f"(post tops {frame.post_top_depth_m(lay):.1f} m)",
+            position=center + np.array([0.5 * lay.frame_size_m[0], 0.0, 0.0]),
+            anchor="top-center",
+        )
+
     def _draw_current(self, snap: Snapshot, size: float) -> None:
-        """Arrow along the current, beside the tree at its top: 10 tree lengths per m/s (at
-        least 0.3), ending two tree lengths upstream of the tree's start."""
+        """Arrow along the current on the landing surface's level, beside the frame on the
+        side facing the overview camera (so neither hides the other), with its label at the
+        tail ("no current" and no arrow when the water is still). Length from
+        ``geometry.current_arrow``."""
         key = (round(snap.current_speed_mps, 4), round(snap.current_direction_rad, 4))
         if key == self._current_key:
             return
         self._current_key = key
-        if self._current is not None:
-            self._current.remove()
-        length = max(0.3 * size, 10.0 * size * snap.current_speed_mps)
-        d = snap.current_direction_rad
-        along = np.array([math.cos(d), math.sin(d), 0.0])
+        arrow = geo.current_arrow(snap.current_speed_mps, snap.current_direction_rad, size)
         info = snap.scene
-        center = np.array([*info.frame.center_n, snap.tree_eta_n[2]])
-        end = center - 2.0 * size * along - np.array([0.0, 0.0, info.tree_dimensions_m[2]])
-        start = end - length * along
-        self._current = self.scene.add_arrows(
-            "/current",
-            np.array([[start, end]]),
-            CURRENT_COLOR,
-            shaft_radius=0.015 * size,
-            head_radius=0.05 * size,
-            head_length=0.12 * size,
-            visible=snap.current_speed_mps > 0.0,
+        center = np.array([*info.frame.center_n, info.frame.landing_depth_m - 0.05 * size])
+        reach = 0.5 * float(np.hypot(*info.layout.frame_size_m)) + 0.5 * size
+        start, end = geo.current_arrow_ends_n(
+            center, reach, snap.current_direction_rad, arrow.length_m
         )
+        with self.server.atomic():
+            if arrow.length_m > 0.0:
+                self._current.points = np.array([[start, end]])
+            self._current.visible = arrow.length_m > 0.0
+            self._current_label.position = start
+            self._current_label.text = arrow.label
 
     # ----------------------------------------------------------------- per frame
     def update(self, snap: Snapshot) -> None:
@@ -222,6 +278,10 @@ class SceneView:
             self._ghost.position = (ref[0], ref[1], tree_eta[2])
             self._ghost.wxyz = geo.quaternion_wxyz_from_rpy_radians(0.0, 0.0, ref[2])
             self._wire.points = geo.polyline_segments(wire)
+            label = f"tree {tree_eta[2]:.1f} m depth"
+            if label != self._tree_label_text:
+                self._tree_label_text = label
+                self._tree_label.text = label
 
     def _update_track(self, snap: Snapshot, depth_m: float) -> None:
         now = time.monotonic()

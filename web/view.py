@@ -74,7 +74,12 @@ class ConsoleView:
 
     def _set_initial_camera(self) -> None:
         snap = self.console.loop.snapshot
-        pose = geo.overview_camera(np.array(snap.tree_eta_n), max(snap.scene.tree_dimensions_m))
+        frame = snap.scene.frame
+        pose = geo.overview_camera(
+            np.array(snap.tree_eta_n),
+            max(snap.scene.tree_dimensions_m),
+            np.array([*frame.center_n, frame.landing_depth_m]),
+        )
         cam = self.server.initial_camera
         cam.position = pose.position_n
         cam.look_at = pose.look_at_n

@@ -1,7 +1,8 @@
 """What protects the server from careless and hostile clients, before a route runs:
 
 - ``BodyLimit``: request bodies above ``MAX_BODY_BYTES`` are refused with 413 (by the declared
-  length, and by counting when none is declared), so no upload is kept in memory whole.
+  length, and by counting when none is declared), so no upload is kept in memory whole. It
+  also names the request's sender ("API <address>") for the console's operations log.
 - the Host header must name this server (``app.console.allowed_hosts``; DNS rebinding: a web
   page on another name that resolves to 127.0.0.1 must not read the console).
 - wrong tokens are counted per client (``app.console.tokens.GuessLimit``): after too many,
@@ -17,6 +18,7 @@ from collections.abc import Awaitable, Callable, MutableMapping
 from typing import Any
 
 from app.console import allowed_hosts, origin_allowed
+from app.console.operations import ACTOR
 
 MAX_BODY_BYTES = 256 * 1024
 """Largest request body [bytes]: a mission file of 200 legs is about 30 kB."""
@@ -45,6 +47,8 @@ class BodyLimit:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
+        client = scope.get("client")
+        ACTOR.set(f"API {client[0]}" if client else "API")  # the operations log's 'who'
         declared = dict(scope.get("headers") or []).get(b"content-length")
         if declared is not None and declared.isdigit() and int(declared) > self.limit:
             await self._refuse(send)

@@ -139,6 +139,9 @@ class ReplayOut(BaseModel):
     end_s: float
     playing: bool
     complete: bool
+    marks: list[tuple[float, str]] = Field(
+        default_factory=list, description="events on the scrub bar: [t_s, label]"
+    )
 
     @staticmethod
     def of(r: ReplayStatus) -> ReplayOut:

@@ -12,6 +12,7 @@ from here.
     replay.py     recordings on disk and their replay
     snapshot.py   Snapshot and the other immutable views
     alarms.py     operator alarms from the log rows
+    texts.py      the page's Markdown for results and signal-check counters
 
 It also passes on the core's rotations (``Rzyx``, ``quaternion_wxyz_from_rpy_radians``) and the
 wire's attachment point, so the view draws with the same geometry as the simulation.
@@ -33,6 +34,7 @@ from app.console.snapshot import (
     SceneInfo,
     Snapshot,
 )
+from app.console.texts import counters_markdown, result_markdown
 from control.config import ALLOCATIONS, MODES, Gains
 from missions.scoring import SATURATED
 from sim.drawing import attachment_point_n
@@ -64,6 +66,7 @@ __all__ = [
     "allowed_hosts",
     "attachment_point_n",
     "commands",
+    "counters_markdown",
     "initial_run",
     "is_loopback",
     "list_recordings",
@@ -72,5 +75,6 @@ __all__ = [
     "prepare_run",
     "quaternion_wxyz_from_rpy_radians",
     "recording_path",
+    "result_markdown",
     "station_keeping_mission",
 ]

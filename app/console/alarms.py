@@ -7,8 +7,12 @@ Five alarms, each with a limit taken from the parameter set where the thesis giv
 - ``position_error``: the tree is further from the reference than the funnels' capture
   tolerance (``DockingLayout.tolerance_m``), or its heading is off by more than
   ``heading_error_deg``.
+- ``position_error`` in free mode (the ROV flying on its own): the ROV against its free-flying
+  set point, with the same limits.
 - ``wire_slack``: the wire tension has dropped below ``slack_fraction`` of the tree's
-  submerged weight W0 (the wire only pulls, eq. 2.28: a slack wire no longer carries the tree).
+  submerged weight W0 (the wire only pulls, eq. 2.28: a slack wire no longer carries the tree),
+  while the tree hangs; a tree whose bottom is down at the post tops or deeper rests on the
+  frame, which carries it, and a slack wire is then the landed state, not an alarm.
 - ``innovation``: the mean normalised innovation squared of the last ``nis_window`` accepted
   position or heading fixes is above ``nis_limit`` (its expected value is 1 per axis when the
   EKF's model and noise agree with the measurements).
@@ -89,6 +93,11 @@ class AlarmMonitor:
     """Tree submerged weight W0 [N]."""
     uses_sensors: bool
     """True with EKF feedback: innovation and dropout alarms are armed."""
+    support_depth_m: float | None = None
+    """Depth of the docking frame's post tops [m] (None: no frame): a tree whose bottom is
+    there or deeper rests on the frame."""
+    tree_half_height_m: float = 0.0
+    """Half the tree's height: from its pose (centre) to its bottom [m]."""
     _sat_since: FloatArray = field(init=False)
     _last_accept: FloatArray = field(init=False)
     _nis: tuple[deque[float], deque[float]] = field(init=False)
@@ -101,15 +110,21 @@ class AlarmMonitor:
         self._nis = (deque(maxlen=self.limits.nis_window), deque(maxlen=self.limits.nis_window))
         self.state = tuple(Alarm(name, False, "") for name in ALARM_NAMES)
 
-    def update(self, rows: LogRows, tension_newton: float | None) -> tuple[Alarm, ...]:
-        """Advance with log rows and the present wire tension (None: unknown)."""
+    def update(
+        self,
+        rows: LogRows,
+        tension_newton: float | None,
+        free_setpoint_n: FloatArray | None = None,
+    ) -> tuple[Alarm, ...]:
+        """Advance with log rows, the present wire tension (None: unknown) and the free-flying
+        ROV's set point [north, east, down, psi] (None: unknown, as in a replay)."""
         if len(rows) == 0:
             return self.state
         self._t_s = float(rows.t_s[-1])
         self.state = (
             self._saturation(rows),
-            self._position(rows),
-            self._slack(tension_newton),
+            self._position(rows, free_setpoint_n),
+            self._slack(rows, tension_newton),
             self._innovation(rows),
             self._dropout(rows),
         )
@@ -136,19 +151,34 @@ class AlarmMonitor:
             )
         return Alarm("saturation", False, "")
 
-    def _position(self, rows: LogRows) -> Alarm:
-        tree, ref = rows["tree_eta_n"][-1], rows["eta_ref_n"][-1]
-        err_m = math.hypot(tree[0] - ref[0], tree[1] - ref[1])
-        err_deg = abs(math.degrees(ssa(float(tree[5] - ref[2]))))
+    def _position(self, rows: LogRows, free_setpoint_n: FloatArray | None) -> Alarm:
+        if float(rows["mode"][-1]) > 0.5:  # free mode: the ROV flies on its own
+            if free_setpoint_n is None:
+                return Alarm("position_error", False, "")
+            who, pose = "ROV", rows["rov_eta_n"][-1]
+            ref = np.array([free_setpoint_n[0], free_setpoint_n[1], free_setpoint_n[3]])
+            what = "its set point"
+        else:
+            who, pose, ref = "tree", rows["tree_eta_n"][-1], rows["eta_ref_n"][-1]
+            what = "the reference"
+        err_m = math.hypot(pose[0] - ref[0], pose[1] - ref[1])
+        err_deg = abs(math.degrees(ssa(float(pose[5] - ref[2]))))
         if err_m > self.limits.position_error_m or err_deg > self.limits.heading_error_deg:
             return Alarm(
-                "position_error", True, f"tree {err_m:.2f} m / {err_deg:.1f} deg off the reference"
+                "position_error", True, f"{who} {err_m:.2f} m / {err_deg:.1f} deg off {what}"
             )
         return Alarm("position_error", False, "")
 
-    def _slack(self, tension_newton: float | None) -> Alarm:
+    def resting(self, rows: LogRows) -> bool:
+        """The tree's bottom is down at the post tops or deeper: the frame carries it."""
+        if self.support_depth_m is None:
+            return False
+        bottom_m = float(rows["tree_eta_n"][-1][2]) + self.tree_half_height_m
+        return bottom_m >= self.support_depth_m
+
+    def _slack(self, rows: LogRows, tension_newton: float | None) -> Alarm:
         slack = self.limits.slack_fraction * self.weight_newton
-        if tension_newton is not None and tension_newton < slack:
+        if tension_newton is not None and tension_newton < slack and not self.resting(rows):
             return Alarm("wire_slack", True, f"wire tension {tension_newton / 1e3:.1f} kN")
         return Alarm("wire_slack", False, "")
 

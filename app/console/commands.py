@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
@@ -35,6 +36,26 @@ VESSEL_RANGE_M = 1000.0
 """Crane tip north and east within +-this [m]."""
 VESSEL_SPEED_MAX_MPS = 5.0
 REPLAY_T_MAX_S = 1.0e7
+GAIN_BAND_FACTOR = 4.0
+"""The console sets each controller gain within 0 to this many times the parameter set's gain:
+a band wide enough to tune by hand (the thesis's own tuning moved gains by about 2x) that keeps
+an operator's typing slip (99 999 for 9 999) from reaching the thrusters. Mission files set
+gains through their own legs, bounded by the schema."""
+AXIS_NAMES = ("surge", "sway", "yaw")
+
+
+def gain_band(preset: float) -> float:
+    """Largest gain the console sets for a term whose parameter-set value is ``preset``."""
+    return GAIN_BAND_FACTOR * preset if preset > 0.0 else 1.0
+
+
+def check_gain_band(gains: Gains | Mapping[str, Sequence[float]], preset: Gains) -> None:
+    """ValueError naming the first gain outside its band (see ``GAIN_BAND_FACTOR``);
+    ``gains``: a Gains or {term: (surge, sway, yaw)}."""
+    for term in ("kp", "ki", "kd"):
+        values = getattr(gains, term) if isinstance(gains, Gains) else gains[term]
+        for axis, value, ref in zip(AXIS_NAMES, values, getattr(preset, term), strict=True):
+            number(f"gain {term} {axis}", value, 0.0, gain_band(ref))
 
 
 def number(
@@ -167,7 +188,9 @@ class SetGains:
     gains: Gains
 
     def apply(self, console: PacedLoop) -> object:
-        console.session.sim.set_gains(self.gains)
+        sim = console.session.sim
+        check_gain_band(self.gains, Gains.of(sim.ps.gains.kp, sim.ps.gains.ki, sim.ps.gains.kd))
+        sim.set_gains(self.gains)
         g = self.gains
         console.session.note(
             "command", "gains", {"kp": list(g.kp), "ki": list(g.ki), "kd": list(g.kd)}

@@ -21,11 +21,13 @@ import collections
 import concurrent.futures
 import queue
 import time
+from dataclasses import replace
 
 import numpy as np
 
 from app.console.commands import Command
 from app.console.errors import ConsoleError
+from app.console.operations import ACTOR, Operation, OperationsLog, describe
 from app.console.session import Session
 from app.console.snapshot import LoopStats, Snapshot
 
@@ -50,9 +52,11 @@ class PacedLoop:
         self.speed = speed
         self.paused = paused
         self.period_s = session.sim.dt_s
-        self._queue: queue.SimpleQueue[tuple[Command, concurrent.futures.Future]] = (
+        self._queue: queue.SimpleQueue[tuple[Command, concurrent.futures.Future, str]] = (
             queue.SimpleQueue()
         )
+        self.operations = OperationsLog()
+        self._operations: tuple[Operation, ...] = ()
         self._stop = False
         self._seq = 0
         self._ticks = 0
@@ -101,19 +105,23 @@ class PacedLoop:
         return np.concatenate([self._lateness[i:], self._lateness[:i]])
 
     # --------------------------------------------------------------- for writers
-    def submit(self, command: Command) -> concurrent.futures.Future:
-        """Queue a command (from any thread); the future holds its result or its error."""
+    def submit(self, command: Command, who: str | None = None) -> concurrent.futures.Future:
+        """Queue a command (from any thread); the future holds its result or its error.
+        ``who`` sent it (default: the context's ``operations.ACTOR``): the operations log
+        names them."""
         future: concurrent.futures.Future = concurrent.futures.Future()
-        self._queue.put((command, future))
+        self._queue.put((command, future, who or ACTOR.get()))
         return future
 
     async def call(self, command: Command, timeout_s: float = 10.0) -> object:
         """Submit and wait (from a coroutine on the loop's event loop or another)."""
         return await asyncio.wait_for(asyncio.wrap_future(self.submit(command)), timeout_s)
 
-    def call_blocking(self, command: Command, timeout_s: float = 10.0) -> object:
+    def call_blocking(
+        self, command: Command, timeout_s: float = 10.0, who: str | None = None
+    ) -> object:
         """Submit and wait (from a thread, e.g. a viser callback)."""
-        return self.submit(command).result(timeout=timeout_s)
+        return self.submit(command, who).result(timeout=timeout_s)
 
     def stop(self) -> None:
         self._stop = True
@@ -204,11 +212,14 @@ class PacedLoop:
     def _drain(self) -> None:
         for _ in range(MAX_COMMANDS_PER_TICK):
             try:
-                command, future = self._queue.get_nowait()
+                command, future, who = self._queue.get_nowait()
             except queue.Empty:
                 return
             if not future.set_running_or_notify_cancel():
                 continue
+            action = describe(command)
+            notes_before = self.session.notes_written
+            self.session.actor = who
             try:
                 self.session.flush_recording()
                 result = command.apply(self)
@@ -218,12 +229,30 @@ class PacedLoop:
                     future.set_result(result)
             except Exception as err:
                 future.set_exception(err)
+                self._log_operation(who, action, f"refused: {err}", noted=False)
+            else:
+                noted = self.session.notes_written > notes_before
+                self._log_operation(who, action, "done", noted)
+            finally:
+                self.session.actor = None
+
+    def _log_operation(self, who: str, action: str, outcome: str, noted: bool) -> None:
+        """Into the operations log; and into the recording unless the command wrote its own
+        event (which then names ``who``)."""
+        entry = self.operations.add(self.session.sim.t_s, who, action, outcome)
+        self._operations = self.operations.latest()
+        if not noted:
+            self.session.note(
+                "operation",
+                f"{who}: {action} ({outcome})",
+                {"who": who, "action": action, "outcome": outcome, "utc": entry.utc},
+            )
 
     def _fail_pending(self) -> None:
         self.cancel_steps("the console is shutting down")
         while True:
             try:
-                _, future = self._queue.get_nowait()
+                _, future, _ = self._queue.get_nowait()
             except queue.Empty:
                 return
             if future.set_running_or_notify_cancel():
@@ -233,7 +262,8 @@ class PacedLoop:
         if self._ticks % 50 == 0:
             self._stats = self._compute_stats()
         self._seq += 1
-        self._snapshot = self.session.snapshot(self._seq, self.paused, self.speed, self._stats)
+        snap = self.session.snapshot(self._seq, self.paused, self.speed, self._stats)
+        self._snapshot = replace(snap, operations=self._operations)
 
     def _compute_stats(self) -> LoopStats:
         n = min(self._ticks, JITTER_WINDOW)

@@ -55,6 +55,34 @@ def list_recordings(directory: Path) -> list[dict]:
     ]
 
 
+MARK_LABELS = {"mission": "leg", "run": "run", "landing": "landing", "dock": "dock"}
+"""Event kinds marked with a word on the replay's scrub bar; commands, operations and alarms
+coming on get a plain tick (labels would run into each other)."""
+MAX_MARKS = 60
+
+
+def event_marks(events: list[dict], start_s: float, end_s: float) -> tuple[tuple[float, str], ...]:
+    """Marks for the scrub bar from a recording's events: (time, label) with an empty label
+    for a plain tick. Legs, new runs and landings are named; commands, operations and alarms
+    that came on are ticks; the rest (alarms going off, notes) is left out."""
+    marks: list[tuple[float, str]] = []
+    for e in events:
+        t, kind = e.get("t_s"), e.get("kind")
+        if not isinstance(t, int | float) or not start_s <= t <= end_s:
+            continue
+        data = e.get("data") or {}
+        if kind in MARK_LABELS:
+            label = MARK_LABELS[kind]
+            if kind == "mission" and "leg" in data:
+                label = f"L{data['leg']}"
+            elif kind == "mission":
+                label = str(data.get("state", "mission"))
+            marks.append((float(t), label))
+        elif kind in ("command", "operation") or (kind == "alarm" and data.get("active", True)):
+            marks.append((float(t), ""))
+    return tuple(marks[:MAX_MARKS])
+
+
 class Replay:
     """A recorded session played back against simulation time (the recorder keeps rows at its
     numeric rate, e.g. 20 Hz: the replay shows the last row at or before its clock)."""
@@ -77,6 +105,7 @@ class Replay:
         self.playing = False
         self.trend_all = frozen_copy(trend_rows(self.log))
         self.mission = recorded_mission_name(data.metadata or {}, name)
+        self.marks = event_marks(data.events, float(self.times[0]), float(self.times[-1]))
         self.monitor = self._new_monitor()
         self.monitor.update(self._rows(0, 1), self._tension(0))
 
@@ -118,6 +147,8 @@ class Replay:
             self.scene.tree_weight_newton,
             uses_sensors=self.log.layout.has("accepted")
             and bool(np.any(self.log["accepted"] > 0.5)),
+            support_depth_m=self.scene.support_depth_m,
+            tree_half_height_m=self.scene.tree_dimensions_m[2] / 2.0,
         )
 
     @property
@@ -167,5 +198,11 @@ class Replay:
 
     def status(self) -> ReplayStatus:
         return ReplayStatus(
-            self.name, self.t_s, self.start_s, self.end_s, self.playing, bool(self.data.complete)
+            self.name,
+            self.t_s,
+            self.start_s,
+            self.end_s,
+            self.playing,
+            bool(self.data.complete),
+            self.marks,
         )

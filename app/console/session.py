@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+import sqlite3
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
@@ -21,8 +22,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from app import scores
 from app.console.alarms import AlarmLimits, AlarmMonitor
 from app.console.errors import ConsoleError
+from app.console.operations import trainee_of
 from app.console.replay import Replay, recording_path
 from app.console.snapshot import (
     LoopStats,
@@ -86,6 +89,10 @@ def prepare_run(mission: schema.Mission, run_legs: bool = True) -> PreparedRun:
     return PreparedRun(mission, build_simulation(mission), run_legs)
 
 
+SCORES_DB = "scores.sqlite"
+"""The scores database, in the recordings folder (``rov-console scores --db``)."""
+
+
 class Session:
     """The live simulation with its mission, alarms, recorder and replay."""
 
@@ -97,6 +104,13 @@ class Session:
         self.recording_name: str | None = None
         self._recording_label = ""
         self._rec_rows: list[FloatArray] = []
+        self.actor: str | None = None
+        self.started_by: str | None = None
+        """Who sent the command being applied (set by the loop; None between commands)."""
+        self.notes_written = 0
+        self._rec_offset_s = 0.0
+        """Added to the simulation time in the recording: a run started while recording goes
+        on in the same file after the one before."""
         self.replay: Replay | None = None
         self._trend_cache = frozen_copy(np.zeros((0, 7)))
         self._trend_wall = 0.0
@@ -104,6 +118,8 @@ class Session:
 
     # ------------------------------------------------------------------ set-up
     def _install(self, run: PreparedRun) -> None:
+        self.started_by = self.actor
+        """Who started this run (None: the console itself, at start-up)."""
         self.sim = run.sim
         self.mission = run.mission
         self.driver = MissionDriver(run.mission, run.sim) if run.run_legs else None
@@ -119,12 +135,16 @@ class Session:
             sim.ps, sim.crane_tip_n[0:2], float(sim.tree_eta_n[5]), float(sim.tree_eta_n[2])
         )
         self._scene_version += 1
-        self.scene = scene_info(sim.ps, frame, self._scene_version)
+        self.scene = scene_info(
+            sim.ps, frame, self._scene_version, frame_in_mission=sim.docking_frame is not None
+        )
         self.monitor = AlarmMonitor(
             AlarmLimits.for_params(sim.ps),
             self.scene.n_thrusters,
             self.scene.tree_weight_newton,
             uses_sensors=sim.settings.feedback == "ekf",
+            support_depth_m=self.scene.support_depth_m,
+            tree_half_height_m=self.scene.tree_dimensions_m[2] / 2.0,
         )
         self.trend = TrendBuffer(sim.dt_s)
         self.last_row = sim.present_row()
@@ -133,18 +153,38 @@ class Session:
         self.notices: tuple[str, ...] = ()
 
     def replace_run(self, run: PreparedRun) -> None:
-        """Swap in a new simulation; a recording in progress goes on in a new file (the log's
-        time starts again at zero)."""
+        """Swap in a new simulation. A recording in progress goes on in the same file, its
+        time continuing from where the last run stopped, when the new run has the same
+        parameter set (the same log layout); otherwise it goes on in a new file, and a notice
+        says so."""
         self.close_replay()
         if self._mission_running:
             self._finish_mission("aborted")
         label = self._recording_label
         was_recording = self.recorder is not None
+        same_layout = (
+            run.sim.ps.name == self.sim.ps.name and run.sim.n_thrusters == self.sim.n_thrusters
+        )
+        if was_recording and same_layout:
+            self.flush_recording()
+            self._rec_offset_s += self.sim.t_s - run.sim.t_s + self.sim.dt_s
+            self._install(run)
+            self.note(
+                "run",
+                f"new run: {run.mission.name}" + (" (its legs)" if run.run_legs else ""),
+                {"mission": run.mission.name, "legs": run.run_legs},
+            )
+            return
         if was_recording:
-            self.stop_recording()
+            old = self.stop_recording()
         self._install(run)
         if was_recording:
-            self.start_recording(label)
+            new = self.start_recording(label)
+            self.notices = (
+                *self.notices[-4:],
+                f"recording goes on in {new}: the new run's parameter set "
+                f"({run.sim.ps.name}) differs from {old}'s",
+            )
 
     # ------------------------------------------------------------------ stepping
     @property
@@ -210,7 +250,22 @@ class Session:
         self.mission_status = MissionStatus(
             s.name, state, s.leg_index, s.legs_total, s.leg_type, s.leg_name
         )
-        self._result = self._workers.submit(lambda: driver.result().summary())
+        started_by, log_file = self.started_by, self.recording_name
+        db = self.recordings_dir / SCORES_DB
+
+        def score() -> dict:
+            result = driver.result()
+            summary = result.summary()
+            if started_by is not None:  # someone flew it: their score goes in the database
+                try:
+                    summary["score_id"] = scores.record(
+                        db, trainee_of(started_by), result, "console", log_file
+                    )
+                except (OSError, ValueError, sqlite3.Error) as err:
+                    summary["score_error"] = f"scores not stored in {db}: {err}"
+            return summary
+
+        self._result = self._workers.submit(score)
         self.note("mission", f"mission {s.name} {state}", {"state": state})
 
     def fail(self, message: str) -> None:
@@ -232,7 +287,10 @@ class Session:
         frame = self.sim.docking_frame
         if frame is not None and frame is not self.scene.frame:
             self._scene_version += 1
-            self.scene = replace(self.scene, frame=frame, version=self._scene_version)
+            self.scene = replace(
+                self.scene, frame=frame, version=self._scene_version, frame_in_mission=True
+            )
+            self.monitor.support_depth_m = self.scene.support_depth_m
 
     def _take_rows(self, rows: LogRows) -> None:
         self._follow_docking_frame()
@@ -240,7 +298,8 @@ class Session:
         self.trend.extend(rows)
         self.tension_newton = self.sim.wire_tension_newton()
         before = {a.name: a.active for a in self.monitor.state}
-        for alarm in self.monitor.update(rows, self.tension_newton):
+        free_setpoint = self.sim.free_setpoint_n
+        for alarm in self.monitor.update(rows, self.tension_newton, free_setpoint):
             if alarm.active != before.get(alarm.name):
                 self.note(
                     "alarm",
@@ -279,12 +338,16 @@ class Session:
 
     # ------------------------------------------------------------------ recording
     def note(self, kind: str, text: str, data: dict) -> None:
-        """An event in the recording (commands, alarms, mission progress)."""
+        """An event in the recording (commands, alarms, mission progress); while the loop
+        applies someone's command, the event names them (``who``)."""
+        self.notes_written += 1
+        if self.actor is not None:
+            data = {**data, "who": self.actor}
         if self.recorder is None:
             return
         self.flush_recording()
         try:
-            self.recorder.event(self.sim.t_s, kind, text, data)
+            self.recorder.event(self.sim.t_s + self._rec_offset_s, kind, text, data)
         except Exception as err:
             self._recording_failed(err)
 
@@ -315,6 +378,7 @@ class Session:
         self.recording_name = name
         self._recording_label = label
         self._rec_rows = []
+        self._rec_offset_s = 0.0
         return name
 
     def flush_recording(self) -> None:
@@ -322,6 +386,8 @@ class Session:
             return
         rows = np.vstack(self._rec_rows)
         self._rec_rows = []
+        if self._rec_offset_s:
+            rows[:, 0] += self._rec_offset_s  # t_s, the first column (control.columns)
         try:
             self.recorder.write_log(
                 rows,
@@ -368,12 +434,13 @@ class Session:
         except (KeyError, TypeError, ValueError):
             return self.scene
         frame = recorded_docking_frame(meta)
+        in_mission = frame is not None
         if frame is None:
             first = np.asarray(data.rows, float)[0]
             tree = LAYOUT.take(first, "tree_eta_n")
             frame = default_docking_frame(ps, tree[0:2], float(tree[5]), float(tree[2]))
         self._scene_version += 1
-        return scene_info(ps, frame, self._scene_version)
+        return scene_info(ps, frame, self._scene_version, frame_in_mission=in_mission)
 
     def close_replay(self) -> None:
         if self.replay is not None:
@@ -436,6 +503,8 @@ class Session:
             stats=stats,
             warnings=(*sim.startup.warnings, *self.notices),
             error=self.error,
+            target=tuple(float(v) for v in sim.target),  # type: ignore[arg-type]
+            quality_counters=tuple(tuple(int(c) for c in row) for row in sim.quality_counters),
             trend=self._trend(),
         )
 

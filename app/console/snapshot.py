@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.console.alarms import Alarm
+from app.console.operations import Operation
 from control.columns import LogRows
 from control.config import MODES, Gains
 from sim.docking import DockingFrame, DockingLayout
@@ -51,6 +52,16 @@ class SceneInfo:
     """Tree submerged weight W0 [N]."""
     preset_gains: Gains
     """The parameter set's controller gains (the gain sliders' reference)."""
+    frame_in_mission: bool = False
+    """True when the mission places the docking frame (False: ``frame`` is drawn under the
+    tree only to give the scene a seabed)."""
+
+    @property
+    def support_depth_m(self) -> float | None:
+        """Depth of the post tops, where a tree coming down rests on the frame [m]."""
+        if not self.frame_in_mission:
+            return None
+        return self.frame.landing_depth_m - self.layout.post_height_m
 
 
 @dataclass(frozen=True)
@@ -80,6 +91,8 @@ class ReplayStatus:
     playing: bool
     complete: bool
     """False when the log was not closed cleanly (its tail was recovered)."""
+    marks: tuple[tuple[float, str], ...] = ()
+    """Events to mark on the scrub bar: (time [s], label; '' for a plain tick)."""
 
 
 @dataclass(frozen=True)
@@ -133,6 +146,14 @@ class Snapshot:
     stats: LoopStats
     warnings: tuple[str, ...] = ()
     error: str | None = None
+    quality_counters: tuple[tuple[int, ...], ...] | None = None
+    """Signal-check counters: a row a sensor (position, depth, compass, dvl, gyro), a column a
+    check (range, wild point, frozen, variance); None in a replay."""
+    operations: tuple[Operation, ...] = ()
+    """The latest operations (who did what), oldest first."""
+    target: Vec3 | None = None
+    """The tree's target [north, east, psi] (where the reference model is heading; None in a
+    replay)."""
     trend: FloatArray = field(default_factory=lambda: _frozen(np.zeros((0, 7))), repr=False)
 
     @property
@@ -163,7 +184,9 @@ def default_docking_frame(
     return DockingFrame(np.asarray(center_ne, float).copy(), heading_rad, landing)
 
 
-def scene_info(ps: ParameterSet, frame: DockingFrame, version: int) -> SceneInfo:
+def scene_info(
+    ps: ParameterSet, frame: DockingFrame, version: int, frame_in_mission: bool = False
+) -> SceneInfo:
     dims = ps.tree.dimensions_m
     return SceneInfo(
         version=version,
@@ -177,6 +200,7 @@ def scene_info(ps: ParameterSet, frame: DockingFrame, version: int) -> SceneInfo
         wire_weight_newton_per_m=float(ps.wire.submerged_weight_per_length()),
         tree_weight_newton=float(ps.tree.submerged_weight_newton),
         preset_gains=Gains.of(ps.gains.kp, ps.gains.ki, ps.gains.kd),
+        frame_in_mission=frame_in_mission,
     )
 
 

@@ -21,10 +21,12 @@ from control.columns import AXES3, AXES6, COLUMN_NAMES, LAYOUT, LOG_COLUMNS, Lay
 
 FloatArray = NDArray[np.float64]
 
-FORMAT_VERSION = 2
-"""Version of this file layout (channels, schemas, metadata keys). 2: columns of
-control.columns (newtons spelt ``_newton``) and the setup keys of ``session_metadata``;
-1: the first files (readers take both)."""
+FORMAT_VERSION = 3
+"""Version of this file layout (channels, schemas, metadata keys). 3: ``/session/log`` holds
+only the columns no plot channel carries exactly (``session_columns``), the reader takes the
+rest back from the plot channels; 2: columns of control.columns (newtons spelt ``_newton``),
+the whole row on ``/session/log``, and the setup keys of ``session_metadata``; 1: the first
+files (readers take all three)."""
 SETUP_RECORD = "setup"
 """Name of the metadata record holding the session's set-up."""
 RESERVED_SETUP_KEYS = ("params", "columns", "recorder")
@@ -232,3 +234,25 @@ def plot_channels(n_thrusters: int) -> tuple[PlotChannel, ...]:
 
 WIRE_FIELDS = ("crane_tip_north_m", "crane_tip_east_m", "wire_length_m", "tree_offset_from_tip_m")
 """Fields of ``/wire`` (besides t_s)."""
+
+
+def carried_columns(n_thrusters: int) -> dict[str, tuple[str, str]]:
+    """The log row's columns that a plot channel carries exactly (in the core's unit, not a
+    difference): flat column name -> (topic, field name), the first channel that has it.
+    ``/session/log`` leaves these out; the reader takes them back from that channel."""
+    out: dict[str, tuple[str, str]] = {}
+    for ch in plot_channels(n_thrusters):
+        for f in ch.fields:
+            if f.scale == 1.0 and f.minus is None:
+                at, _ = f.columns()
+                out.setdefault(LAYOUT.names[at], (ch.topic, f.name))
+    return out
+
+
+def session_columns(n_thrusters: int) -> list[str]:
+    """The columns ``/session/log`` writes for an ROV with ``n_thrusters`` thrusters (row
+    order): time, the true velocities, angles and propeller speeds (the plot channels give
+    them in degrees and rpm), the site, the unused thruster slots, and whatever else no plot
+    channel carries exactly."""
+    carried = carried_columns(n_thrusters)
+    return [c for c in COLUMNS if c not in carried]

@@ -166,10 +166,12 @@ def wire_message(row: FloatArray, crane_tip_n: FloatArray, wire_length_m: float)
     }
 
 
-def session_row_message(row: FloatArray) -> dict:
-    """``/session/log``: the whole row, exactly (non-finite values as null)."""
-    values = row.tolist()
-    if not np.all(np.isfinite(row)):
+def session_row_message(row: FloatArray, columns: NDArray[np.intp] | None = None) -> dict:
+    """``/session/log``: the row's entries at ``columns`` (None: the whole row), exactly
+    (non-finite values as null)."""
+    part = row if columns is None else row[columns]
+    values = part.tolist()
+    if not np.all(np.isfinite(part)):
         values = [v if math.isfinite(v) else None for v in values]
     return {"t_s": _t_s(row), "row": values}
 

@@ -4,6 +4,11 @@ The file is scanned record by record; the reader stops at the first record that 
 damaged and returns everything before it, with ``complete=False`` and where it stopped. Reading
 never changes the file.
 
+Since format 3 ``/session/log`` holds only the columns no plot channel carries exactly; the
+reader puts each row back together from it and the plot messages of the same log time (the
+channel's ``carried`` metadata says where each other column is), so ``rows`` are whole rows
+whichever format the file has.
+
 The rows are read by block name whatever layout they were recorded in: ``data.log`` is a
 ``LogRows`` over the file's own columns (``Layout.from_names``), so ``data.log["tree_eta_n"]``
 works on files written before the log row was declared in ``control.columns`` too.
@@ -47,7 +52,8 @@ class SessionData:
     t_s: FloatArray
     """(n,) simulation time of each row [s]."""
     rows: FloatArray
-    """(n, len(columns)) the rows of ``/session/log``, in the recorded column order."""
+    """(n, len(columns)) the whole rows (``/session/log`` and, since format 3, the columns
+    the plot channels carry), in the recorded column order."""
     events: list[dict]
     complete: bool
     """Footer present and every record intact."""
@@ -207,11 +213,65 @@ def _decode_setup(scan: FileScan) -> dict:
     return out
 
 
-def _session_columns(scan: FileScan) -> list[str] | None:
+def _session_channel_metadata(scan: FileScan) -> dict[str, str]:
     for ch in scan.channels.values():
-        if ch.topic == SESSION_TOPIC and "columns" in ch.metadata:
-            return json.loads(ch.metadata["columns"])
-    return None
+        if ch.topic == SESSION_TOPIC:
+            return dict(ch.metadata)
+    return {}
+
+
+@dataclass(frozen=True)
+class RowSources:
+    """Where each column of the recorded row is: on ``/session/log`` or on a plot channel."""
+
+    columns: list[str]
+    """The row's flat names, in row order."""
+    written: list[str]
+    """The columns ``/session/log`` holds, in its order (all of them before format 3)."""
+    carried: dict[str, tuple[str, str]]
+    """Column -> (topic, field) of the plot channel holding it (empty before format 3)."""
+
+
+def _row_sources(path: Path | str, setup: dict, scan: FileScan) -> RowSources:
+    meta = _session_channel_metadata(scan)
+    written = json.loads(meta["columns"]) if "columns" in meta else None
+    carried = {
+        str(k): (str(v[0]), str(v[1])) for k, v in json.loads(meta.get("carried", "{}")).items()
+    }
+    fallback = written if written is not None and not carried else COLUMNS
+    columns = list(setup.get("columns") or fallback)
+    written = columns if written is None else list(written)
+    if carried:
+        unknown = sorted((set(written) | set(carried)) ^ set(columns))
+        if unknown or len(written) + len(carried) != len(columns):
+            raise ValueError(
+                f"{path}: {SESSION_TOPIC} and its carried columns do not make up the "
+                f"recorded row (differ in {', '.join(unknown) or 'duplicates'})"
+            )
+    return RowSources(columns, written, carried)
+
+
+def _rebuilt_rows(scan: FileScan, written_rows: FloatArray, sources: RowSources) -> FloatArray:
+    """The whole rows: ``/session/log``'s columns, and each carried column from the message of
+    its plot channel with the same log time (NaN where that message is missing)."""
+    msgs = scan.messages.get(SESSION_TOPIC, [])
+    where = {c: i for i, c in enumerate(sources.columns)}
+    rows = np.full((len(msgs), len(sources.columns)), math.nan)
+    rows[:, [where[c] for c in sources.written]] = written_rows
+    by_topic: dict[str, list[tuple[int, str]]] = {}
+    for column, (topic, name) in sources.carried.items():
+        by_topic.setdefault(topic, []).append((where[column], name))
+    for topic, fields in by_topic.items():
+        at_time = {m.log_time: m for m in scan.messages.get(topic, [])}
+        for i, m in enumerate(msgs):
+            other = at_time.get(m.log_time)
+            if other is None:
+                continue
+            values = json.loads(other.data)
+            for k, name in fields:
+                v = values.get(name)
+                rows[i, k] = math.nan if v is None else v
+    return rows
 
 
 def _rows(messages: list[Message], width: int) -> FloatArray:
@@ -239,11 +299,14 @@ def read_scan(path: str | Path) -> tuple[FileScan, SessionData]:
     scan = _scan_file(Path(path))
     _check_statistics(scan)
     setup = _decode_setup(scan)
-    columns = list(setup.get("columns") or _session_columns(scan) or COLUMNS)
+    sources = _row_sources(path, setup, scan)
+    columns = sources.columns
     layout = Layout.from_names(columns)
     if not layout.has("t_s"):
         raise ValueError(f"{path}: the recorded columns have no t_s")
-    rows = _rows(scan.messages.get(SESSION_TOPIC, []), len(columns))
+    rows = _rows(scan.messages.get(SESSION_TOPIC, []), len(sources.written))
+    if sources.carried:
+        rows = _rebuilt_rows(scan, rows, sources)
     events = [json.loads(m.data) for m in scan.messages.get(EVENTS_TOPIC, [])]
     ends = [m.log_time for msgs in scan.messages.values() for m in msgs]
     data = SessionData(

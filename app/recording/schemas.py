@@ -248,7 +248,8 @@ def wire_schema() -> dict:
 def session_log_schema() -> dict:
     return _object(
         "rov_console.SessionLogRow",
-        "one full row of the closed-loop log",
+        "one row of the closed-loop log: the columns no plot channel carries exactly (the "
+        "channel's 'carried' metadata names the topic and field of each other column)",
         {
             "t_s": _num("simulation time [s]"),
             "row": _array(

@@ -3,9 +3,11 @@
 Decimation
     Log rows (one per plant step) are decimated by their *simulation* time, never by wall time,
     so the same seeded run gives the same messages. A row is kept when it is the first one at or
-    after a multiple of 1/rate. Every kept row of the numeric rate goes, in full and exactly, to
-    ``/session/log``; the same rows feed the named plot channels, ``/wire`` and ``/tf``; the rows
-    of the (slower) scene rate feed ``/scene``.
+    after a multiple of 1/rate. Every kept row of the numeric rate feeds the named plot
+    channels, ``/wire`` and ``/tf``, and ``/session/log`` gets, exactly, the row's columns that
+    no plot channel carries exactly (``channels.session_columns``; the channel's ``carried``
+    metadata says which topic and field holds each of the others, and the reader puts the whole
+    row back together); the rows of the (slower) scene rate feed ``/scene``.
 
 Crash safety
     Messages are grouped in zstd-compressed chunks. A chunk is closed and handed to the
@@ -49,7 +51,9 @@ from app.recording.channels import (
     SETUP_RECORD,
     TF_TOPIC,
     WIRE_TOPIC,
+    carried_columns,
     plot_channels,
+    session_columns,
 )
 from app.recording.messages import (
     event_message,
@@ -219,6 +223,11 @@ class SessionRecorder:
         )
         setup = _setup_record(metadata, params, n_thrusters, rates, self._origin_ns)
         self._plots = plot_channels(n_thrusters)
+        self._session_columns = session_columns(n_thrusters)
+        self._session_at = np.array(
+            [COLUMN_NAMES.index(c) for c in self._session_columns], dtype=np.intp
+        )
+        self._carried = carried_columns(n_thrusters)
         self._geo = scene_geometry(params)
         self.path = Path(path)
         self._file: BinaryIO = open(self.path, "wb" if overwrite else "xb")
@@ -277,7 +286,11 @@ class SessionRecorder:
         add(
             SESSION_TOPIC,
             schemas.session_log_schema(),
-            {"kind": "table", "columns": json.dumps(COLUMNS)},
+            {
+                "kind": "table",
+                "columns": json.dumps(self._session_columns),
+                "carried": json.dumps(self._carried),
+            },
         )
         add(TF_TOPIC, schemas.frame_transforms_schema())
         add(SCENE_TOPIC, schemas.scene_update_schema())
@@ -345,7 +358,7 @@ class SessionRecorder:
         self._note_time(t_s)
         t_ns = self._origin_ns + round(t_s * 1e9)
         if numeric:
-            self._add(SESSION_TOPIC, t_ns, session_row_message(row))
+            self._add(SESSION_TOPIC, t_ns, session_row_message(row, self._session_at))
             self._add(TF_TOPIC, t_ns, tf_message(t_ns, row))
             for ch in self._plots:
                 self._add(ch.topic, t_ns, plot_message(ch, row))

@@ -1,0 +1,200 @@
+"""Scores of flown missions, kept in an embedded SQLite database (one file, no server).
+
+Each finished mission is one row: who flew it (the trainee), the mission, when, where its log
+is, and its figures: landed or not (the funnel tolerance and the landing-speed limit), time
+to the first contact, miss, heading error and contact speed at it, RMS errors, time saturated
+and thrust spent. The console writes a row when a mission it runs ends; ``rov-console run
+--trainee NAME`` writes one for a headless run; ``rov-console scores`` lists them.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sqlite3
+from contextlib import closing
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+
+from missions.scoring import MissionResult
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS runs (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    utc TEXT NOT NULL,
+    trainee TEXT NOT NULL,
+    mission TEXT NOT NULL,
+    source TEXT NOT NULL,
+    log_file TEXT,
+    passed INTEGER NOT NULL,
+    landed INTEGER,
+    time_to_dock_s REAL,
+    miss_m REAL,
+    heading_error_deg REAL,
+    contact_speed_mps REAL,
+    rms_north_m REAL,
+    rms_east_m REAL,
+    rms_heading_deg REAL,
+    saturated_s REAL,
+    thrust_newton_s REAL,
+    faults TEXT NOT NULL DEFAULT ''
+)
+"""
+COLUMNS = (
+    "id",
+    "utc",
+    "trainee",
+    "mission",
+    "source",
+    "log_file",
+    "passed",
+    "landed",
+    "time_to_dock_s",
+    "miss_m",
+    "heading_error_deg",
+    "contact_speed_mps",
+    "rms_north_m",
+    "rms_east_m",
+    "rms_heading_deg",
+    "saturated_s",
+    "thrust_newton_s",
+    "faults",
+)
+NAME_MAX = 60
+
+
+@dataclass(frozen=True)
+class Score:
+    """One row of the database."""
+
+    id: int
+    utc: str
+    trainee: str
+    mission: str
+    source: str
+    log_file: str | None
+    passed: bool
+    landed: bool | None
+    """None: the mission has no landing."""
+    time_to_dock_s: float | None
+    miss_m: float | None
+    heading_error_deg: float | None
+    contact_speed_mps: float | None
+    rms_north_m: float
+    rms_east_m: float
+    rms_heading_deg: float
+    saturated_s: float
+    thrust_newton_s: float | None
+    faults: str
+
+
+def trainee_name(text: str) -> str:
+    """A trainee's name as stored: spaces folded, at most ``NAME_MAX`` characters;
+    ValueError when empty."""
+    name = " ".join(str(text).split())[:NAME_MAX]
+    if not name:
+        raise ValueError("trainee: give a name (letters, at most 60 characters)")
+    return name
+
+
+def thrust_spent(result: MissionResult) -> float | None:
+    """Sum over thrusters of the time integral of |force| [N s] (None without the log)."""
+    rows = result.log
+    if rows is None or len(rows) < 2:
+        return None
+    return float(np.sum(np.trapezoid(np.abs(rows["thruster_force"]), rows.t_s, axis=0)))
+
+
+def _finite(v: float | None) -> float | None:
+    return float(v) if v is not None and math.isfinite(v) else None
+
+
+def record(
+    db: Path,
+    trainee: str,
+    result: MissionResult,
+    source: str,
+    log_file: str | None = None,
+    faults: str = "",
+) -> int:
+    """Store one finished mission; returns its row id."""
+    landing = result.landings[0] if result.landings else None
+    values = {
+        "utc": datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "trainee": trainee_name(trainee),
+        "mission": result.name,
+        "source": source,
+        "log_file": log_file,
+        "passed": int(not result.failed),
+        "landed": None if landing is None else int(landing.success),
+        "time_to_dock_s": None if landing is None else _finite(landing.t_contact_s),
+        "miss_m": None if landing is None else _finite(landing.miss_m),
+        "heading_error_deg": None if landing is None else _finite(landing.heading_error_deg),
+        "contact_speed_mps": None if landing is None else _finite(landing.contact_speed_mps),
+        "rms_north_m": result.rms_north_m,
+        "rms_east_m": result.rms_east_m,
+        "rms_heading_deg": result.rms_heading_deg,
+        "saturated_s": result.saturated_time_s,
+        "thrust_newton_s": _finite(thrust_spent(result)),
+        "faults": faults,
+    }
+    db.parent.mkdir(parents=True, exist_ok=True)
+    with closing(sqlite3.connect(db)) as con, con:
+        con.execute(SCHEMA)
+        cur = con.execute(
+            f"INSERT INTO runs ({', '.join(values)}) VALUES ({', '.join('?' * len(values))})",
+            tuple(values.values()),
+        )
+        return int(cur.lastrowid or 0)
+
+
+def history(db: Path, trainee: str | None = None, mission: str | None = None) -> list[Score]:
+    """Stored runs, newest first, of one trainee and/or mission (all when None)."""
+    if not db.exists():
+        return []
+    where, args = [], []
+    if trainee:
+        where.append("trainee = ?")
+        args.append(trainee_name(trainee))
+    if mission:
+        where.append("mission = ?")
+        args.append(mission)
+    sql = f"SELECT {', '.join(COLUMNS)} FROM runs"
+    sql += (" WHERE " + " AND ".join(where)) if where else ""
+    sql += " ORDER BY id DESC"
+    try:
+        with closing(sqlite3.connect(db)) as con:
+            con.execute(SCHEMA)
+            rows = con.execute(sql, args).fetchall()
+    except sqlite3.DatabaseError as err:
+        raise ValueError(f"{db}: not a scores database ({err})") from None
+    return [_score(row) for row in rows]
+
+
+def _score(row: tuple) -> Score:
+    r = dict(zip(COLUMNS, row, strict=True))
+    r["passed"] = bool(r["passed"])
+    r["landed"] = None if r["landed"] is None else bool(r["landed"])
+    return Score(**r)
+
+
+def best(scores: list[Score]) -> list[Score]:
+    """The best run of each mission: passed first, then the smallest landing miss, then the
+    smallest RMS position error."""
+
+    def key(s: Score) -> tuple:
+        miss = s.miss_m if s.miss_m is not None else 0.0
+        return (not s.passed, miss, math.hypot(s.rms_north_m, s.rms_east_m))
+
+    out: dict[str, Score] = {}
+    for s in scores:
+        if s.mission not in out or key(s) < key(out[s.mission]):
+            out[s.mission] = s
+    return sorted(out.values(), key=lambda s: s.mission)
+
+
+def as_json(scores: list[Score]) -> str:
+    return json.dumps([s.__dict__ for s in scores], indent=2)

@@ -1,0 +1,85 @@
+"""What the console's page receives and draws, measured in headless Chromium.
+
+The page promises a status line refreshed 5 times a second (``web.panels.STATUS_EVERY_S``) and
+plots twice a second (``PLOTS_EVERY_S``). This opens the console in Debian's chromium, counts in
+the page itself how often the status text changes (a MutationObserver) and how often each plot
+gets new data (uPlot's data arrays, sampled every 50 ms), and how many bytes the view's
+websocket delivers a second, for ``--seconds`` of a running console at ``--speed``.
+
+    .venv/bin/python benchmarks/page_rates.py --seconds 20 --speed 1
+
+Prints one JSON object: rates per second, against what the page promises.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from app.console import ConsoleSettings
+from app.server import serve_in_thread
+from tests.browser import CHROMIUM, CHROMIUM_ARGS, _dismiss_notifications
+from web import panels
+
+WATCH = """() => {
+  window.__rates = {status: 0, plots: 0, bytes: 0};
+  const status = Array.from(document.querySelectorAll('p, div'))
+    .find(e => e.children.length < 6 && /t = .* s, (running|paused)/.test(e.textContent));
+  new MutationObserver(() => window.__rates.status++)
+    .observe(status, {subtree: true, childList: true, characterData: true});
+  let last = null;
+  setInterval(() => {
+    const u = Object.values((window.__viserTestpoints || {}).uplots || {})[0];
+    if (u && u.chart.data[0] !== last) { last = u.chart.data[0]; window.__rates.plots++; }
+  }, 50);
+}"""
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seconds", type=float, default=20.0)
+    ap.add_argument("--speed", type=float, default=1.0)
+    args = ap.parse_args()
+    from playwright.sync_api import sync_playwright
+
+    settings = ConsoleSettings(port=0, viser_port=0, recordings_dir=Path("/tmp/page-rates"))
+    with serve_in_thread(settings) as srv, sync_playwright() as pw:
+        browser = pw.chromium.launch(
+            executable_path=str(CHROMIUM), args=CHROMIUM_ARGS, headless=True
+        )
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        received = {"bytes": 0}
+
+        def count(payload: str | bytes) -> None:
+            received["bytes"] += len(payload)
+
+        page.on("websocket", lambda ws: ws.on("framereceived", count))
+        page.goto(srv.view_url)
+        page.get_by_text("Unlock controls").wait_for(timeout=60_000)
+        _dismiss_notifications(page)
+        srv.console.loop.speed = args.speed
+        time.sleep(2.0)
+        page.evaluate(WATCH)
+        received["bytes"] = 0
+        time.sleep(args.seconds)
+        counts = page.evaluate("() => window.__rates")
+        browser.close()
+    out = {
+        "seconds": args.seconds,
+        "speed": args.speed,
+        "status_per_s": round(counts["status"] / args.seconds, 2),
+        "status_promised_per_s": 1.0 / panels.STATUS_EVERY_S,
+        "plot_updates_per_s": round(counts["plots"] / args.seconds, 2),
+        "plots_promised_per_s": 1.0 / panels.PLOTS_EVERY_S,
+        "websocket_kB_per_s": round(received["bytes"] / args.seconds / 1e3, 1),
+    }
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()

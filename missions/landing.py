@@ -1,0 +1,188 @@
+"""Plan a landing on the docking frame before flying it: can the ROV hold the tree over the
+frame in this current, and which way should it turn and where (issue 11).
+
+The steady force the ROV must give to hold the tree still at a pose is what the plant itself
+says acts on the pair there: the wire's pull back towards its equilibrium, the current's drag
+on the tree and on the ROV (and the added-mass Munk moment), taken from ``sim.plant``'s own
+wrench functions with the pair at rest. What the ROV can give in that direction is the
+largest multiple of it its thrusters reach inside their force limits (a small linear
+programme over the thrusters' forces, surge, sway and yaw). Their ratio is the utilisation
+of the pose; a landing is feasible when the pose over the frame needs at most
+``FEASIBLE_UTILISATION`` of what the ROV has, leaving the rest for the controller to correct
+the errors that the current's wandering and the waves make.
+
+The approach: the tree turns either way, either where it is or over the frame; the plan takes
+the way whose worst pose along it needs the least.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import linprog
+
+from control.simulation import Simulation
+from sim import plant, site
+from sim.docking import DockingFrame
+from sim.gnc import Rzyx, ssa
+
+FloatArray = NDArray[np.float64]
+
+FEASIBLE_UTILISATION = 0.9
+"""Largest share of the ROV's thrust that holding the tree over the frame may need: the
+controller's integral action, which holds a steady load, is saturated at 90 % of the largest
+thrust (thesis eq. 3.19, anti-windup), so a steadier load than that is not held."""
+TURN_STEP_RAD = math.radians(5.0)
+"""Heading step at which a turn is checked [rad]."""
+
+
+@dataclass(frozen=True)
+class PoseLoad:
+    """What holding the tree still at one pose takes."""
+
+    needed_xyn: FloatArray
+    """Surge force [N], sway force [N] and yaw moment [N m] the ROV must give, in its own axes."""
+    available_xyn: FloatArray
+    """The most the thrusters give in the same direction (same ratio of the three) [N, N, N m]."""
+
+    @property
+    def utilisation(self) -> float:
+        need = float(np.linalg.norm(self.needed_xyn))
+        have = float(np.linalg.norm(self.available_xyn))
+        return need / have if have > 0.0 else math.inf
+
+    def words(self) -> str:
+        n, a = self.needed_xyn, self.available_xyn
+        return (
+            f"{_newtons(math.hypot(n[0], n[1]), 'N')} and {_newtons(n[2], 'N m')} of yaw moment "
+            f"needed, {_newtons(math.hypot(a[0], a[1]), 'N')} and {_newtons(a[2], 'N m')} "
+            f"available in that direction ({100.0 * self.utilisation:.0f} % of the thrust)"
+        )
+
+
+def _newtons(value: float, unit: str) -> str:
+    """A force or moment in words: kilo from 1000 up."""
+    v = abs(value)
+    return f"{v / 1e3:.2f} k{unit}" if v >= 1e3 else f"{v:.0f} {unit}"
+
+
+@dataclass(frozen=True)
+class LandingPlan:
+    """The approach the dock leg flies, and whether it may."""
+
+    feasible: bool
+    reason: str
+    """In words: the force over the frame needed against available, and the verdict."""
+    at_frame: PoseLoad
+    turn_rad: float
+    """Signed turn from the present heading to the frame's heading [rad] (either way round)."""
+    turn_first: bool
+    """Turn where the tree is, then move over the frame (else move first, turn over it)."""
+    worst_utilisation: float
+    """The largest utilisation along the chosen approach."""
+
+
+class Thrusters:
+    """The ROV's thrusters in surge, sway and yaw, with their force limits."""
+
+    def __init__(self, sim: Simulation) -> None:
+        arr = sim.arrays
+        self.T3 = np.asarray(arr.thr_T, float)[[0, 1, 5], :]
+        self.u_max = arr.thr_k_pos * arr.thr_n_max**2
+        self.u_min = -arr.thr_k_neg * arr.thr_n_max**2
+
+    def reach(self, direction: FloatArray) -> float:
+        """Largest s with s * direction = T3 u inside the force limits."""
+        m = self.T3.shape[1]
+        c = np.zeros(m + 1)
+        c[-1] = -1.0
+        a_eq = np.hstack([self.T3, -direction.reshape(3, 1)])
+        bounds = [(lo, hi) for lo, hi in zip(self.u_min, self.u_max, strict=True)]
+        bounds.append((0.0, None))
+        res = linprog(c, A_eq=a_eq, b_eq=np.zeros(3), bounds=bounds, method="highs")
+        return float(res.x[-1]) if res.status == 0 else 0.0
+
+
+def _environment(sim: Simulation, depth_m: float, speed: float, direction: float) -> FloatArray:
+    length = sim.wire_length_for_depth(depth_m)
+    env = site.wire_environment(sim.plant_ps, length, sim.crane_tip_n, speed, direction)
+    env[plant.E_VC] = speed * math.cos(direction)
+    env[plant.E_VC + 1] = speed * math.sin(direction)
+    return env
+
+
+def pose_load(
+    sim: Simulation,
+    thrusters: Thrusters,
+    north: float,
+    east: float,
+    psi: float,
+    env: FloatArray,
+    depth_m: float,
+) -> PoseLoad:
+    """The ROV's share of holding the pair still at (north, east, psi) at ``depth_m``."""
+    arr = sim.arrays
+    x = np.zeros(plant.N_STATE)
+    x[0:3] = north, east, depth_m
+    x[5] = psi
+    rot_t = Rzyx(0.0, 0.0, psi)
+    rot_m = arr.mount_R
+    rot_r = rot_t @ rot_m
+    x[12:15] = x[0:3] + rot_t @ arr.mount_r
+    x[17] = psi + math.atan2(rot_m[1, 0], rot_m[0, 0])
+    w_tree = plant.tree_wrench(x, env, arr, rot_t)
+    w_rov = plant.rov_wrench(x, np.zeros(arr.thr_T.shape[1]), env, arr, rot_r)
+    # everything on the pair, about the ROV's origin in its axes; the thrust must cancel it
+    f_tree_r = rot_m.T @ w_tree[0:3]
+    r_tree_from_rov = -(rot_m.T @ arr.mount_r)
+    m_tree_r = rot_m.T @ w_tree[3:6] + np.cross(r_tree_from_rov, f_tree_r)
+    total = np.array(
+        [f_tree_r[0] + w_rov[0], f_tree_r[1] + w_rov[1], m_tree_r[2] + w_rov[5]], dtype=float
+    )
+    needed = -total
+    norm = float(np.linalg.norm(needed))
+    if norm == 0.0:
+        return PoseLoad(needed, needed.copy())
+    reach = thrusters.reach(needed / norm)
+    return PoseLoad(needed, needed / norm * reach)
+
+
+def plan_landing(sim: Simulation, frame: DockingFrame, target_n: FloatArray, depth_m: float):
+    """Check the pose over ``frame`` in the present current and choose the approach from the
+    present target (north, east, heading)."""
+    thrusters = Thrusters(sim)
+    speed, direction = sim.current_speed_mps, sim.current_direction_rad
+    env = _environment(sim, depth_m, speed, direction)
+    north, east = float(frame.center_n[0]), float(frame.center_n[1])
+    at_frame = pose_load(sim, thrusters, north, east, frame.heading_rad, env, depth_m)
+    short = ssa(frame.heading_rad - target_n[2])
+    options = []
+    for turn in (short, short - math.copysign(2.0 * math.pi, short)):
+        steps = max(2, int(abs(turn) / TURN_STEP_RAD) + 1)
+        headings = target_n[2] + np.linspace(0.0, turn, steps)
+        for turn_first in (True, False):
+            n, e = (target_n[0], target_n[1]) if turn_first else (north, east)
+            worst = max(
+                pose_load(sim, thrusters, n, e, float(h), env, depth_m).utilisation
+                for h in headings
+            )
+            options.append((worst, abs(turn), turn, turn_first))
+    worst, _, turn, turn_first = min(options)
+    feasible = at_frame.utilisation <= FEASIBLE_UTILISATION
+    current = f"{speed:.3f} m/s towards {math.degrees(direction) % 360:.0f} deg"
+    limit = f"{100 * FEASIBLE_UTILISATION:.0f} %"
+    if feasible:
+        reason = (
+            f"landing feasible in {current}: holding the tree over the frame takes "
+            f"{at_frame.words()}, within the {limit} allowed"
+        )
+    else:
+        reason = (
+            f"landing not feasible in {current} with the frame at "
+            f"{math.degrees(frame.heading_rad):.0f} deg: holding the tree over it takes "
+            f"{at_frame.words()}, more than the {limit} allowed"
+        )
+    return LandingPlan(feasible, reason, at_frame, turn, turn_first, worst)

@@ -1,0 +1,414 @@
+"""Regenerate every figure the README quotes, so none of them is typed by hand.
+
+Each figure block of README.md sits between two markers,
+
+    <!-- figures:NAME -->
+    ... generated text ...
+    <!-- /figures:NAME -->
+
+and belongs to one entry of ``BLOCKS``: a function that runs what the block quotes (missions,
+studies, a recording) and returns its results as a JSON-ready dict, and a renderer that turns
+those results into the block's text (wording included where the numbers decide it, e.g.
+"halved" or "down an order of magnitude"). The results of the last run are kept in
+``docs/figures/readme_figures.json``; the tests check that every block of the README is what
+the renderer makes of them.
+
+Run (a few minutes; ``--only`` for some blocks, ``--render`` to rewrite the README from the
+stored results without running anything):
+
+    .venv/bin/python scripts/readme_figures.py
+    .venv/bin/python scripts/readme_figures.py --only laws --only limits
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import subprocess
+import sys
+import tempfile
+import textwrap
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # run as a file: import this checkout's packages
+    sys.path.insert(0, str(ROOT))
+
+README = ROOT / "README.md"
+RESULTS = ROOT / "docs" / "figures" / "readme_figures.json"
+
+MARKER = re.compile(r"^\s*<!-- (/?)figures:([a-z0-9.-]+) -->\s*$")
+"""A marker line (it may be indented, e.g. inside a list item)."""
+STRAY = re.compile(r"(?<!`)<!-- /?figures:")
+"""A marker sharing its line with text (a marker quoted in backticks is prose)."""
+
+Results = dict[str, Any]
+
+
+# ------------------------------------------------------------------------------ markers
+
+
+def _spans(text: str) -> dict[str, tuple[int, int]]:
+    """Block name -> (first, last) line index of its body (last exclusive); ValueError naming
+    the line for a block opened twice, closed without being opened or under another name,
+    nested, or never closed, and for a marker that shares its line with text."""
+    out: dict[str, tuple[int, int]] = {}
+    open_name: str | None = None
+    open_at = 0
+    for i, line in enumerate(text.split("\n")):
+        m = MARKER.match(line)
+        if m is None:
+            if STRAY.search(line):
+                raise ValueError(f"line {i + 1}: a figures marker must stand on its own line")
+            continue
+        closing, name = m.group(1) == "/", m.group(2)
+        if not closing:
+            if open_name is not None:
+                raise ValueError(
+                    f"line {i + 1}: figures:{name} opens inside figures:{open_name} "
+                    f"(opened on line {open_at})"
+                )
+            if name in out:
+                raise ValueError(f"line {i + 1}: figures:{name} appears twice")
+            open_name, open_at = name, i + 1
+            continue
+        if open_name != name:
+            opened = f"figures:{open_name} (opened on line {open_at})" if open_name else "nothing"
+            raise ValueError(f"line {i + 1}: /figures:{name} closes {opened}")
+        out[name] = (open_at, i)
+        open_name = None
+    if open_name is not None:
+        raise ValueError(f"line {open_at}: figures:{open_name} is never closed")
+    return out
+
+
+def blocks_in(text: str) -> dict[str, str]:
+    """The figure blocks of a README: name -> the lines between its markers."""
+    lines = text.split("\n")
+    return {name: "\n".join(lines[a:b]) for name, (a, b) in _spans(text).items()}
+
+
+def replace_block(text: str, name: str, body: str) -> str:
+    """``text`` with the block ``name`` holding ``body``; ValueError if there is no such block."""
+    spans = _spans(text)
+    if name not in spans:
+        raise ValueError(f"README has no figures:{name} block")
+    a, b = spans[name]
+    lines = text.split("\n")
+    return "\n".join(lines[:a] + body.rstrip("\n").split("\n") + lines[b:])
+
+
+# ------------------------------------------------------------------------------ wording
+
+
+def sig(value: float, digits: int = 2) -> str:
+    """``value`` to ``digits`` significant figures, without an exponent."""
+    if value == 0.0 or not math.isfinite(value):
+        return f"{value:g}"
+    decimals = max(digits - 1 - math.floor(math.log10(abs(value))), 0)
+    return f"{value:.{decimals}f}"
+
+
+def para(text: str, indent: str = "", first: str | None = None) -> str:
+    """``text`` wrapped as the README's prose (96 columns), ``first`` starting the first line
+    (default ``indent``)."""
+    return textwrap.fill(
+        " ".join(text.split()),
+        width=96,
+        initial_indent=indent if first is None else first,
+        subsequent_indent=indent,
+        break_long_words=False,
+        break_on_hyphens=False,
+    )
+
+
+def reduction(before: float, after: float) -> str:
+    """How much smaller ``after`` is than ``before``, in words the ratio supports."""
+    ratio = before / after if after > 0.0 else math.inf
+    if ratio >= 100.0:
+        return f"down {math.floor(math.log10(ratio))} orders of magnitude, {ratio:.0f} times"
+    if ratio >= 15.0:
+        return f"down {ratio:.0f} times"
+    if ratio >= 8.0:
+        return f"down {ratio:.1f} times, about an order of magnitude"
+    if 1.8 <= ratio <= 2.2:
+        return "halved"
+    if ratio > 1.25:
+        return f"{ratio:.1f} times smaller"
+    if ratio >= 0.8:
+        return "about the same"
+    return f"{1.0 / ratio:.1f} times larger"
+
+
+# ------------------------------------------------------------------------------ laws
+
+
+LAW_SCENARIOS = ("full-rotation-400", "full-square-400")
+
+
+def compute_laws() -> Results:
+    from missions import runner, schema
+
+    rows = []
+    for name in LAW_SCENARIOS:
+        mission = schema.load_mission(name)
+        for law, ff in (("thesis", False), ("feedforward", True)):
+            r = runner.run_mission(mission, feedforward=ff)
+            rows.append(
+                {
+                    "scenario": name,
+                    "law": law,
+                    "rms_north_m": r.rms_north_m,
+                    "rms_east_m": r.rms_east_m,
+                    "rms_heading_deg": r.rms_heading_deg,
+                }
+            )
+    return {"rows": rows}
+
+
+def render_laws(res: Results) -> str:
+    lines = [
+        "  | scenario | law | RMS N [m] | RMS E [m] | RMS heading [deg] |",
+        "  |---|---|---|---|---|",
+    ]
+    for row in res["rows"]:
+        lines.append(
+            f"  | {row['scenario']} | {row['law']} | {sig(row['rms_north_m'])} | "
+            f"{sig(row['rms_east_m'])} | {row['rms_heading_deg']:.2f} |"
+        )
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------------ limits
+
+
+def compute_limits() -> Results:
+    """What Minerva and the work-class ROV can push sideways on the tree (an LP over their
+    thruster limits, in the tree's axes), the wire's spring in the library scenarios, and the
+    sway force that holding the model-scale module broadside to the thesis's current takes."""
+    import numpy as np
+
+    from control import model
+    from control.config import ControlSettings
+    from control.simulation import Simulation, steady_current
+    from missions import runner, schema
+    from sim import params, wire
+
+    out: Results = {}
+    for key, name in (("model", "model-square-ekf-400"), ("full100", "full-square-100")):
+        sim = runner.build_simulation(schema.load_mission(name))
+        thr = sim.ps.rov.thrusters
+        cap = model.dof_capacity(sim.sysm.rov_to_tree @ thr.T, thr.f_max_neg, thr.f_max_pos)
+        k_h = wire.horizontal_stiffness(  # what the simulation's wire spring is at the start
+            sim.plant_ps.wire.submerged_weight_per_length(),
+            sim.ps.tree.submerged_weight_newton,
+            sim.wire_length_m,
+        )
+        out[key] = {
+            "mission": name,
+            "depth_m": float(sim.tree_eta_n[2]),
+            "sway_capacity_newton": float(cap[1]),
+            "wire_stiffness_newton_per_m": float(k_h),
+            "lever_m": float(np.linalg.norm(sim.sysm.r_rov_from_tree_tree_m[0:2])),
+        }
+    # broadside to 0.1 m/s towards 225 deg: heading 135 deg; the sway the controller asks for
+    # once settled (perfect feedback, so only the current and the wire are in it)
+    ps = params.load("model-scale")
+    sim = Simulation(
+        ps,
+        tree_depth_m=400.0,
+        settings=ControlSettings(feedback="perfect", feedforward=True),
+        current=steady_current(0.1, math.radians(225.0)),
+        tree_heading_rad=math.radians(135.0),
+    )
+    rows = sim.run_for(400.0)
+    out["model"]["broadside_sway_newton"] = float(abs(np.mean(rows["tau_tree_cmd"][-6000:, 1])))
+    return out
+
+
+def render_limits(res: Results) -> str:
+    m, f = res["model"], res["full100"]
+    need, cap = m["broadside_sway_newton"], m["sway_capacity_newton"]
+    broadside = (
+        f"Held broadside to the current the module needs {need:.0f} N of sway, more than those "
+        f"{cap:.0f} N: a square there would saturate."
+        if need > cap
+        else f"Broadside to the current the drag alone takes {need:.0f} N of those {cap:.0f} N."
+    )
+    model_bullet = (
+        f"**Model-scale squares are 1 m at heading 45 deg** (into the current). With the ROV "
+        f"{m['lever_m']:g} m behind the module, Minerva can push the module sideways with at "
+        f"most {cap:.0f} N (an LP over its thruster limits), and at {m['depth_m']:.0f} m the "
+        f"16 mm wire alone pulls back {m['wire_stiffness_newton_per_m']:.0f} N per metre. "
+        f"{broadside} The thesis's HIL square was 1 m too."
+    )
+    full_bullet = (
+        f"**full-square-100 is beyond the ROV.** At {f['depth_m']:.0f} m the wire pulls back "
+        f"{f['wire_stiffness_newton_per_m']:.0f} N per metre, and the work-class ROV can push "
+        f"the tree sideways with at most {f['sway_capacity_newton']:.0f} N through the "
+        f"{f['lever_m']:g} m lever: the square saturates and lags (it is worse, with larger "
+        f"forces, as the thesis reports), while the prioritised allocation keeps the heading."
+    )
+    return para(model_bullet, "  ", "- ") + "\n" + para(full_bullet, "  ", "- ")
+
+
+# ------------------------------------------------------------------------------ failures
+
+
+FAILED = ("model-rotation-wrong-r", "full-square-100")
+MISS = re.compile(r"([0-9.]+) m and ([0-9.]+) deg off")
+
+
+def compute_failures() -> Results:
+    from missions import runner, schema
+
+    out: Results = {}
+    for name in FAILED:
+        r = runner.run_mission(schema.load_mission(name))
+        misses = [m for leg in r.legs if (m := MISS.search(leg.error))]
+        if not misses:
+            raise RuntimeError(f"{name} no longer misses a target: update the README by hand")
+        out[name] = {
+            "failed": r.failed,
+            "miss_m": float(misses[0].group(1)),
+            "miss_deg": float(misses[0].group(2)),
+        }
+    return out
+
+
+def render_failures(res: Results) -> str:
+    wrong, square = res["model-rotation-wrong-r"], res["full-square-100"]
+    verb = "report failed" if wrong["failed"] and square["failed"] else "do not fail"
+    return para(
+        f"So `model-rotation-wrong-r` (the tree never turns: {wrong['miss_deg']:.0f} deg off) "
+        f"and `full-square-100` (beyond the ROV: {square['miss_m']:.2f} m off a corner) {verb}."
+    )
+
+
+# ------------------------------------------------------------------------------ table 4.1
+
+
+def compute_table_4_1() -> Results:
+    from missions import studies
+
+    return {
+        "rows": [
+            {"label": row.label, "ours": list(row.ours), "thesis": list(row.thesis)}
+            for row in studies.table_4_1()
+        ]
+    }
+
+
+def render_table_4_1(res: Results) -> str:
+    rows = {r["label"].split("  ")[0] + " " + r["label"].split()[-1]: r for r in res["rows"]}
+    lines = [
+        "| sea state | | RMS N [m] ours / thesis | RMS E [m] ours / thesis "
+        "| RMS heading [deg] ours / thesis |",
+        "|---|---|---|---|---|",
+    ]
+    for r in res["rows"]:
+        state, kind = r["label"].split("  ")
+        ours, thesis = r["ours"], r["thesis"]
+        cells = [f"{sig(ours[k])} / {sig(thesis[k])}" for k in range(3)]
+        lines.append(f"| {state} | {kind.strip()} | " + " | ".join(cells) + " |")
+
+    def pair(state: str) -> tuple[list[float], list[float]]:
+        return rows[f"{state} uncontrolled"]["ours"], rows[f"{state} controlled"]["ours"]
+
+    short_unc, short_ctl = pair("T = 10 s, Hs = 8 m")
+    long_unc, long_ctl = pair("T = 30 s, Hs = 8 m")
+    larger = all(
+        r["ours"][0] > r["thesis"][0] for r in res["rows"] if r["label"].endswith("uncontrolled")
+    )
+    short_north = reduction(short_unc[0], short_ctl[0])
+    short_words = (
+        "control leaves the short 10 s sea's north motion about the same"
+        if short_north == "about the same"
+        else f"control changes the short 10 s sea's north motion ({short_north})"
+    )
+    finding = (
+        f"Our wave-induced motions are {'larger than' if larger else 'not all larger than'} the "
+        "thesis's (its wave direction, spectrum discretisation and damping are not stated; we "
+        f"infer the direction from its east/north ratio), but the finding is the same: "
+        f"{short_words} (its heading RMS {reduction(short_unc[2], short_ctl[2])}) and control "
+        f"cuts the long-period motion (T = 30 s, Hs = 8 m: north RMS "
+        f"{reduction(long_unc[0], long_ctl[0])}, heading RMS "
+        f"{reduction(long_unc[2], long_ctl[2])})."
+    )
+    return "\n".join([*lines, "", para(finding)])
+
+
+# ------------------------------------------------------------------------------ log size
+
+
+def compute_log_size() -> Results:
+    """The file ``rov-console run full-square-400 --log`` writes, per simulated minute."""
+    from app.recording import load_session
+
+    name = "full-square-400"
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "run.mcap"
+        subprocess.run(
+            [sys.executable, "-m", "app.cli", "run", name, "--log", str(path), "--no-progress"],
+            cwd=ROOT,
+            check=True,
+            capture_output=True,
+        )
+        data = load_session(path)
+        return {"mission": name, "file_bytes": data.file_bytes, "simulated_s": data.end_time_s}
+
+
+def render_log_size(res: Results) -> str:
+    per_minute = res["file_bytes"] / 1e6 / (res["simulated_s"] / 60.0)
+    return f"About {per_minute:.1f} MB per simulated minute ({res['mission']})."
+
+
+# ------------------------------------------------------------------------------ the blocks
+
+
+BLOCKS: dict[str, tuple[Callable[[], Results], Callable[[Results], str]]] = {
+    "laws": (compute_laws, render_laws),
+    "limits": (compute_limits, render_limits),
+    "failures": (compute_failures, render_failures),
+    "table-4.1": (compute_table_4_1, render_table_4_1),
+    "log-size": (compute_log_size, render_log_size),
+}
+
+
+def render_readme(text: str, results: dict[str, Results]) -> str:
+    """``text`` with every block that has results rendered from them."""
+    for name, res in results.items():
+        text = replace_block(text, name, BLOCKS[name][1](res))
+    return text
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", action="append", choices=sorted(BLOCKS), default=[])
+    parser.add_argument(
+        "--render", action="store_true", help="rewrite README.md from the stored results only"
+    )
+    args = parser.parse_args(argv)
+    stored: dict[str, Results] = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+    if not args.render:
+        for name in args.only or list(BLOCKS):
+            print(f"running {name} ...", flush=True)
+            stored[name] = BLOCKS[name][0]()
+        RESULTS.parent.mkdir(parents=True, exist_ok=True)
+        RESULTS.write_text(json.dumps(stored, indent=1, sort_keys=True) + "\n")
+    text = README.read_text()
+    missing = sorted(set(BLOCKS) - set(blocks_in(text)))
+    if missing:
+        print(f"README.md has no block for {', '.join(missing)}", file=sys.stderr)
+        return 1
+    README.write_text(render_readme(text, stored))
+    print(f"wrote {README.relative_to(ROOT)}" + ("" if args.render else f" and {RESULTS.name}"))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,152 @@
+"""The console in a real headless Chromium (Debian's /usr/bin/chromium, driven by Playwright):
+fixtures (one console server, one browser and one API client per test module) and the helpers
+that find viser's controls by their labels. Registered for every test module by
+``tests/conftest.py``; a module that uses the ``page`` fixture is skipped when chromium is
+missing.
+"""
+
+from __future__ import annotations
+
+import io
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import httpx
+import numpy as np
+import pytest
+from PIL import Image
+
+from app.console import ConsoleSettings
+from app.server import RunningServer, serve_in_thread
+
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+SCREENSHOTS = Path(__file__).resolve().parents[1] / "docs" / "screenshots"
+
+
+def _playwright():
+    if not CHROMIUM.exists():
+        pytest.skip("Debian's chromium is missing")
+    return pytest.importorskip("playwright.sync_api")
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningServer]:
+    settings = ConsoleSettings(
+        port=0, viser_port=0, recordings_dir=tmp_path_factory.mktemp("recordings")
+    )
+    with serve_in_thread(settings) as srv:
+        yield srv
+
+
+@pytest.fixture(scope="module")
+def page(server: RunningServer, tmp_path_factory: pytest.TempPathFactory):
+    with _playwright().sync_playwright() as pw:
+        context = pw.chromium.launch_persistent_context(
+            str(tmp_path_factory.mktemp("chromium-profile")),
+            executable_path=str(CHROMIUM),
+            args=CHROMIUM_ARGS,
+            headless=True,
+            viewport={"width": 1400, "height": 900},
+        )
+        try:
+            pg = context.new_page()
+            pg.goto(server.view_url)
+            pg.get_by_text("Unlock controls").wait_for(timeout=60_000)
+            time.sleep(1.0)
+            _dismiss_notifications(pg)
+            yield pg
+        finally:
+            context.close()
+
+
+@pytest.fixture(scope="module")
+def api(server: RunningServer) -> Iterator[httpx.Client]:
+    with httpx.Client(base_url=server.base_url, headers=server.auth, timeout=30.0) as client:
+        yield client
+
+
+# ---------------------------------------------------------------------- helpers
+def _dismiss_notifications(pg) -> None:
+    """Close viser's 'software WebGL' notice so it does not cover the scene."""
+    time.sleep(1.0)
+    for button in pg.locator(".mantine-Notification-root button").all():
+        try:
+            button.click(timeout=1000)
+        except Exception:
+            pass
+
+
+def field(pg, label: str):
+    """The text/number input of a viser control, found by its label."""
+    inputs = "*[self::input[not(@type='hidden')] or self::select or self::textarea]"
+    return pg.locator(
+        f"xpath=//label[normalize-space(.)='{label}']/ancestor::div[.//{inputs}][1]//{inputs}"
+    ).first
+
+
+def choose(pg, label: str, option: str) -> None:
+    """Pick an option of a viser dropdown (a combobox with a list of options)."""
+    field(pg, label).click()
+    pg.locator(f"xpath=//*[@role='option'][normalize-space(.)='{option}']").filter(
+        visible=True
+    ).first.click()
+
+
+def button(pg, name: str):
+    """A button by its text (XPath: role queries are slow on viser's large page)."""
+    return pg.locator(f"xpath=//button[normalize-space(.)='{name}']").first
+
+
+def click(pg, name: str) -> None:
+    button(pg, name).click()
+
+
+def tab(pg, name: str) -> None:
+    pg.locator(f"xpath=//*[@role='tab'][normalize-space(.)='{name}']").first.click()
+
+
+def unlock(pg, token: str) -> None:
+    """Unlock this page's controls (nothing to do when they are unlocked already)."""
+    if button(pg, "Lock controls").is_visible():
+        return
+    field(pg, "Token").fill(token)
+    time.sleep(0.2)  # viser sends an input's value at most every 50 ms
+    click(pg, "Unlock controls")
+    pg.get_by_text("controls unlocked").wait_for(timeout=10_000)
+
+
+def wait_for(predicate: Callable[[], bool], timeout_s: float, what: str) -> None:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.1)
+    raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+
+
+def image(pg) -> np.ndarray:
+    """The page as an RGB array."""
+    return np.asarray(Image.open(io.BytesIO(pg.screenshot())).convert("RGB"), dtype=float)
+
+
+def scene_part(img: np.ndarray) -> np.ndarray:
+    """The 3D view without the control panel on the right."""
+    return img[:, : int(0.6 * img.shape[1])]
+
+
+def save(img_bytes: bytes, name: str) -> Path:
+    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+    path = SCREENSHOTS / name
+    path.write_bytes(img_bytes)
+    return path

@@ -1,0 +1,151 @@
+"""Automatic landings on the docking frame (issue 11): the failures the issue reported, each
+rerun, and the tree staying where the posts hold it once landed."""
+
+import math
+
+import numpy as np
+import pytest
+
+from missions import landing, runner, schema
+from sim import params
+
+LAYOUT = params.load("full-scale").spec.docking.to_numeric()
+
+
+def docking_variant(
+    heading_deg: float | None = None,
+    speed_mps: float | None = None,
+    direction_deg: float | None = None,
+    center_ne_m: tuple[float, float] | None = None,
+) -> schema.Mission:
+    """full-docking-current-0.3 with another frame heading or current."""
+    m = schema.load_mission("full-docking-current-0.3").model_dump(mode="json")
+    if heading_deg is not None:
+        m["setup"]["docking_frame"]["heading_deg"] = heading_deg
+    if center_ne_m is not None:
+        m["setup"]["docking_frame"]["center_ne_m"] = list(center_ne_m)
+    if speed_mps is not None:
+        m["setup"]["current"]["speed_mps"] = speed_mps
+    if direction_deg is not None:
+        m["setup"]["current"]["direction_deg"] = direction_deg
+    return schema.parse_mission(m)
+
+
+def assert_landed_and_held(result: runner.MissionResult, heading_deg: float) -> None:
+    """Landed on the frame, and from touchdown to the end of the mission the tree stays with
+    its funnels around the posts: heading within the posts' clearance of the frame's (plus
+    0.2 deg for the posts' elastic give under the ROV's thrust)."""
+    assert not result.failed, result.summary()
+    (landing,) = result.landings
+    assert landing.success and landing.rests_on == "frame"
+    assert landing.rest_miss_m <= LAYOUT.clearance_m + 0.01
+    assert result.log is not None
+    rows = result.log
+    after = rows["t_s"] >= landing.t_contact_s + 60.0
+    psi = rows["tree_eta_n"][after, 5]
+    err = np.degrees(np.abs((psi - math.radians(heading_deg) + math.pi) % (2 * math.pi) - math.pi))
+    assert err.size > 1000
+    assert err.max() <= math.degrees(LAYOUT.heading_clearance_rad) + 0.2
+
+
+def test_frame_at_180_deg_lands_and_stays():
+    """Issue 11: with the frame turned 180 deg the tree 'landed' and then turned 26 deg while
+    resting on the frame."""
+    result = runner.run_mission(docking_variant(heading_deg=180.0))
+    assert_landed_and_held(result, 180.0)
+
+
+@pytest.mark.parametrize("heading_deg", [90.0, 150.0, -90.0])
+def test_forced_landings_the_issue_reported_land_and_stay(heading_deg, monkeypatch):
+    """Issue 11: with the frame at 90 or 150 deg the tree ended on the post tops although its
+    funnels met them within the capture tolerance; at -90 deg it 'landed' and then turned 44
+    deg on the frame. The feasibility check now refuses these (see the next test: they need
+    more than 90 % of the thrust); forced past it, the contact guides the tree down and holds
+    it there."""
+    monkeypatch.setattr(landing, "FEASIBLE_UTILISATION", 5.0)
+    result = runner.run_mission(docking_variant(heading_deg=heading_deg))
+    (done,) = result.landings
+    assert done.miss_m < LAYOUT.tolerance_m  # captured at the post tops, as in the report
+    assert_landed_and_held(result, heading_deg)
+
+
+@pytest.mark.parametrize("heading_deg, needed_pct", [(90.0, 108), (120.0, 133), (150.0, 119)])
+def test_landing_the_rov_cannot_hold_is_refused_with_the_forces(heading_deg, needed_pct):
+    """Issue 11: at 120 deg the tree never aligned (2 325 s saturated, the leg timed out).
+    Holding the tree over a frame turned 90 to 150 deg in 0.3 m/s needs more than the ROV's
+    thrust: the dock leg refuses before it starts, naming the force and moment needed and
+    available (the percentages are the planner's own figures, kept here so a change in them
+    shows), and the mission fails with that error instead of trying."""
+    result = runner.run_mission(docking_variant(heading_deg=heading_deg))
+    assert result.failed and not result.landings
+    assert result.error.startswith("leg 2 (dock) failed: landing not feasible in 0.3")
+    assert "kN m of yaw moment needed" in result.error and "available" in result.error
+    assert f"({needed_pct} % of the thrust), more than the 90 % allowed" in result.error
+    assert result.legs[1].duration_s < 1.0  # refused at once
+
+
+def test_weak_current_case_the_issue_reported_lands_and_stays():
+    """Issue 11: 0.1 m/s towards 42.9 deg, frame at 129.6 deg at (4.0, 2.5): the funnels met
+    the post tops 0.068 m off with 1.3 deg of heading error at 0.032 m/s, the tree stayed on
+    the posts and 35 s later wandered 10 m and spun through 2 000 deg."""
+    result = runner.run_mission(
+        docking_variant(heading_deg=129.6, speed_mps=0.1, direction_deg=42.9)
+    )
+    (landing,) = result.landings
+    assert landing.miss_m < LAYOUT.tolerance_m  # captured, as in the report
+    assert_landed_and_held(result, 129.6)
+    final = result.final_eta_n
+    assert math.hypot(final[0] - 4.0, final[1] - 2.5) < LAYOUT.clearance_m + 0.01
+
+
+def test_planner_force_is_the_wire_pull_back_in_still_water():
+    """The force the planner says holds the tree 2 m north of its hang in still water is the
+    wire's horizontal stiffness (eq. 2.30) times 2 m, within 5 % (the pendulum's tilt about
+    the attachment point adds about 0.7 %), along surge at heading 0 and with no sway or yaw
+    to speak of; at the hang itself nothing is needed."""
+    from control.simulation import Simulation
+    from sim import params as params_mod
+    from sim import site
+    from sim import wire as wm
+
+    ps = params_mod.load("full-scale")
+    sim = Simulation(ps, tree_depth_m=400.0)
+    thrusters = landing.Thrusters(sim)
+    env = site.wire_environment(ps, sim.wire_length_for_depth(400.0), sim.crane_tip_n, 0.0, 0.0)
+    hang = sim.crane_tip_n
+    k = wm.horizontal_stiffness(
+        ps.wire.submerged_weight_per_length(), ps.tree.submerged_weight_newton, sim.wire_length_m
+    )
+    load = landing.pose_load(sim, thrusters, hang[0] + 2.0, hang[1], 0.0, env, 400.0)
+    assert load.needed_xyn[0] == pytest.approx(2.0 * k, rel=0.05)
+    assert abs(load.needed_xyn[1]) < 0.01 * abs(load.needed_xyn[0])
+    # the surge force acts 2 m ahead of the ROV (the tree's centre): no yaw from it
+    assert abs(load.needed_xyn[2]) < 0.01 * abs(load.needed_xyn[0])
+    assert 0.0 < load.utilisation < 1.0
+    still = landing.pose_load(sim, thrusters, hang[0], hang[1], 0.0, env, 400.0)
+    assert np.linalg.norm(still.needed_xyn) < 0.01 * abs(load.needed_xyn[0])
+
+
+def test_a_small_random_set_of_landings_lands_where_it_is_accepted():
+    """Issue 11: a few landings drawn at random (the Monte Carlo's draw, seed 1 at full scale
+    and 2 at model scale, as `benchmarks/landing_montecarlo.py --seed 1` draws them): every one
+    the feasibility check accepts lands on the frame, and each one refused says why."""
+    from missions import landing_study
+
+    cases = landing_study.random_cases(2, "full", 1) + landing_study.random_cases(2, "model", 2)
+    outcomes = [landing_study.run_case(c) for c in cases]
+    summary = landing_study.summary(outcomes)
+    assert sum(s["accepted"] for s in summary.values()) >= 2  # the set tests something
+    for s in summary.values():
+        assert s["failures"] == []
+    for o in outcomes:
+        assert o.feasible == (not o.verdict.startswith("refused")), o.verdict
+        if not o.feasible:
+            assert "of yaw moment needed" in o.verdict and "available" in o.verdict
+
+
+def test_random_cases_name_an_unknown_scale():
+    from missions import landing_study
+
+    with pytest.raises(ValueError, match="scale must be one of full, model, got 'huge'"):
+        landing_study.random_cases(1, "huge", 0)

@@ -1,0 +1,106 @@
+"""The README's figure blocks: well-formed markers, and each block exactly what
+scripts/readme_figures.py renders from its stored results (so a number typed by hand fails).
+The studies themselves are not rerun here (minutes); the script does that."""
+
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location(
+        "readme_figures", ROOT / "scripts" / "readme_figures.py"
+    )
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+rf = _script()
+
+
+def test_every_block_of_the_readme_is_what_the_script_renders_from_its_results():
+    text = (ROOT / "README.md").read_text()
+    blocks = rf.blocks_in(text)
+    assert set(blocks) == set(rf.BLOCKS)
+    stored = json.loads(rf.RESULTS.read_text())
+    assert set(stored) == set(rf.BLOCKS)
+    for name, (_, render) in rf.BLOCKS.items():
+        assert blocks[name] == render(stored[name]), f"figures:{name} was edited by hand"
+    assert rf.render_readme(text, stored) == text
+
+
+LAWS = {
+    "rows": [
+        {
+            "scenario": "full-square-400",
+            "law": "thesis",
+            "rms_north_m": 0.08312,
+            "rms_east_m": 0.0801,
+            "rms_heading_deg": 0.4123,
+        },
+        {
+            "scenario": "full-square-400",
+            "law": "feedforward",
+            "rms_north_m": 0.003449,
+            "rms_east_m": 0.002951,
+            "rms_heading_deg": 0.333,
+        },
+    ]
+}
+
+
+def test_table_renderer_writes_the_rows_to_two_significant_figures():
+    assert rf.render_laws(LAWS).split("\n") == [
+        "  | scenario | law | RMS N [m] | RMS E [m] | RMS heading [deg] |",
+        "  |---|---|---|---|---|",
+        "  | full-square-400 | thesis | 0.083 | 0.080 | 0.41 |",
+        "  | full-square-400 | feedforward | 0.0034 | 0.0030 | 0.33 |",
+    ]
+
+
+def test_a_block_is_rewritten_in_place_and_the_rest_kept():
+    text = "intro\n  <!-- figures:laws -->\n  old table\n  <!-- /figures:laws -->\nafter\n"
+    out = rf.replace_block(text, "laws", rf.render_laws(LAWS))
+    assert out.startswith("intro\n  <!-- figures:laws -->\n  | scenario |")
+    assert out.endswith("| 0.33 |\n  <!-- /figures:laws -->\nafter\n")
+    assert rf.blocks_in(out)["laws"] == rf.render_laws(LAWS)
+    with pytest.raises(ValueError, match="no figures:limits block"):
+        rf.replace_block(text, "limits", "x")
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("<!-- figures:a -->\nx\n", "line 1: figures:a is never closed"),
+        ("x\n<!-- /figures:a -->\n", "line 2: /figures:a closes nothing"),
+        ("<!-- figures:a -->\n<!-- /figures:b -->\n", "line 2: /figures:b closes figures:a"),
+        ("<!-- figures:a -->\n<!-- figures:b -->\n", "line 2: figures:b opens inside figures:a"),
+        (
+            "<!-- figures:a -->\n<!-- /figures:a -->\n<!-- figures:a -->\n<!-- /figures:a -->\n",
+            "line 3: figures:a appears twice",
+        ),
+        ("text <!-- figures:a -->\n<!-- /figures:a -->\n", "line 1: .* on its own line"),
+    ],
+)
+def test_malformed_markers_are_refused_naming_the_line(text, message):
+    with pytest.raises(ValueError, match=message):
+        rf.blocks_in(text)
+
+
+def test_wording_follows_the_ratio():
+    """Table 4.1's heading went from 'down two orders of magnitude' (typed) to what the ratio
+    says; the words are chosen by the numbers."""
+    assert rf.reduction(3.0, 0.03) == "down 2 orders of magnitude, 100 times"
+    assert rf.reduction(8.5, 0.2) == "down 42 times"
+    assert rf.reduction(3.0, 0.3125) == "down 9.6 times, about an order of magnitude"
+    assert rf.reduction(0.75, 0.37) == "halved"
+    assert rf.reduction(0.75, 0.25) == "3.0 times smaller"
+    assert rf.reduction(0.0024, 0.0025) == "about the same"
+    assert rf.reduction(0.1, 0.3) == "3.0 times larger"
+    assert rf.sig(0.0062) == "0.0062" and rf.sig(7.349) == "7.3" and rf.sig(3170.4) == "3170"
