@@ -351,6 +351,8 @@ def test_failure_causes_come_from_the_row():
     assert report.failure_cause(missed) == "landing: a funnel missed its post"
     fast = {**base, "landed": False, "rests_on": "frame", "error": ""}
     assert report.failure_cause(fast) == "landing: too fast"
+    refused = {**base, "error": "leg 2 (dock) failed: not feasible in 0.494 m/s"}
+    assert report.failure_cause(refused) == "leg failed: leg # (dock) failed: not feasible in # m/s"
     table = report.failure_table(
         [{**missed, "success": False, "saturated_time_s": 80.0, "max_thruster_utilisation": 1.0}]
         + [{**base, "success": True, "saturated_time_s": 2.0, "max_thruster_utilisation": 0.5}]

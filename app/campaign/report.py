@@ -5,6 +5,7 @@ depth and per parameter set), as tables (Markdown) and a PNG figure."""
 from __future__ import annotations
 
 import math
+import re
 from collections import defaultdict
 from dataclasses import dataclass
 from pathlib import Path
@@ -140,7 +141,8 @@ def failure_cause(row: dict) -> str:
             return "landing: a funnel missed its post"
         return "landing: too fast"
     if row["error"]:
-        return "leg failed: " + str(row["error"])[:60]
+        # the same failure with other numbers is the same cause
+        return "leg failed: " + re.sub(r"-?\d+(\.\d+)?", "#", str(row["error"]))[:70]
     return "other"
 
 
