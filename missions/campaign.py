@@ -49,7 +49,6 @@ from sim import params as params_mod
 FORMAT_VERSION = 1
 LIBRARY_DIR = Path(__file__).with_name("campaigns")
 MAX_RUNS = 1_000_000
-MAX_FILE_BYTES = 256 * 1024
 
 
 def worker_name() -> str:
@@ -507,24 +506,9 @@ def parse_stored(text: str, source: str, base: schema.Mission) -> Campaign:
 def load_campaign(path_or_name: str | Path) -> tuple[Campaign, schema.Mission, str]:
     """A campaign file (or a library campaign by name): the campaign, its base mission and the
     file's text."""
-    path = Path(path_or_name)
-    if not path.is_file():
-        candidate = LIBRARY_DIR / f"{path_or_name}.toml"
-        if candidate.is_file():
-            path = candidate
-        elif path.suffix == ".toml" or "/" in str(path_or_name):
-            raise CampaignError(f"campaign file not found: {path}")
-        else:
-            raise CampaignError(
-                f"unknown campaign {str(path_or_name)!r}; the library has: "
-                f"{', '.join(library_names())}"
-            )
-    try:
-        if path.stat().st_size > MAX_FILE_BYTES:
-            raise CampaignError(f"{path}: larger than {MAX_FILE_BYTES} bytes; not a campaign")
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as err:
-        raise CampaignError(f"cannot read {path}: {err}") from None
+    path, text = schema.read_named_file(
+        path_or_name, LIBRARY_DIR, library_names, "campaign", "a campaign", CampaignError
+    )
     campaign, base = parse_text(text, str(path), path.parent)
     return campaign, base, text
 

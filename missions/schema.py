@@ -11,6 +11,7 @@ from __future__ import annotations
 import re
 import tomllib
 import typing
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -504,25 +505,40 @@ def _got(value: object) -> str:
 
 def load_mission(path_or_name: str | Path) -> Mission:
     """Load a mission file, or a library mission by name."""
+    path, text = read_named_file(
+        path_or_name, LIBRARY_DIR, library_names, "mission", "a mission file", MissionError
+    )
+    return parse_text(text, str(path))
+
+
+def read_named_file(
+    path_or_name: str | Path,
+    library_dir: Path,
+    names: Callable[[], list[str]],
+    what: str,
+    kind: str,
+    error: type[ValueError],
+) -> tuple[Path, str]:
+    """(path, text) of a file, or of ``library_dir/NAME.toml`` for a bare name; ``error``
+    (naming the file, or listing the library's names) when it is missing, unreadable or larger
+    than ``MAX_FILE_BYTES``. Shared by mission and campaign files."""
     path = Path(path_or_name)
     if not path.is_file():
-        candidate = LIBRARY_DIR / f"{path_or_name}.toml"
+        candidate = library_dir / f"{path_or_name}.toml"
         if candidate.is_file():
             path = candidate
         elif path.suffix == ".toml" or "/" in str(path_or_name):
-            raise MissionError(f"mission file not found: {path}")
+            raise error(f"{what} file not found: {path}")
         else:
-            raise MissionError(
-                f"unknown mission {str(path_or_name)!r}; the library has: "
-                f"{', '.join(library_names())}"
+            raise error(
+                f"unknown {what} {str(path_or_name)!r}; the library has: {', '.join(names())}"
             )
     try:
         if path.stat().st_size > MAX_FILE_BYTES:
-            raise MissionError(f"{path}: larger than {MAX_FILE_BYTES} bytes; not a mission file")
-        text = path.read_text()
+            raise error(f"{path}: larger than {MAX_FILE_BYTES} bytes; not {kind}")
+        return path, path.read_text()
     except (OSError, UnicodeDecodeError) as err:
-        raise MissionError(f"cannot read {path}: {err}") from None
-    return parse_text(text, str(path))
+        raise error(f"cannot read {path}: {err}") from None
 
 
 MAX_FILE_BYTES = 256 * 1024
