@@ -33,17 +33,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from app.console import ConsoleSettings
 from app.server import serve_in_thread
+from tests import browser
 
-CHROMIUM = "/usr/bin/chromium"
+CHROMIUM = str(browser.CHROMIUM)
 CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
+    *browser.CHROMIUM_ARGS,
     # five pages at once: the ones not in front must not be throttled to 1 Hz
     "--disable-background-timer-throttling",
     "--disable-renderer-backgrounding",
