@@ -362,5 +362,6 @@ def test_grip_closes_only_within_reach_of_the_mount():
     assert sim.gripping is True
     sim.set_mode("tree")
     sim.run_for(2.0)
-    # the gripper spring pulls the last few centimetres and degrees together, no more
+    # the gripper spring pulls the last centimetres together (measured: 0.07 deg of tree turn);
+    # 2 deg stays far below the 12 deg yank of the defect while leaving room for the seed
     assert abs(math.degrees(sim.tree_eta_n[5] - psi_before)) < 2.0

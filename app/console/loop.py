@@ -21,7 +21,6 @@ import collections
 import concurrent.futures
 import queue
 import time
-from dataclasses import replace
 
 import numpy as np
 
@@ -262,8 +261,9 @@ class PacedLoop:
         if self._ticks % 50 == 0:
             self._stats = self._compute_stats()
         self._seq += 1
-        snap = self.session.snapshot(self._seq, self.paused, self.speed, self._stats)
-        self._snapshot = replace(snap, operations=self._operations)
+        self._snapshot = self.session.snapshot(
+            self._seq, self.paused, self.speed, self._stats, self._operations
+        )
 
     def _compute_stats(self) -> LoopStats:
         n = min(self._ticks, JITTER_WINDOW)

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from app import scores
 from app.console.alarms import AlarmLimits, AlarmMonitor
 from app.console.errors import ConsoleError
-from app.console.operations import trainee_of
+from app.console.operations import Operation, trainee_of
 from app.console.replay import Replay, recording_path
 from app.console.snapshot import (
     LoopStats,
@@ -474,10 +474,17 @@ class Session:
             self._trend_wall = now
         return self._trend_cache
 
-    def snapshot(self, seq: int, paused: bool, speed: float, stats: LoopStats) -> Snapshot:
+    def snapshot(
+        self,
+        seq: int,
+        paused: bool,
+        speed: float,
+        stats: LoopStats,
+        operations: tuple[Operation, ...] = (),
+    ) -> Snapshot:
         """The state as of now (see ``Snapshot``)."""
         if self.replay is not None:
-            return self._replay_snapshot(seq, paused, speed, stats)
+            return self._replay_snapshot(seq, paused, speed, stats, operations)
         sim = self.sim
         v: RowView = row_view(self.last_row, self.scene.n_thrusters)
         return Snapshot(
@@ -501,6 +508,7 @@ class Session:
             replay=None,
             scene=self.scene,
             stats=stats,
+            operations=operations,
             warnings=(*sim.startup.warnings, *self.notices),
             error=self.error,
             target=tuple(float(v) for v in sim.target),  # type: ignore[arg-type]
@@ -508,7 +516,14 @@ class Session:
             trend=self._trend(),
         )
 
-    def _replay_snapshot(self, seq: int, paused: bool, speed: float, stats: LoopStats) -> Snapshot:
+    def _replay_snapshot(
+        self,
+        seq: int,
+        paused: bool,
+        speed: float,
+        stats: LoopStats,
+        operations: tuple[Operation, ...],
+    ) -> Snapshot:
         rp = self.replay
         assert rp is not None
         v = row_view(rp.row(), rp.scene.n_thrusters)
@@ -534,6 +549,7 @@ class Session:
             replay=rp.status(),
             scene=rp.scene,
             stats=stats,
+            operations=operations,
             trend=rp.trend(),
         )
 
