@@ -1,7 +1,7 @@
 """The console in a real headless Chromium (Debian's /usr/bin/chromium, driven by Playwright):
 the page loads, the camera presets show the scene (screenshots go to docs/screenshots/), a
 gain set in the panel reaches the controller, a mission built and started in the panel moves
-the tree, and a session recorded in the panel is replayed in the same view.
+the tree, and a session recorded in the panel is replayed in the page (that browser's own replay).
 
 One server and one browser for the module (fixtures in ``tests/browser.py``; start-up costs
 seconds); each test leaves the console running live.
@@ -165,29 +165,31 @@ def test_recording_from_the_panel_is_written_and_replayed(
     click(page, "Refresh list")
     choose(page, "Recording", names[0])
     click(page, "Open replay")
-    wait_for(lambda: api.get("/api/state").json()["source"] == "replay", 20.0, "replay mode")
-    replay = api.get("/api/replay").json()["replay"]
-    assert replay["end_s"] - replay["start_s"] > 5.0
-    assert replay["marks"], "the gain change is marked on the scrub bar"
+    # the replay is this page's: the page shows it, the console's state stays live
+    page.get_by_text("REPLAY").first.wait_for(timeout=20_000)
+    assert api.get("/api/state").json()["source"] == "live"
+    panel = next(iter(server.app.state.view._panels.values()))
+    wait_for(lambda: panel.replay is not None, 10.0, "the page's replay")
+    replay = panel.replay.status()
+    assert replay.end_s - replay.start_s > 5.0
+    assert replay.marks, "the gain change is marked on the scrub bar"
     page.locator(".mantine-Slider-mark").first.wait_for(timeout=5000)
     click(page, "Play replay")
-    t0 = api.get("/api/state").json()["t_s"]
-    wait_for(lambda: api.get("/api/state").json()["t_s"] > t0 + 1.0, 15.0, "the replay to play")
-    page.get_by_text("REPLAY").first.wait_for(timeout=5000)
+    t0 = replay.t_s
+    wait_for(lambda: panel.replay.status().t_s > t0 + 1.0, 15.0, "the replay to play")
     save(page.screenshot(), "console-replay.png")
     click(page, "Pause replay")
-    wait_for(
-        lambda: not api.get("/api/replay").json()["replay"]["playing"], 10.0, "the replay to pause"
-    )
-    field(page, "Replay time s").fill(f"{replay['start_s'] + 1.0:.1f}")
+    wait_for(lambda: not panel.replay.status().playing, 10.0, "the replay to pause")
+    field(page, "Replay time s").fill(f"{replay.start_s + 1.0:.1f}")
     field(page, "Replay time s").press("Enter")
     wait_for(
-        lambda: abs(api.get("/api/state").json()["t_s"] - replay["start_s"] - 1.0) < 0.5,
+        lambda: abs(panel.replay.status().t_s - replay.start_s - 1.0) < 0.5,
         10.0,
         "the replay to seek back",
     )
     click(page, "Close replay")
-    wait_for(lambda: api.get("/api/state").json()["source"] == "live", 10.0, "live again")
+    wait_for(lambda: panel.replay is None, 10.0, "live again")
+    page.get_by_text("replay closed: live").first.wait_for(timeout=5000)
     api.put("/api/run/speed", json={"speed": 1.0}).raise_for_status()
 
 

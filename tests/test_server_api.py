@@ -405,15 +405,22 @@ def test_record_list_download_and_replay(client: TestClient) -> None:
     assert r.status_code == 200
     replay = r.json()["replay"]
     assert replay["end_s"] > replay["start_s"] + 2.5 and replay["complete"] is True
-    assert state(client)["source"] == "replay"
+    # the API's replay plays beside the live run: /api/state stays live, and the live run
+    # goes on stepping while the replay plays (it used to wait, paused, under the replay)
+    live = state(client)
+    assert live["source"] == "live" and live["replay"]["name"] == name
     client.post("/api/replay/play", headers=AUTH)
-    wait_for(lambda: state(client)["t_s"] > replay["start_s"] + 1.0, what="replay playing")
+    wait_for(
+        lambda: client.get("/api/replay").json()["replay"]["t_s"] > replay["start_s"] + 1.0,
+        what="replay playing",
+    )
+    assert state(client)["t_s"] > live["t_s"] + 0.5, "the live run stepped meanwhile"
     client.post("/api/replay/pause", headers=AUTH)
     seek = client.put("/api/replay/seek", json={"t_s": replay["start_s"] + 0.5}, headers=AUTH)
     assert seek.json()["replay"]["t_s"] == pytest.approx(replay["start_s"] + 0.5, abs=0.06)
     assert client.put("/api/replay/seek", json={"t_s": -1}, headers=AUTH).status_code == 422
     assert client.post("/api/replay/close", headers=AUTH).json() == {"replay": None}
-    assert state(client)["source"] == "live"
+    assert state(client)["source"] == "live" and state(client)["replay"] is None
     assert client.post("/api/replay/play", headers=AUTH).status_code == 409
 
 

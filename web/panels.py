@@ -30,9 +30,11 @@ from app.console import (
     station_keeping_mission,
 )
 from app.console import commands as cmd
+from app.console.viewer_replay import ViewerReplay
 from missions import schema
 from web import geometry as geo
 from web.builder_panel import BuilderPanel
+from web.scene import SceneView
 
 if TYPE_CHECKING:
     from app.console import Console
@@ -69,8 +71,16 @@ def _bar_color(utilisation: float) -> BarColor:
 class ClientPanel:
     """Panels of one browser."""
 
-    def __init__(self, client: viser.ClientHandle, console: Console) -> None:
+    def __init__(
+        self, client: viser.ClientHandle, console: Console, shared_scene: SceneView | None = None
+    ) -> None:
         self.client = client
+        self.shared_scene = shared_scene
+        """The scene every browser shares (its nodes are hidden here while a replay shows)."""
+        self.replay: ViewerReplay | None = None
+        """This browser's replay (None: it shows the live run)."""
+        self._replay_scene: SceneView | None = None
+        self._replay_count = 0
         self.console = console
         self.gui = client.gui
         self.unlocked = False
@@ -336,9 +346,12 @@ class ClientPanel:
             refresh.on_click(lambda _: self._refresh_recordings())
             self.replay_open = self._guard(gui.add_button("Open replay"))
             self.replay_open.on_click(self._on_open_replay)
-            self._action(self._guard(gui.add_button("Play replay")), lambda: cmd.PlayReplay(True))
-            self._action(self._guard(gui.add_button("Pause replay")), lambda: cmd.PlayReplay(False))
-            self._action(self._guard(gui.add_button("Close replay")), cmd.CloseReplay)
+            for label, act in (
+                ("Play replay", lambda: self._play_replay(True)),
+                ("Pause replay", lambda: self._play_replay(False)),
+                ("Close replay", self._close_replay),
+            ):
+                self._guard(gui.add_button(label)).on_click(self._replay_action(act))
         self._make_replay_slider(0.0, 1.0, ())  # enters the folder itself
 
     def _make_replay_slider(
@@ -362,9 +375,7 @@ class ClientPanel:
                 )
             )
         self.replay_time.disabled = not self.unlocked
-        self.replay_time.on_update(
-            self._when_client(lambda: cmd.SeekReplay(float(self.replay_time.value)))
-        )
+        self.replay_time.on_update(self._on_seek_replay)
 
     # ================================================================== callbacks
     def _set_enabled(self, enabled: bool) -> None:
@@ -535,12 +546,53 @@ class ClientPanel:
         if not self.unlocked:
             self._say("**locked**: enter the console token under Access")
             return
+        self._say(f"opening {name}...")
         try:
             data = load_replay(self.console.settings.recordings_dir, name)
+            self._replay_count += 1
+            replay = ViewerReplay(name, data, self.console.loop.snapshot, self._replay_count)
         except (ConsoleError, FileNotFoundError, ValueError) as err:
             self._say(f"**error**: {err}")
             return
-        self._run(lambda: cmd.OpenReplay(name, data))
+        self.replay = replay  # the publisher thread draws it from its next frame
+        self._camera_pending = True
+        self._say(f"replay of `{name}` in this browser; the live run goes on")
+
+    def _replay_action(self, act: Callable[[], None]) -> Callable[[Any], None]:
+        """A replay button: acts on this browser's replay only (the live run and the other
+        browsers are not touched, so nothing goes to the loop)."""
+
+        def clicked(event: Any) -> None:
+            if event.client is None:
+                return
+            if not self.unlocked:
+                self._say("**locked**: enter the console token under Access")
+                return
+            if self.replay is None:
+                self._say("**error**: no replay is open")
+                return
+            act()
+
+        return clicked
+
+    def _play_replay(self, playing: bool) -> None:
+        if self.replay is not None:
+            self.replay.play(playing)
+            self._say("")
+
+    def _close_replay(self) -> None:
+        self.replay = None  # the publisher thread removes its scene
+        self._camera_pending = True
+        self._say("replay closed: live")
+
+    def _on_seek_replay(self, event: Any) -> None:
+        replay = self.replay
+        if event.client is None or replay is None or not self.unlocked:
+            return
+        try:
+            replay.seek(float(self.replay_time.value))
+        except ConsoleError as err:
+            self._say(f"**error**: {err}")
 
     # ================================================================== updates
     def _apply_camera(self, snap: Snapshot) -> None:
@@ -597,26 +649,49 @@ class ClientPanel:
         self._camera_pending = self.camera_mode in FOLLOWING
 
     def update(self, snap: Snapshot) -> None:
-        """Refresh from a snapshot (the publisher thread)."""
+        """Refresh from a snapshot (the publisher thread): the live one, or this browser's
+        replay drawn in its own scene (the inputs follow the live run either way)."""
+        view = self._shown(snap)
         if self._camera_pending:
-            self._apply_camera(snap)
+            self._apply_camera(view)
         now = time.monotonic()
         if now - self._status_wall >= STATUS_EVERY_S:
             self._status_wall = now
-            self._update_status(snap)
+            self._update_status(view, snap)
         if now - self._plots_wall >= PLOTS_EVERY_S:
             self._plots_wall = now
-            self._update_plots(snap)
+            self._update_plots(view)
 
-    def _update_status(self, snap: Snapshot) -> None:
+    def _shown(self, live: Snapshot) -> Snapshot:
+        """What this browser shows: its replay (drawn in its own scope of the scene, which
+        hides the shared nodes for it alone) or the live run (its own scope cleared)."""
+        replay = self.replay
+        if replay is None:
+            if self._replay_scene is not None:
+                self._replay_scene.clear()
+                self._replay_scene = None
+            return live
+        view = replay.snapshot(live)
+        if self._replay_scene is None and self.shared_scene is not None:
+            self._replay_scene = SceneView(self.shared_scene.server, self.client)
+        if self._replay_scene is not None:
+            self._replay_scene.update(view)
+            if self.shared_scene is not None:
+                self._replay_scene.hide(self.shared_scene.names())
+        return view
+
+    def _update_status(self, snap: Snapshot, live: Snapshot | None = None) -> None:
+        live = snap if live is None else live
         tree = snap.tree_eta_n
         m = snap.mission
         leg = f"leg {m.leg_index}/{m.legs_total} {m.leg_type}" if m.leg_index else ""
         state = "paused" if snap.paused else f"running x{snap.speed:g}"
-        source = f"REPLAY `{snap.replay.name}`" if snap.replay else "live"
+        replaying = snap.source == "replay" and snap.replay is not None
+        source = f"REPLAY `{snap.replay.name}`" if replaying and snap.replay else "live"
         text = (
             f"**{source}** t = {snap.t_s:8.1f} s, {state}  \n"
-            f"tree N {tree[0]:.2f} m, E {tree[1]:.2f} m, heading "
+            + (f"live run goes on: t = {live.t_s:.1f} s  \n" if replaying else "")
+            + f"tree N {tree[0]:.2f} m, E {tree[1]:.2f} m, heading "
             f"{math.degrees(tree[5]):.1f} deg, mode {snap.mode}  \n"
             f"mission: {m.name or '-'} ({m.state}) {leg}"
             + (f"  \n**{snap.error}**" if snap.error else "")
@@ -638,7 +713,8 @@ class ClientPanel:
         if self.alarms_html.content != html:
             self.alarms_html.content = html
         self._update_thrusters(snap)
-        self._update_controls(snap)
+        self._update_controls(live)
+        self._update_replay(snap)
         ops = _operations_text(snap)
         if self.operations_md.content != ops:
             self.operations_md.content = ops
@@ -700,7 +776,6 @@ class ClientPanel:
         if self.counters_md.content != counters:
             self.counters_md.content = counters
         self.builder.update(snap)
-        self._update_replay(snap)
 
     def _follow_live_inputs(self, snap: Snapshot) -> None:
         """Inputs the operator is not editing show the live values."""
@@ -728,7 +803,7 @@ class ClientPanel:
                     handle.value = value
 
     def _update_replay(self, snap: Snapshot) -> None:
-        rp = snap.replay
+        rp = snap.replay if snap.source == "replay" else None
         if rp is None:
             self._replay_name = None
             return

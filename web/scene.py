@@ -38,27 +38,53 @@ TRACK_EVERY_S = 1.0
 
 
 class SceneView:
-    """Owns the scene nodes of one viser server; ``update`` from the publisher thread."""
+    """Owns the scene nodes of one viser server (the shared scene every browser sees), or of
+    one browser (``client``: nodes of the same names in that browser's own scope, which viser
+    draws instead of the shared ones for that browser alone); ``update`` from the publisher
+    thread."""
 
-    def __init__(self, server: viser.ViserServer) -> None:
+    def __init__(self, server: viser.ViserServer, client: viser.ClientHandle | None = None) -> None:
         self.server = server
-        self.scene = server.scene
-        self.scene.set_up_direction("-z")
-        # software-rendered browsers (no GPU) stay responsive without shadows
-        self.scene.configure_default_lights(enabled=True, cast_shadow=False)
+        self._atomic = server.atomic if client is None else client.atomic
+        self.scene = server.scene if client is None else client.scene
+        if client is None:  # a browser's own scope keeps the shared settings
+            self.scene.set_up_direction("-z")
+            # software-rendered browsers (no GPU) stay responsive without shadows
+            self.scene.configure_default_lights(enabled=True, cast_shadow=False)
         self._last_pose: np.ndarray | None = None
         self._version = -1
         self._track_wall = 0.0
         self._current_key: tuple[float, float] | None = None
         self.info: SceneInfo | None = None
         self._handles: list = []
+        self._hidden: list = []
+
+    def names(self) -> set[str]:
+        """Names of the nodes drawn (after the first ``update``)."""
+        return {h.name for h in self._handles}
+
+    def hide(self, names: set[str]) -> None:
+        """Hide these names in this view's scope (a browser's own scene hides the shared
+        nodes it has no node of its own for: a post or funnel the other set-up lacks)."""
+        for name in sorted(names - self.names() - {h.name for h in self._hidden}):
+            self._hidden.append(self.scene.add_frame(name, show_axes=False, visible=False))
+
+    def clear(self) -> None:
+        """Remove every node this view drew (a browser's own scope: the shared scene shows
+        again)."""
+        # children before their parents (a parent takes its children along)
+        for handle in [*reversed(self._hidden), *reversed(self._handles)]:
+            handle.remove()
+        self._handles, self._hidden = [], []
+        self._version = -1
+        self._last_pose = None
 
     # ----------------------------------------------------------------- static parts
     def _build(self, info: SceneInfo) -> None:
         """(Re)draw what only changes with a new set-up."""
-        for handle in reversed(self._handles):  # children before their parents
+        for handle in [*reversed(self._hidden), *reversed(self._handles)]:  # children first
             handle.remove()
-        self._handles = []
+        self._handles, self._hidden = [], []
         sc = _Recorder(self.scene, self._handles)
         self.info = info
         lay, frame = info.layout, info.frame
@@ -230,7 +256,7 @@ class SceneView:
         start, end = geo.current_arrow_ends_n(
             center, reach, snap.current_direction_rad, arrow.length_m
         )
-        with self.server.atomic():
+        with self._atomic():
             if arrow.length_m > 0.0:
                 self._current.points = np.array([[start, end]])
             self._current.visible = arrow.length_m > 0.0
@@ -270,7 +296,7 @@ class SceneView:
                 [math.cos(snap.current_direction_rad), math.sin(snap.current_direction_rad)]
             ),
         )
-        with self.server.atomic():
+        with self._atomic():
             self._tree.position = tree_eta[0:3]
             self._tree.wxyz = geo.quaternion_wxyz_from_rpy_radians(*tree_eta[3:6])
             self._rov.position = np.array(snap.rov_eta_n[0:3])

@@ -86,7 +86,7 @@ class ConsoleView:
         cam.up = pose.up_n
 
     def _connect(self, client: viser.ClientHandle) -> None:
-        panel = ClientPanel(client, self.console)
+        panel = ClientPanel(client, self.console, self.scene)
         with self._lock:
             self._panels[client.client_id] = panel
 

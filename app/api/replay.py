@@ -1,4 +1,10 @@
-"""Replay of a recorded session in the same view: open, play, pause, seek, close."""
+"""The API's replay of a recorded session: open, play, pause, seek, close.
+
+One replay for API clients (session-level), played beside the live run on the loop's clock:
+``GET /api/replay`` (and ``replay`` in ``/api/state``) reports where it is, while
+``/api/state`` keeps reporting the live run, which goes on stepping. It never changes what a
+browser in the page shows: each browser opens replays of its own in the page.
+"""
 
 from __future__ import annotations
 
@@ -25,7 +31,7 @@ def get_replay(snapshot: SnapshotDep) -> ReplayStateOut:
 
 @router.post("/open", response_model=ReplayStateOut)
 async def open_replay(body: ReplayOpenIn, console: ConsoleDep, _: TokenDep) -> ReplayStateOut:
-    """Show a recording instead of the live run (which waits, paused)."""
+    """Open a recording beside the live run (which goes on; the page does not show it)."""
     try:
         data = await asyncio.to_thread(load_replay, console.settings.recordings_dir, body.name)
     except FileNotFoundError as err:

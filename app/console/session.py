@@ -40,18 +40,17 @@ from app.console.snapshot import (
     row_view,
     scene_info,
 )
+from app.console.viewer_replay import recording_scene
 from app.recording import (
     SessionData,
     SessionRecorder,
-    recorded_docking_frame,
     session_metadata,
 )
-from control.columns import LAYOUT, LogRows
+from control.columns import LogRows
 from control.simulation import Simulation, SimulationDiverged, steady_current
 from missions import schema
 from missions.driver import MissionDriver
 from missions.setup import build_simulation
-from sim import params as params_mod
 
 FloatArray = NDArray[np.float64]
 LABEL = re.compile(r"^[A-Za-z0-9._-]{0,60}$")
@@ -192,10 +191,10 @@ class Session:
         return self.driver is not None and self.mission_status.state == "running"
 
     def advance(self, n_steps: int) -> None:
-        """Advance the replay, or the live simulation (and its mission), by ``n_steps``."""
+        """Advance the live simulation (and its mission) by ``n_steps``, and the API's replay
+        (if one is open) by as long: a replay never holds up the live run."""
         if self.replay is not None:
             self.replay.advance(n_steps)
-            return
         if self.error is not None or n_steps <= 0:
             return
         remaining = int(n_steps)
@@ -314,8 +313,8 @@ class Session:
 
     # ------------------------------------------------------------------ commands
     def require_live(self, what: str) -> None:
-        if self.replay is not None:
-            raise ConsoleError(f"{what}: a replay is open; close it first")
+        """Kept for callers: the live run is always there (a replay, the API's or a
+        browser's, runs beside it), so nothing is refused for a replay."""
 
     def require_no_mission(self, what: str) -> None:
         if self._mission_running:
@@ -420,7 +419,10 @@ class Session:
 
     # ------------------------------------------------------------------ replay
     def open_replay(self, name: str, data: SessionData) -> ReplayStatus:
-        """Show a loaded recording (``load_replay``) instead of the live run."""
+        """Open the API's replay of a loaded recording (``load_replay``): it plays beside the
+        live run on the loop's clock and is reported in the snapshot's ``replay`` (the live
+        run's state stays what the snapshot shows; browsers in the page have replays of
+        their own, ``app.console.viewer_replay``)."""
         if name == self.recording_name:
             raise ConsoleError(f"{name} is being recorded; stop the recording first")
         self.replay = Replay(name, data, self._replay_scene(data), self.sim.dt_s)
@@ -428,25 +430,11 @@ class Session:
 
     def _replay_scene(self, data: SessionData) -> SceneInfo:
         """The scene of the recorded parameter set (the live one if it cannot be rebuilt)."""
-        meta = data.metadata or {}
-        try:
-            ps = params_mod.build(params_mod.parse_spec(meta["params"], "<recording>"))
-        except (KeyError, TypeError, ValueError):
-            return self.scene
-        frame = recorded_docking_frame(meta)
-        in_mission = frame is not None
-        if frame is None:
-            first = np.asarray(data.rows, float)[0]
-            tree = LAYOUT.take(first, "tree_eta_n")
-            frame = default_docking_frame(ps, tree[0:2], float(tree[5]), float(tree[2]))
         self._scene_version += 1
-        return scene_info(ps, frame, self._scene_version, frame_in_mission=in_mission)
+        return recording_scene(data, self.scene, self._scene_version)
 
     def close_replay(self) -> None:
-        if self.replay is not None:
-            self.replay = None
-            self._scene_version += 1
-            self.scene = replace(self.scene, version=self._scene_version)
+        self.replay = None
 
     def require_replay(self) -> Replay:
         if self.replay is None:
@@ -483,8 +471,6 @@ class Session:
         operations: tuple[Operation, ...] = (),
     ) -> Snapshot:
         """The state as of now (see ``Snapshot``)."""
-        if self.replay is not None:
-            return self._replay_snapshot(seq, paused, speed, stats, operations)
         sim = self.sim
         v: RowView = row_view(self.last_row, self.scene.n_thrusters)
         return Snapshot(
@@ -505,7 +491,7 @@ class Session:
             mission=self._mission_result(),
             alarms=self.monitor.state,
             recording=self.recording_name,
-            replay=None,
+            replay=None if self.replay is None else self.replay.status(),
             scene=self.scene,
             stats=stats,
             operations=operations,
@@ -514,43 +500,6 @@ class Session:
             target=tuple(float(v) for v in sim.target),  # type: ignore[arg-type]
             quality_counters=tuple(tuple(int(c) for c in row) for row in sim.quality_counters),
             trend=self._trend(),
-        )
-
-    def _replay_snapshot(
-        self,
-        seq: int,
-        paused: bool,
-        speed: float,
-        stats: LoopStats,
-        operations: tuple[Operation, ...],
-    ) -> Snapshot:
-        rp = self.replay
-        assert rp is not None
-        v = row_view(rp.row(), rp.scene.n_thrusters)
-        crane_tip_n, wire_length_m, tension_newton = rp.site()
-        return Snapshot(
-            seq=seq,
-            source="replay",
-            paused=not rp.playing,
-            speed=speed,
-            **_row_fields(v),
-            allocation=None,
-            grip=None,
-            gains=None,
-            crane_tip_n=crane_tip_n,
-            wire_length_m=wire_length_m,
-            wire_tension_newton=tension_newton,
-            current_speed_mps=0.0,
-            current_direction_rad=0.0,
-            wire_drag_newton_per_m=0.0,
-            mission=MissionStatus(name=rp.mission, state="replay"),
-            alarms=rp.monitor.state,
-            recording=self.recording_name,
-            replay=rp.status(),
-            scene=rp.scene,
-            stats=stats,
-            operations=operations,
-            trend=rp.trend(),
         )
 
     def close(self) -> None:
