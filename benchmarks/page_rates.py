@@ -8,16 +8,20 @@ websocket delivers a second, for ``--seconds`` of a running console at ``--speed
 
     .venv/bin/python benchmarks/page_rates.py --seconds 20 --speed 1
 
-Prints one JSON object: rates per second, against what the page promises.
+Prints one JSON object: rates per second, against what the page promises, the 1-minute load
+average at the end, and the view publisher's work per frame (median and 95th percentile).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -27,7 +31,9 @@ from tests.browser import CHROMIUM, CHROMIUM_ARGS, _dismiss_notifications
 from web import panels
 
 WATCH = """() => {
-  window.__rates = {status: 0, plots: 0, bytes: 0};
+  window.__rates = {status: 0, plots: 0, bytes: 0, frames: 0};
+  const frame = () => { window.__rates.frames++; requestAnimationFrame(frame); };
+  requestAnimationFrame(frame);
   const status = Array.from(document.querySelectorAll('p, div'))
     .find(e => e.children.length < 6 && /t = .* s, (running|paused)/.test(e.textContent));
   new MutationObserver(() => window.__rates.status++)
@@ -64,20 +70,35 @@ def main() -> None:
         _dismiss_notifications(page)
         srv.console.loop.speed = args.speed
         time.sleep(2.0)
+        panels_ = list(srv.app.state.view._panels.values())
         page.evaluate(WATCH)
         received["bytes"] = 0
+        sent0 = dict(panels_[0].updates_sent)
         time.sleep(args.seconds)
         counts = page.evaluate("() => window.__rates")
+        sent = {k: panels_[0].updates_sent[k] - sent0[k] for k in sent0}
+        frames = np.array(list(srv.app.state.view.frame_ms)) if srv.app.state.view else None
         browser.close()
     out = {
         "seconds": args.seconds,
         "speed": args.speed,
+        "status_sent_per_s": round(sent["status"] / args.seconds, 2),
         "status_per_s": round(counts["status"] / args.seconds, 2),
         "status_promised_per_s": 1.0 / panels.STATUS_EVERY_S,
+        "plots_sent_per_s": round(sent["plots"] / args.seconds, 2),
         "plot_updates_per_s": round(counts["plots"] / args.seconds, 2),
         "plots_promised_per_s": 1.0 / panels.PLOTS_EVERY_S,
         "websocket_kB_per_s": round(received["bytes"] / args.seconds / 1e3, 1),
+        # the page handles what viser sends once per animation frame: several updates of the
+        # status line between two frames are drawn once
+        "page_frames_per_s": round(counts["frames"] / args.seconds, 2),
+        "load_average_1min": round(os.getloadavg()[0], 2),
     }
+    if frames is not None and len(frames):
+        # the view's publisher: work per frame (shared scene, all panels) [ms]
+        for k, part in enumerate(("scene", "panels")):
+            out[f"publisher_{part}_ms_median"] = round(float(np.median(frames[:, k])), 2)
+            out[f"publisher_{part}_ms_p95"] = round(float(np.percentile(frames[:, k], 95)), 2)
     print(json.dumps(out))
 
 

@@ -374,3 +374,35 @@ def test_replay_marks_name_legs_runs_and_landings_and_tick_commands_and_alarms()
         (5.0, "landing"),
         (6.0, "done"),
     )
+
+
+@pytest.mark.parametrize(("frame_s", "period_s"), [(0.06, 0.2), (0.06, 0.5), (0.13, 0.2)])
+def test_panel_updates_keep_their_rate_whatever_the_frame_period(
+    frame_s: float, period_s: float
+) -> None:
+    """Defect: the status line (every 0.2 s) and plots (every 0.5 s) were counted from the
+    frame that did the last update, so each period was rounded up to whole publisher frames:
+    with 60 ms frames the status line came 4.2 times a second, not 5 (4 frames = 0.24 s) and
+    the plots 1.7 (9 frames). Counting from the due time keeps the promised rate on average."""
+    from web.panels import _next_due
+
+    due, sent, now = 0.0, 0, 0.0
+    frames = int(round(60.0 / frame_s))
+    for k in range(frames):
+        now = k * frame_s
+        if now >= due:
+            due = _next_due(due, period_s, now)
+            sent += 1
+    # over 60 s the count is 60 / period, give or take the first and the last update
+    assert abs(sent - 60.0 / period_s) <= 1
+
+
+def test_panel_updates_do_not_burst_after_a_stall() -> None:
+    """After a stall of several periods, one update and then the normal rate (no catch-up
+    burst of the missed ones)."""
+    from web.panels import _next_due
+
+    due = _next_due(0.0, 0.2, 0.0)
+    assert due == pytest.approx(0.2)
+    due = _next_due(due, 0.2, 3.0)  # 2.8 s late
+    assert due == pytest.approx(3.2)

@@ -92,6 +92,8 @@ class ClientPanel:
         """What went wrong with the last command this browser sent ('' when it was done)."""
         self._status_wall = 0.0
         self._plots_wall = 0.0
+        self.updates_sent = {"status": 0, "plots": 0}
+        """Status-line and plot refreshes made (``benchmarks/page_rates.py`` reads them)."""
         self._scene_version = -1
         self._replay_name: str | None = None
         snap = console.loop.snapshot
@@ -655,12 +657,14 @@ class ClientPanel:
         if self._camera_pending:
             self._apply_camera(view)
         now = time.monotonic()
-        if now - self._status_wall >= STATUS_EVERY_S:
-            self._status_wall = now
+        if now >= self._status_wall:
+            self._status_wall = _next_due(self._status_wall, STATUS_EVERY_S, now)
             self._update_status(view, snap)
-        if now - self._plots_wall >= PLOTS_EVERY_S:
-            self._plots_wall = now
+            self.updates_sent["status"] += 1
+        if now >= self._plots_wall:
+            self._plots_wall = _next_due(self._plots_wall, PLOTS_EVERY_S, now)
             self._update_plots(view)
+            self.updates_sent["plots"] += 1
 
     def _shown(self, live: Snapshot) -> Snapshot:
         """What this browser shows: its replay (drawn in its own scope of the scene, which
@@ -834,6 +838,15 @@ class ClientPanel:
             frame = np.full(len(t), np.nan)
             frame[0], frame[-1] = mid - span / 2, mid + span / 2
             plot.data = tuple(np.ascontiguousarray(a) for a in (*series, frame))
+
+
+def _next_due(due: float, period: float, now: float) -> float:
+    """The next time an every-``period`` update is due: one period after the last due time
+    (not after now: frames come every 50 ms, and counting from the frame that did the update
+    rounded each period up to the next frame, 0.2 s to 0.25 s), or one period from now when
+    more than a period behind (no burst of catch-up updates)."""
+    due += period
+    return due if due > now - period else now + period
 
 
 def _mission_text(snap: Snapshot) -> str:
