@@ -21,6 +21,7 @@ import sys
 import time
 from pathlib import Path
 
+import httpx
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -50,6 +51,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--speed", type=float, default=1.0)
+    ap.add_argument("--warmup", type=float, default=2.0, help="seconds of running before measuring")
+    ap.add_argument("--paused", action="store_true", help="measure with the run paused")
     args = ap.parse_args()
     from playwright.sync_api import sync_playwright
 
@@ -69,7 +72,10 @@ def main() -> None:
         page.get_by_text("Unlock controls").wait_for(timeout=60_000)
         _dismiss_notifications(page)
         srv.console.loop.speed = args.speed
-        time.sleep(2.0)
+        time.sleep(args.warmup)
+        if args.paused:
+            httpx.post(f"{srv.base_url}/api/run/pause", headers=srv.auth).raise_for_status()
+            time.sleep(1.0)
         panels_ = list(srv.app.state.view._panels.values())
         page.evaluate(WATCH)
         received["bytes"] = 0
@@ -82,11 +88,14 @@ def main() -> None:
     out = {
         "seconds": args.seconds,
         "speed": args.speed,
+        "paused": args.paused,
+        "warmup_s": args.warmup,
         "status_sent_per_s": round(sent["status"] / args.seconds, 2),
         "status_per_s": round(counts["status"] / args.seconds, 2),
         "status_promised_per_s": 1.0 / panels.STATUS_EVERY_S,
         "plots_sent_per_s": round(sent["plots"] / args.seconds, 2),
         "plot_updates_per_s": round(counts["plots"] / args.seconds, 2),
+        "plot_data_kB_per_s": round(sent["plot_bytes"] / args.seconds / 1e3, 1),
         "plots_promised_per_s": 1.0 / panels.PLOTS_EVERY_S,
         "websocket_kB_per_s": round(received["bytes"] / args.seconds / 1e3, 1),
         # the page handles what viser sends once per animation frame: several updates of the

@@ -162,3 +162,33 @@ def _side_by_side(shots: list[bytes]) -> bytes:
     buf = io.BytesIO()
     out.save(buf, format="PNG")
     return buf.getvalue()
+
+
+WATCH_PLOTS = """() => {
+  window.__plotUpdates = 0;
+  let last = null;
+  setInterval(() => {
+    const u = Object.values((window.__viserTestpoints || {}).uplots || {})[0];
+    if (u && u.chart.data[0] !== last) { last = u.chart.data[0]; window.__plotUpdates++; }
+  }, 50);
+}"""
+
+
+def test_plots_are_not_sent_again_when_nothing_is_new(
+    page, server: RunningServer, api: httpx.Client
+) -> None:
+    """Defect: a paused run's plots were sent whole twice a second (45.9 kB/s for nothing);
+    the page now gets plot data only when there are new points."""
+    unlock(page, server.token)
+    api.post("/api/run/resume").raise_for_status()
+    page.evaluate(WATCH_PLOTS)
+    time.sleep(3.0)
+    running = page.evaluate("() => window.__plotUpdates")
+    assert running >= 3, "the plots are updated while the run goes on"
+    api.post("/api/run/pause").raise_for_status()
+    time.sleep(1.5)  # an update under way may still arrive
+    before = page.evaluate("() => window.__plotUpdates")
+    time.sleep(3.0)
+    assert page.evaluate("() => window.__plotUpdates") == before, "no plot data while paused"
+    api.post("/api/run/resume").raise_for_status()
+    wait_for(lambda: page.evaluate("() => window.__plotUpdates") > before, 10.0, "plots again")

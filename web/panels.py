@@ -92,8 +92,10 @@ class ClientPanel:
         """What went wrong with the last command this browser sent ('' when it was done)."""
         self._status_wall = 0.0
         self._plots_wall = 0.0
-        self.updates_sent = {"status": 0, "plots": 0}
-        """Status-line and plot refreshes made (``benchmarks/page_rates.py`` reads them)."""
+        self.updates_sent = {"status": 0, "plots": 0, "plot_bytes": 0}
+        """Status-line and plot refreshes made, and the bytes of plot data assigned
+        (``benchmarks/page_rates.py`` reads them)."""
+        self._plots_key: tuple[str, str, float, int] | None = None
         self._scene_version = -1
         self._replay_name: str | None = None
         snap = console.loop.snapshot
@@ -664,7 +666,6 @@ class ClientPanel:
         if now >= self._plots_wall:
             self._plots_wall = _next_due(self._plots_wall, PLOTS_EVERY_S, now)
             self._update_plots(view)
-            self.updates_sent["plots"] += 1
 
     def _shown(self, live: Snapshot) -> Snapshot:
         """What this browser shows: its replay (drawn in its own scope of the scene, which
@@ -821,6 +822,18 @@ class ClientPanel:
         trend = snap.trend
         if len(trend) < 2:
             return
+        # viser re-sends a plot's whole data at every assignment (its uPlot has no append,
+        # and a tuple of arrays is never found equal to the last), so nothing is assigned
+        # when there is nothing new: a paused run or replay sent its full window twice a second
+        key = (
+            snap.source,
+            snap.replay.name if snap.replay else "",
+            float(trend[-1, 0]),
+            len(trend),
+        )
+        if key == self._plots_key:
+            return
+        self._plots_key = key
         recent = trend[trend[:, 0] >= trend[-1, 0] - PLOT_WINDOW_S]
         # PLOT_POINTS_PER_S a second (a trace a few hundred pixels wide needs no more): the
         # whole window goes out at each update (viser's uPlot has no append), so this is what
@@ -837,7 +850,10 @@ class ClientPanel:
             mid = 0.5 * (float(np.min(series[1:])) + float(np.max(series[1:])))
             frame = np.full(len(t), np.nan)
             frame[0], frame[-1] = mid - span / 2, mid + span / 2
-            plot.data = tuple(np.ascontiguousarray(a) for a in (*series, frame))
+            arrays = tuple(np.ascontiguousarray(a) for a in (*series, frame))
+            plot.data = arrays
+            self.updates_sent["plot_bytes"] += sum(a.nbytes for a in arrays)
+        self.updates_sent["plots"] += 1
 
 
 def _next_due(due: float, period: float, now: float) -> float:
