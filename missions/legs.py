@@ -157,9 +157,13 @@ def _move(ctx: MissionContext, leg: schema.MoveLeg, deadline: float) -> LegRun:
 def _step(ctx: MissionContext, leg: schema.StepLeg, deadline: float) -> LegRun:
     t = ctx.target
     n, e = (t[0] + leg.north_m, t[1] + leg.east_m) if leg.relative else (leg.north_m, leg.east_m)
-    ctx.set_target(n, e, _heading(ctx, leg.heading_deg))
+    psi = _heading(ctx, leg.heading_deg)
+    ctx.set_target(n, e, psi)
     yield from ctx.wait(leg.duration_s, deadline)
-    return leg.duration_s <= leg.timeout_s
+    if leg.duration_s > leg.timeout_s:
+        return False
+    ctx.check_reached(n, e, psi)
+    return True
 
 
 def _corners(side: float, clockwise: bool) -> list[tuple[float, float]]:

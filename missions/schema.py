@@ -190,7 +190,10 @@ class MoveLeg(_Reaching):
     settle_s: float = Field(default=30.0, ge=0.0, le=3600.0)
 
 
-class StepLeg(_Leg):
+class StepLeg(_Reaching):
+    """A step of the target (no settling wait: the response over ``duration_s`` is what is
+    studied); at its end the tree must be within the tolerances of the stepped target."""
+
     type: Literal["step"]
     north_m: float = Field(ge=-1000.0, le=1000.0)
     east_m: float = Field(ge=-1000.0, le=1000.0)

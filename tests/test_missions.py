@@ -316,3 +316,23 @@ def test_tree_estimate_stays_continuous_through_the_hookup():
     assert np.max(np.abs(cmd - ach)) < 1e-6 * max(1.0, float(np.max(np.abs(cmd))))
     # position fixes after the grip reach the observer
     assert rows["accepted"][grip : grip + 150, 0].sum() >= 1
+
+
+def test_step_leg_that_ends_off_its_target_fails_the_mission():
+    """Defect: the step leg had no tolerance, so the impossible step with pinv allocation
+    reported failed: false while the tree ended 13 m and 132 deg off its target (thesis 4.2.2:
+    the heading is lost). A step leg now ends with the same check as move and rotate legs."""
+    r = runner.run_mission(schema.load_mission("model-step-pinv"))
+    assert r.failed
+    assert "did not reach its target" in r.legs[1].error
+    off_deg = abs((r.final_eta_n[5] - 90.0 + 180.0) % 360.0 - 180.0)  # final_eta_n in deg
+    assert off_deg > 100.0  # measured 132.3 deg, far outside the default 2 deg
+
+
+def test_step_leg_that_reaches_its_target_passes():
+    """A small step (0.5 m north, heading kept) at model scale is reached within 0.1 m and
+    2 deg in 200 s, so the same check passes it."""
+    m = schema.load_mission("model-step-priority").model_dump(mode="json")
+    m["legs"][1].update(north_m=0.5, east_m=0.0, heading_deg=0.0, duration_s=200.0)
+    r = runner.run_mission(schema.parse_mission(m))
+    assert not r.failed, r.legs[1].error

@@ -18,7 +18,8 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
     out = tmp_path_factory.mktemp("report")
     log = out / "step.mcap"
     run = cli("run", "model-step-priority", "--seed", "0", "--json", "--log", str(log))
-    assert run.returncode == 0, run.stderr
+    # exit 1: the impossible step ends 3.6 m off its target, outside the leg's tolerance
+    assert run.returncode in (0, 1) and run.stdout, run.stderr
     return log, json.loads(run.stdout)
 
 
