@@ -22,6 +22,7 @@ from app.console import (
     ConsoleError,
     Gains,
     Snapshot,
+    ViewerReplay,
     counters_markdown,
     list_recordings,
     load_replay,
@@ -30,7 +31,6 @@ from app.console import (
     station_keeping_mission,
 )
 from app.console import commands as cmd
-from app.console.viewer_replay import ViewerReplay
 from missions import schema
 from web import geometry as geo
 from web.builder_panel import BuilderPanel

@@ -10,6 +10,7 @@ from here.
     commands.py   the commands (Pause, SetTarget, StartRun, ...)
     session.py    Session: simulation, mission driver, alarms, recorder, replay
     replay.py     recordings on disk and their replay
+    viewer_replay.py  one reader's (a browser's) own replay beside the live run
     snapshot.py   Snapshot and the other immutable views
     alarms.py     operator alarms from the log rows
     texts.py      the page's Markdown for results and signal-check counters
@@ -35,6 +36,7 @@ from app.console.snapshot import (
     Snapshot,
 )
 from app.console.texts import counters_markdown, result_markdown
+from app.console.viewer_replay import ViewerReplay
 from control.config import ALLOCATIONS, MODES, Gains
 from missions.scoring import SATURATED
 from sim.drawing import attachment_point_n
@@ -63,6 +65,7 @@ __all__ = [
     "SceneInfo",
     "Session",
     "Snapshot",
+    "ViewerReplay",
     "allowed_hosts",
     "attachment_point_n",
     "commands",
