@@ -936,3 +936,38 @@ def test_a_recorder_that_cannot_start_leaves_no_empty_file(tmp_path, monkeypatch
             path, metadata={}, params=params.load("model-scale"), n_thrusters=5
         )
     assert not path.exists()
+
+
+def test_a_viewers_replay_runs_on_its_own_clock_beside_the_live_run(session, tmp_path):
+    """A browser's replay (``ViewerReplay``): its clock moves by wall time times the console's
+    speed only while it plays, seeks, and shows the recording's rows in the recording's scene
+    (its docking frame), with the live run's sequence number and operations; the live session
+    is not touched."""
+    from app.console.session import Session, prepare_run, station_keeping_mission
+    from app.console.snapshot import LoopStats
+    from app.console.viewer_replay import ViewerReplay
+
+    path, source = session
+    data = recording.load_session(path)
+    live_session = Session(prepare_run(station_keeping_mission("model-scale", 100.0)), tmp_path)
+    live = live_session.snapshot(7, False, 2.0, LoopStats(0.01, 0.0, 0.0, 0, 0, 0.0))
+    viewer = ViewerReplay("session.mcap", data, live, 1)
+    t0 = viewer.status().t_s
+    viewer.advance(2.0, now=100.0)
+    assert viewer.status().t_s == t0, "not playing: the clock stands"
+    viewer.play(True)
+    viewer.advance(2.0, now=1000.0)  # the first call after play starts the clock
+    viewer.advance(2.0, now=1000.5)  # 0.5 s of wall time at 2x: 1 s of the recording
+    # rows are 20 Hz: the shown row is the last at or before the clock
+    assert viewer.status().t_s == pytest.approx(t0 + 1.0, abs=0.05 + 1e-9)
+    viewer.advance(2.0, now=1010.5)  # a 10 s stall is taken as 1 s (MAX_WALL_STEP_S)
+    assert viewer.status().t_s == pytest.approx(t0 + 3.0, abs=0.05 + 1e-9)
+    viewer.play(False)
+    middle = float(source[len(source) // 2, 0])
+    viewer.seek(middle)
+    snap = viewer.snapshot(live)
+    assert snap.source == "replay" and snap.seq == 7 and snap.replay is not None
+    assert snap.t_s == pytest.approx(middle, abs=0.05 + 1e-9)
+    assert snap.scene.frame.center_n.tolist() == [1.5, 1.0], "the recording's docking frame"
+    assert snap.scene.frame.heading_rad == pytest.approx(math.radians(20.0))
+    assert live_session.replay is None and live_session.sim.t_s == live.t_s
