@@ -570,6 +570,15 @@ def serve(
             "no spaces (generated and printed if not given)"
         ),
     ] = None,
+    instructor_token: Annotated[
+        str | None,
+        typer.Option(
+            "--instructor-token",
+            envvar="ROV_CONSOLE_INSTRUCTOR_TOKEN",
+            help="the instructor's token (faults): at least 8 printable characters, no "
+            "spaces, not the console token; without it the instructor's features are off",
+        ),
+    ] = None,
     params: Annotated[
         str, typer.Option(help="parameter set when no mission is given")
     ] = "full-scale",
@@ -596,6 +605,7 @@ def serve(
             port=port,
             viser_port=viser_port,
             token=token,
+            instructor_token=instructor_token,
             params=params,
             mission=mission,
             depth_m=depth,

@@ -30,6 +30,7 @@ from app.console import (
     station_keeping_mission,
 )
 from app.console import commands as cmd
+from app.console.operations import trainee_view
 from missions import schema
 from web import geometry as geo
 from web.builder_panel import BuilderPanel
@@ -771,12 +772,14 @@ def _mission_text(snap: Snapshot) -> str:
 
 
 def _operations_text(snap: Snapshot) -> str:
-    """The latest operations, newest first: time, who, what, outcome."""
-    if not snap.operations:
+    """The latest operations, newest first: time, who, what, outcome (a trainee's view: the
+    instructor's commands are left out, ``trainee_view``)."""
+    operations = trainee_view(snap.operations)
+    if not operations:
         return "*nothing done yet*"
     lines = [
         f"- {op.utc[11:19]} (t {op.t_s:.1f} s) **{op.who}**: {op.action} - {op.outcome}"
-        for op in reversed(snap.operations[-10:])
+        for op in reversed(operations[-10:])
     ]
     return "\n".join(lines)
 
