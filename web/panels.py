@@ -34,6 +34,7 @@ from app.console.operations import trainee_view
 from missions import schema
 from web import geometry as geo
 from web.builder_panel import BuilderPanel
+from web.instructor_panel import InstructorPanel
 
 if TYPE_CHECKING:
     from app.console import Console
@@ -96,6 +97,8 @@ class ClientPanel:
             self._build_control(snap)
         with tabs.add_tab("Record"):
             self._build_record()
+        with tabs.add_tab("Instructor"):
+            self.instructor = InstructorPanel(self)
         # not a tab: a hidden tab is drawn 0 px wide, and uPlot's charts came back blank from
         # one (a collapsed folder keeps its width, so the charts stay valid while folded)
         with self.gui.add_folder("Plots", expand_by_default=True):
@@ -643,6 +646,7 @@ class ClientPanel:
         ops = _operations_text(snap)
         if self.operations_md.content != ops:
             self.operations_md.content = ops
+        self.instructor.update(snap)
 
     def _update_readout(self, snap: Snapshot) -> None:
         """Height over the post tops, distance and heading error to the frame, wire tension."""
