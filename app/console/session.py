@@ -303,7 +303,8 @@ class Session:
         self.tension_newton = self.sim.wire_tension_newton()
         before = {a.name: a.active for a in self.monitor.state}
         free_setpoint = self.sim.free_setpoint_n
-        for alarm in self.monitor.update(rows, self.tension_newton, free_setpoint):
+        mount = (float(self.sim.C.k_h), self.sim.sysm.r_rov_from_tree_tree_m)
+        for alarm in self.monitor.update(rows, self.tension_newton, free_setpoint, mount):
             if alarm.active != before.get(alarm.name):
                 self.note(
                     "alarm",
