@@ -32,6 +32,7 @@ from app.api import (
     recordings,
     replay,
     run,
+    scores,
     state,
 )
 from app.api.guards import MAX_BODY_BYTES, BodyLimit, allowed_hosts
@@ -50,6 +51,7 @@ ROUTERS = (
     recordings.router,
     replay.router,
     faults.router,
+    scores.router,
 )
 
 

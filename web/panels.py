@@ -35,6 +35,7 @@ from missions import schema
 from web import geometry as geo
 from web.builder_panel import BuilderPanel
 from web.instructor_panel import InstructorPanel
+from web.scores_panel import ScoresPanel
 
 if TYPE_CHECKING:
     from app.console import Console
@@ -97,6 +98,8 @@ class ClientPanel:
             self._build_control(snap)
         with tabs.add_tab("Record"):
             self._build_record()
+        with tabs.add_tab("Scores"):
+            self.scores = ScoresPanel(self)
         with tabs.add_tab("Instructor"):
             self.instructor = InstructorPanel(self)
         # not a tab: a hidden tab is drawn 0 px wide, and uPlot's charts came back blank from
