@@ -12,10 +12,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from app.console import ConsoleError, Snapshot
-from app.console.faults import ClearFaults, InjectFault
-from app.console.tokens import INSTRUCTOR_TOKEN_ENV
-from control.faults import FAULT_KINDS, THRUSTER_KINDS
+from app.console import (
+    FAULT_KINDS,
+    INSTRUCTOR_TOKEN_ENV,
+    THRUSTER_KINDS,
+    ClearFaults,
+    ConsoleError,
+    InjectFault,
+    Snapshot,
+)
 
 if TYPE_CHECKING:
     from web.panels import ClientPanel

@@ -28,9 +28,9 @@ from app.console import (
     prepare_run,
     result_markdown,
     station_keeping_mission,
+    trainee_view,
 )
 from app.console import commands as cmd
-from app.console.operations import trainee_view
 from missions import schema
 from web import geometry as geo
 from web.builder_panel import BuilderPanel

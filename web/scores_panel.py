@@ -11,9 +11,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from app import scores as store
-from app.console import list_recordings
-from app.console.session import SCORES_DB
+from app.console import SCORES_DB, list_recordings
+from app.console import scores as store
 
 if TYPE_CHECKING:
     from web.panels import ClientPanel
