@@ -143,6 +143,16 @@ def manual_share(result: MissionResult) -> float:
     return float(np.mean(np.round(mode) == MODE_MANUAL))
 
 
+def faults_of(result: MissionResult) -> str:
+    """The faults that acted during the mission, from its events ('; '-separated)."""
+    texts = [
+        str(e.get("text", "")).removeprefix("fault: ")
+        for e in result.events
+        if e.get("kind") == "fault" and str(e.get("text", "")).startswith("fault: ")
+    ]
+    return "; ".join(texts)
+
+
 def flown_by(share: float) -> str:
     """'hand', 'autopilot' or 'mixed' for a share of time in manual mode."""
     if share >= HAND_SHARE:
@@ -164,7 +174,8 @@ def record(
     log_file: str | None = None,
     faults: str = "",
 ) -> int:
-    """Store one finished mission; returns its row id."""
+    """Store one finished mission; returns its row id. ``faults``: the faults that were
+    active, in words (default: those the mission's events record)."""
     landing = result.landings[0] if result.landings else None
     share = manual_share(result)
     values = {
@@ -184,7 +195,7 @@ def record(
         "rms_heading_deg": result.rms_heading_deg,
         "saturated_s": result.saturated_time_s,
         "thrust_newton_s": _finite(thrust_spent(result)),
-        "faults": faults,
+        "faults": faults or faults_of(result),
         "manual_share": share,
         "flown_by": flown_by(share),
     }

@@ -164,3 +164,20 @@ def test_the_pages_scores_text_lists_runs_best_and_debrief_links(
     best_part = text.split("best run of each mission")[1]
     assert "0.050" in best_part and "autopilot" in best_part and "0.100" not in best_part
     assert "no scores for **Bo** yet" in scores_markdown([], "http://x", "Bo")
+
+
+def test_the_faults_a_mission_met_are_stored_with_its_score(tmp_path: Path) -> None:
+    """Defect: the faults column stayed empty for every run (nobody passed it); now it holds
+    the faults the mission's events record."""
+    from missions import runner, schema
+
+    text = (
+        'format_version = 1\nname = "hold"\n[setup]\nparams = "model-scale"\n'
+        'depth_m = 100.0\nfeedback = "ekf"\n[[legs]]\ntype = "hold"\nduration_s = 10.0\n'
+        '[[faults]]\nkind = "dvl_lost"\nstart_s = 2.0\nduration_s = 3.0\n'
+    )
+    mission = schema.parse_text(text, "<test>")
+    result = runner.run_mission(mission)
+    db = tmp_path / "s.sqlite"
+    scores.record(db, "Anna", result, "run")
+    assert scores.history(db)[0].faults == "dvl lost from 2 s for 3 s"
