@@ -263,3 +263,32 @@ def test_thruster_faults_name_a_thruster_the_rov_has():
         sim.inject_fault(Fault("thruster_lost", 0.0, 1.0, thruster=6))
     with pytest.raises(ValueError, match="names no thruster"):
         Fault("dvl_lost", 0.0, 1.0, thruster=2)
+
+
+def test_thruster_faults_in_a_mission_file_name_their_thruster():
+    from missions import schema, setup
+
+    text = """
+format_version = 1
+name = "weak-thruster"
+[setup]
+params = "model-scale"
+depth_m = 100.0
+[[legs]]
+type = "hold"
+duration_s = 1.0
+[[faults]]
+kind = "thruster_weakened"
+start_s = 0.0
+duration_s = 5.0
+value = 0.5
+thruster = 2
+"""
+    sim = setup.build_simulation(schema.parse_text(text, "<test>"))
+    assert [(f.kind, f.thruster, f.value) for f in sim.faults] == [("thruster_weakened", 2, 0.5)]
+    with pytest.raises(ValueError, match=r"faults\[1\]: fault thruster must be a thruster number"):
+        schema.parse_text(text.replace("thruster = 2", "thruster = 40"), "<test>")
+    with pytest.raises(ValueError, match=r"fault thruster must be in \[1, 5\]"):
+        setup.build_simulation(
+            schema.parse_text(text.replace("thruster = 2", "thruster = 7"), "<t>")
+        )
