@@ -72,3 +72,26 @@ def test_instructor_injects_a_compass_bias_and_a_trainee_does_not_see_it(
     click(page, "Clear faults")
     page.get_by_text("cleared 1 fault(s)").wait_for(timeout=10_000)
     assert server.console.loop.snapshot.faults == ()
+
+
+def test_the_scores_tab_shows_the_pilots_runs_with_a_debrief_link(page, server: RunningServer):
+    from app import scores
+    from app.console import SCORES_DB
+    from missions.scoring import LandingResult, MissionResult
+
+    landing = LandingResult(True, 0.07, 1.0, 0.02, "frame", 40.0)
+    result = MissionResult(
+        "dock-drill", [], 0.01, 0.02, 0.5, 0.4, 0.0, None, [0.0] * 6, False, [], {}, [landing]
+    )
+    scores.record(
+        server.settings.recordings_dir / SCORES_DB, "Anna", result, "console", "drill.mcap"
+    )
+    field(page, "Your name").fill("Anna")
+    time.sleep(0.3)
+    tab(page, "Scores")
+    click(page, "Show my scores")
+    page.get_by_text("latest runs of Anna").wait_for(timeout=10_000)
+    link = page.locator("a", has_text="report").first
+    href = link.get_attribute("href") or ""
+    assert href == f"{server.base_url}/api/recordings/drill.mcap/report"
+    assert page.get_by_text("dock-drill").count() >= 2, "in the latest runs and the best"
