@@ -431,18 +431,30 @@ def scores(
     best: Annotated[bool, typer.Option("--best", help="the best run of each mission")] = False,
     db: Annotated[Path, typer.Option(help="the scores database (SQLite)")] = DEFAULT_SCORES_DB,
     json_out: Annotated[bool, typer.Option("--json", help="JSON instead of a table")] = False,
+    compare: Annotated[
+        str | None,
+        typer.Option(
+            "--compare",
+            metavar="MISSION",
+            help="the best hand-flown and the best autopilot run of MISSION side by side",
+        ),
+    ] = None,
 ) -> None:
     """List stored scores (newest first): who flew which mission when, landed or not, miss,
-    heading error and contact speed at the landing, RMS errors, time saturated."""
+    heading error and contact speed at the landing, RMS errors, time saturated, and whether
+    the autopilot or the pilot's hand flew it."""
     from rich.console import Console
     from rich.table import Table
 
     from app import scores as store
 
     try:
-        rows = store.history(db, trainee, mission)
+        rows = store.history(db, trainee, compare or mission)
     except ValueError as err:
         _fail(str(err))
+        return
+    if compare is not None:
+        _print_comparison(compare, store.compare(rows), json_out, db)
         return
     if best:
         rows = store.best(rows)
@@ -466,11 +478,9 @@ def scores(
         "RMS E m",
         "RMS psi deg",
         "saturated s",
+        "flown by",
     ):
         table.add_column(col, justify="right")
-
-    def num(v: float | None, fmt: str) -> str:
-        return "-" if v is None else format(v, fmt)
 
     for r in rows:
         verdict = "PASS" if r.passed else "FAIL"
@@ -482,15 +492,74 @@ def scores(
             r.trainee,
             r.mission,
             verdict,
-            num(r.miss_m, ".3f"),
-            num(r.heading_error_deg, ".2f"),
-            num(r.contact_speed_mps, ".3f"),
+            _num(r.miss_m, ".3f"),
+            _num(r.heading_error_deg, ".2f"),
+            _num(r.contact_speed_mps, ".3f"),
             f"{r.rms_north_m:.4f}",
             f"{r.rms_east_m:.4f}",
             f"{r.rms_heading_deg:.3f}",
             f"{r.saturated_s:.1f}",
+            r.flown_by,
         )
-    Console(width=160).print(table)
+    Console(width=170).print(table)
+
+
+def _num(v: float | None, fmt: str) -> str:
+    return "-" if v is None else format(v, fmt)
+
+
+COMPARE_ROWS: tuple[tuple[str, str, str], ...] = (
+    ("run id", "id", "d"),
+    ("when (UTC)", "utc", ""),
+    ("trainee", "trainee", ""),
+    ("share by hand", "manual_share", ".0%"),
+    ("passed", "passed", ""),
+    ("landed", "landed", ""),
+    ("time to dock s", "time_to_dock_s", ".1f"),
+    ("miss m", "miss_m", ".3f"),
+    ("heading error deg", "heading_error_deg", ".2f"),
+    ("contact speed m/s", "contact_speed_mps", ".3f"),
+    ("RMS north m", "rms_north_m", ".4f"),
+    ("RMS east m", "rms_east_m", ".4f"),
+    ("RMS heading deg", "rms_heading_deg", ".3f"),
+    ("saturated s", "saturated_s", ".1f"),
+    ("thrust spent kN s", "thrust_newton_s", ".1f"),
+    ("faults", "faults", ""),
+)
+"""The comparison's rows: (label, Score field, format)."""
+
+
+def _cell(value: object, fmt: str, field: str) -> str:
+    if value is None or value == "":
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if field == "thrust_newton_s":
+        return format(float(value) / 1e3, fmt)  # type: ignore[arg-type]
+    return format(value, fmt) if fmt else str(value)
+
+
+def _print_comparison(mission: str, best: dict, json_out: bool, db: Path) -> None:
+    """``scores --compare``: the best run of each way of flying, side by side."""
+    from rich.console import Console
+    from rich.table import Table
+
+    if json_out:
+        typer.echo(json.dumps({how: s.__dict__ for how, s in best.items()}, indent=2))
+        return
+    if not best:
+        typer.echo(f"no scores of {mission} in {db}")
+        return
+    table = Table(title=f"{mission}: best run of each way of flying ({db})")
+    table.add_column("figure")
+    for how in best:
+        table.add_column(f"best {how}", justify="right")
+    for label, field, fmt in COMPARE_ROWS:
+        table.add_row(label, *(_cell(getattr(s, field), fmt, field) for s in best.values()))
+    Console(width=120).print(table)
+    for how in ("hand", "autopilot"):
+        if how not in best:
+            typer.echo(f"no {'hand-flown' if how == 'hand' else 'autopilot'} run of {mission} yet")
 
 
 @app.command()
@@ -570,6 +639,15 @@ def serve(
             "no spaces (generated and printed if not given)"
         ),
     ] = None,
+    instructor_token: Annotated[
+        str | None,
+        typer.Option(
+            "--instructor-token",
+            envvar="ROV_CONSOLE_INSTRUCTOR_TOKEN",
+            help="the instructor's token (faults): at least 8 printable characters, no "
+            "spaces, not the console token; without it the instructor's features are off",
+        ),
+    ] = None,
     params: Annotated[
         str, typer.Option(help="parameter set when no mission is given")
     ] = "full-scale",
@@ -596,6 +674,7 @@ def serve(
             port=port,
             viser_port=viser_port,
             token=token,
+            instructor_token=instructor_token,
             params=params,
             mission=mission,
             depth_m=depth,

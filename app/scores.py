@@ -40,9 +40,25 @@ CREATE TABLE IF NOT EXISTS runs (
     rms_heading_deg REAL,
     saturated_s REAL,
     thrust_newton_s REAL,
-    faults TEXT NOT NULL DEFAULT ''
+    faults TEXT NOT NULL DEFAULT '',
+    manual_share REAL NOT NULL DEFAULT 0,
+    flown_by TEXT NOT NULL DEFAULT 'autopilot'
 )
 """
+ADDED_COLUMNS = {
+    "manual_share": "REAL NOT NULL DEFAULT 0",
+    "flown_by": "TEXT NOT NULL DEFAULT 'autopilot'",
+}
+"""Columns added since the first version: a database written before gets them on opening
+(its runs count as flown by the autopilot: there was no manual mode then)."""
+MODE_MANUAL = 2
+"""The log's ``mode`` column while the pilot flies by hand (the supervisor's manual mode)."""
+HAND_SHARE = 0.9
+"""A run with at least this share of its time in manual mode was flown by hand."""
+AUTOPILOT_SHARE = 0.1
+"""A run with at most this share in manual mode was flown by the autopilot (a pilot who takes
+the sticks for a moment does not make it a hand-flown run); between the two it is mixed."""
+FLOWN_BY = ("autopilot", "hand", "mixed")
 COLUMNS = (
     "id",
     "utc",
@@ -62,6 +78,8 @@ COLUMNS = (
     "saturated_s",
     "thrust_newton_s",
     "faults",
+    "manual_share",
+    "flown_by",
 )
 NAME_MAX = 60
 
@@ -89,6 +107,10 @@ class Score:
     saturated_s: float
     thrust_newton_s: float | None
     faults: str
+    manual_share: float = 0.0
+    """Share of the run's time the pilot flew by hand (the log's mode column = 2)."""
+    flown_by: str = "autopilot"
+    """autopilot, hand or mixed (``flown_by``)."""
 
 
 def trainee_name(text: str) -> str:
@@ -108,6 +130,38 @@ def thrust_spent(result: MissionResult) -> float | None:
     return float(np.sum(np.trapezoid(np.abs(rows["thruster_force"]), rows.t_s, axis=0)))
 
 
+def manual_share(result: MissionResult) -> float:
+    """Share of the logged steps flown by hand (mode column = ``MODE_MANUAL``); 0 without a
+    log or a mode column (all autopilot)."""
+    rows = result.log
+    if rows is None or len(rows) == 0:
+        return 0.0
+    try:
+        mode = np.asarray(rows["mode"], float).reshape(len(rows), -1)[:, 0]
+    except KeyError:
+        return 0.0
+    return float(np.mean(np.round(mode) == MODE_MANUAL))
+
+
+def faults_of(result: MissionResult) -> str:
+    """The faults that acted during the mission, from its events ('; '-separated)."""
+    texts = [
+        str(e.get("text", "")).removeprefix("fault: ")
+        for e in result.events
+        if e.get("kind") == "fault" and str(e.get("text", "")).startswith("fault: ")
+    ]
+    return "; ".join(texts)
+
+
+def flown_by(share: float) -> str:
+    """'hand', 'autopilot' or 'mixed' for a share of time in manual mode."""
+    if share >= HAND_SHARE:
+        return "hand"
+    if share <= AUTOPILOT_SHARE:
+        return "autopilot"
+    return "mixed"
+
+
 def _finite(v: float | None) -> float | None:
     return float(v) if v is not None and math.isfinite(v) else None
 
@@ -120,8 +174,10 @@ def record(
     log_file: str | None = None,
     faults: str = "",
 ) -> int:
-    """Store one finished mission; returns its row id."""
+    """Store one finished mission; returns its row id. ``faults``: the faults that were
+    active, in words (default: those the mission's events record)."""
     landing = result.landings[0] if result.landings else None
+    share = manual_share(result)
     values = {
         "utc": datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "trainee": trainee_name(trainee),
@@ -139,11 +195,13 @@ def record(
         "rms_heading_deg": result.rms_heading_deg,
         "saturated_s": result.saturated_time_s,
         "thrust_newton_s": _finite(thrust_spent(result)),
-        "faults": faults,
+        "faults": faults or faults_of(result),
+        "manual_share": share,
+        "flown_by": flown_by(share),
     }
     db.parent.mkdir(parents=True, exist_ok=True)
     with closing(sqlite3.connect(db)) as con, con:
-        con.execute(SCHEMA)
+        _open(con)
         cur = con.execute(
             f"INSERT INTO runs ({', '.join(values)}) VALUES ({', '.join('?' * len(values))})",
             tuple(values.values()),
@@ -166,12 +224,21 @@ def history(db: Path, trainee: str | None = None, mission: str | None = None) ->
     sql += (" WHERE " + " AND ".join(where)) if where else ""
     sql += " ORDER BY id DESC"
     try:
-        with closing(sqlite3.connect(db)) as con:
-            con.execute(SCHEMA)
+        with closing(sqlite3.connect(db)) as con, con:
+            _open(con)
             rows = con.execute(sql, args).fetchall()
     except sqlite3.DatabaseError as err:
         raise ValueError(f"{db}: not a scores database ({err})") from None
     return [_score(row) for row in rows]
+
+
+def _open(con: sqlite3.Connection) -> None:
+    """Create the table, or add the columns a database from an earlier version lacks."""
+    con.execute(SCHEMA)
+    have = {row[1] for row in con.execute("PRAGMA table_info(runs)")}
+    for name, decl in ADDED_COLUMNS.items():
+        if name not in have:
+            con.execute(f"ALTER TABLE runs ADD COLUMN {name} {decl}")
 
 
 def _score(row: tuple) -> Score:
@@ -181,19 +248,36 @@ def _score(row: tuple) -> Score:
     return Score(**r)
 
 
+def _best_key(s: Score) -> tuple:
+    miss = s.miss_m if s.miss_m is not None else 0.0
+    return (not s.passed, miss, math.hypot(s.rms_north_m, s.rms_east_m))
+
+
 def best(scores: list[Score]) -> list[Score]:
     """The best run of each mission: passed first, then the smallest landing miss, then the
     smallest RMS position error."""
 
-    def key(s: Score) -> tuple:
-        miss = s.miss_m if s.miss_m is not None else 0.0
-        return (not s.passed, miss, math.hypot(s.rms_north_m, s.rms_east_m))
-
     out: dict[str, Score] = {}
     for s in scores:
-        if s.mission not in out or key(s) < key(out[s.mission]):
+        if s.mission not in out or _best_key(s) < _best_key(out[s.mission]):
             out[s.mission] = s
     return sorted(out.values(), key=lambda s: s.mission)
+
+
+def compare(scores: list[Score]) -> dict[str, Score]:
+    """The best run (``best``'s order) of each way of flying present: {flown_by: Score}, in
+    the order autopilot, hand, mixed (the same mission flown by hand and by the autopilot,
+    side by side: the sea trial's appendix C, step 6)."""
+    out = {}
+    for how in FLOWN_BY:
+        mine = [s for s in scores if s.flown_by == how]
+        if mine:
+            out[how] = _best_one(mine)
+    return out
+
+
+def _best_one(scores: list[Score]) -> Score:
+    return min(scores, key=_best_key)
 
 
 def as_json(scores: list[Score]) -> str:

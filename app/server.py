@@ -22,7 +22,19 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 
-from app.api import control, environment, gains, health, missions, recordings, replay, run, state
+from app.api import (
+    control,
+    environment,
+    faults,
+    gains,
+    health,
+    missions,
+    recordings,
+    replay,
+    run,
+    scores,
+    state,
+)
 from app.api.guards import MAX_BODY_BYTES, BodyLimit, allowed_hosts
 from app.api.schemas import ErrorOut
 from app.api.state import StateJsonCache
@@ -38,6 +50,8 @@ ROUTERS = (
     environment.router,
     recordings.router,
     replay.router,
+    faults.router,
+    scores.router,
 )
 
 
@@ -55,6 +69,7 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
             app.state.view = view
             if settings.announce:
                 print(addresses(settings, console.token, view.port if view else None), flush=True)
+                print(instructor_line(settings), flush=True)
             yield
         finally:
             console.loop.stop()
@@ -90,7 +105,8 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     code: {"model": ErrorOut, "description": text}
     for code, text in (
         (400, "malformed request (bad Host header, nesting too deep)"),
-        (401, "this action needs the console token"),
+        (401, "this action needs the console token (faults: the instructor token)"),
+        (403, "instructor features off, or the console token sent for an instructor action"),
         (404, "no such mission or recording"),
         (409, "cannot be done now (a mission is running, a replay is open ...)"),
         (413, "request body too large"),
@@ -137,6 +153,16 @@ def addresses(settings: ConsoleSettings, token: str, viser_port: int | None = No
         f"token:       {token}   (needed to change the run; watching needs none)",
     ]
     return "\n".join(lines)
+
+
+def instructor_line(settings: ConsoleSettings) -> str:
+    """What ``serve`` prints about the instructor (never the instructor's token)."""
+    if settings.instructor_token is None:
+        return (
+            "instructor:  off (faults cannot be injected; pass --instructor-token or set "
+            "ROV_CONSOLE_INSTRUCTOR_TOKEN to turn it on)"
+        )
+    return "instructor:  on (faults need the instructor token, not the console token)"
 
 
 def serve(settings: ConsoleSettings) -> None:

@@ -26,11 +26,21 @@ FAULT_KINDS: dict[str, tuple[str, float, float]] = {
     "current_surge": ("m/s", -2.0, 2.0),
     "current_turn": ("deg", -180.0, 180.0),
     "vessel_drift": ("m/s", 0.01, 2.0),
+    "thruster_lost": ("-", 0.0, 0.0),
+    "thruster_weakened": ("factor", 0.0, 1.0),
+    "compass_freeze": ("-", 0.0, 0.0),
 }
 """Kind -> (unit of its value, smallest value, largest value). The value: the size of a wild
 point (the position fix jumps this far, every second sample); the compass's bias; how far the
 winch slips (the tree drops that much at once; 0.5 to 1 m at sea); the current's added speed;
-its turn; the vessel's drift speed (towards ``direction_deg``). Kinds with no value take 0."""
+its turn; the vessel's drift speed (towards ``direction_deg``); a weakened thruster's efficiency
+(the thrust it still gives for the speed it turns at: 0 gives nothing, 1 all of it). Kinds with
+no value take 0. The thruster kinds name their thruster (``thruster``, 1-based); a lost
+thruster gives no thrust whatever it is told; a frozen compass goes on sending, at its rate,
+the heading it measured when it froze."""
+THRUSTER_KINDS = ("thruster_lost", "thruster_weakened")
+THRUSTERS_MAX = 32
+"""Highest thruster number a fault may name (the ROV's own count is checked when injected)."""
 DURATION_MAX_S = 48 * 3600.0
 
 
@@ -45,6 +55,8 @@ class Fault:
     value: float = 0.0
     direction_deg: float = 0.0
     """Vessel drift: the direction it drifts towards [deg]."""
+    thruster: int = 0
+    """Thruster faults: which thruster (1-based); 0 for the other kinds."""
 
     def __post_init__(self) -> None:
         if self.kind not in FAULT_KINDS:
@@ -60,6 +72,18 @@ class Fault:
                 raise ValueError(f"fault {name} must be in [{lo:g}, {hi:g}], got {v!r}")
         if self.duration_s <= 0.0:
             raise ValueError(f"fault duration_s must be more than 0, got {self.duration_s!r}")
+        if self.kind in THRUSTER_KINDS:
+            if (
+                isinstance(self.thruster, bool)
+                or not isinstance(self.thruster, int)
+                or not 1 <= self.thruster <= THRUSTERS_MAX
+            ):
+                raise ValueError(
+                    f"fault thruster must be a thruster number in [1, {THRUSTERS_MAX}], "
+                    f"got {self.thruster!r}"
+                )
+        elif self.thruster != 0:
+            raise ValueError(f"fault {self.kind} names no thruster, got thruster {self.thruster!r}")
         unit, lo, hi = FAULT_KINDS[self.kind]
         if unit == "-":
             if self.value != 0.0:
@@ -79,7 +103,8 @@ class Fault:
     def describe(self) -> str:
         unit = FAULT_KINDS[self.kind][0]
         value = "" if unit == "-" else f" {self.value:g} {unit}"
+        which = f" {self.thruster}" if self.kind in THRUSTER_KINDS else ""
         return (
-            f"{self.kind.replace('_', ' ')}{value} from {self.start_s:g} s "
+            f"{self.kind.replace('_', ' ')}{which}{value} from {self.start_s:g} s "
             f"for {self.duration_s:g} s"
         )

@@ -44,7 +44,7 @@ from control.config import (
     control_arrays,
     system_thruster_config,
 )
-from control.faults import Fault
+from control.faults import THRUSTER_KINDS, Fault
 from control.startup import StartupReport, check_mount_vector
 from sim import environment as envmod
 from sim import plant, sensors, site
@@ -236,7 +236,12 @@ class Simulation:
         self._slipped: set[int] = set()
         self._faults_on: set[int] = set()
         self._fault_log: list[tuple[float, str]] = []
+        self.fault_events: list[tuple[float, str]] = []
+        """Every fault start and end so far, (time [s], what), oldest first (unlike
+        ``take_fault_log``, never emptied: the console reads it from where it got to)."""
         self._mount_flipped = False
+        self._healthy_arrays = self.arrays
+        self._thrust_factors = np.ones(ps.rov.thrusters.T.shape[1])
         tree_pos = np.array([self.crane_tip_n[0], self.crane_tip_n[1], tree_depth_m])
         self.x = initial_state(ps, tree_pos, tree_heading_rad, self.has_rov)
         self.held_y = sensors.true_outputs(self.x)
@@ -618,14 +623,24 @@ class Simulation:
         """Schedule a fault (control.faults); one that starts in the past starts now."""
         if not isinstance(fault, Fault):
             raise ValueError(f"fault must be a control.faults.Fault, got {type(fault).__name__}")
+        if fault.kind in THRUSTER_KINDS and fault.thruster > self.n_thrusters:
+            raise ValueError(
+                f"fault thruster must be in [1, {self.n_thrusters}] (this ROV's thrusters), "
+                f"got {fault.thruster}"
+            )
         self.faults.append(fault)
 
     def clear_faults(self) -> None:
         """End every fault now (a slipped winch stays where it slipped to)."""
         for k in sorted(self._faults_on):
-            self._fault_log.append((self.t_s, f"fault cleared: {self.faults[k].kind}"))
+            self._log_fault(f"fault cleared: {self.faults[k].kind}")
         self.faults, self._faults_on, self._slipped = [], set(), set()
         self._apply_mount_sign(False)
+        self._apply_thrust_factors(np.ones(self.n_thrusters))
+
+    def _log_fault(self, text: str) -> None:
+        self._fault_log.append((self.t_s, text))
+        self.fault_events.append((self.t_s, text))
 
     def take_fault_log(self) -> list[tuple[float, str]]:
         """Faults that started or ended since the last call: (time [s], what)."""
@@ -652,9 +667,9 @@ class Simulation:
         t = self.t_s + 1e-9
         active = {k for k, f in enumerate(self.faults) if f.active(t)}
         for k in sorted(active - self._faults_on):
-            self._fault_log.append((self.t_s, f"fault: {self.faults[k].describe()}"))
+            self._log_fault(f"fault: {self.faults[k].describe()}")
         for k in sorted(self._faults_on - active):
-            self._fault_log.append((self.t_s, f"fault over: {self.faults[k].kind}"))
+            self._log_fault(f"fault over: {self.faults[k].kind}")
         self._faults_on = active
         for k, f in enumerate(self.faults):
             if f.kind == "winch_slip" and f.active(t) and k not in self._slipped:
@@ -663,6 +678,24 @@ class Simulation:
                 self.wire_target_m += f.value
         flipped = any(f.kind == "mount_sign" and f.active(t) for f in self.faults)
         self._apply_mount_sign(flipped)
+        factors = np.ones(self.n_thrusters)
+        for f in self.faults:
+            if f.kind in THRUSTER_KINDS and f.active(t):
+                i = f.thruster - 1
+                factors[i] = min(factors[i], 0.0 if f.kind == "thruster_lost" else f.value)
+        self._apply_thrust_factors(factors)
+
+    def _apply_thrust_factors(self, factors: FloatArray) -> None:
+        """Each thruster gives this share of the thrust its speed would give (a lost thruster
+        0): the plant's thrust coefficients scaled; the control system's are left alone (it
+        is not told, and goes on allocating to the thruster)."""
+        if np.array_equal(factors, self._thrust_factors):
+            return
+        self._thrust_factors = factors.copy()
+        base = self._healthy_arrays
+        self.arrays = base._replace(
+            thr_k_pos=base.thr_k_pos * factors, thr_k_neg=base.thr_k_neg * factors
+        )
 
     def _apply_mount_sign(self, flipped: bool) -> None:
         """The control system's mounting vector: as configured, or mirrored."""
@@ -709,6 +742,8 @@ class Simulation:
                 noise.noise[fixes[::2], 0] += f.value  # every second fix jumps north
             elif f.kind == "compass_bias":
                 noise.noise[on, 4] += math.radians(f.value)
+            elif f.kind == "compass_freeze":
+                noise.noise[on, 4] = np.nan  # sim.sensors.sample: a NaN repeats the held value
             elif f.kind == "vessel_drift":
                 d = math.radians(f.direction_deg)
                 step = f.value * self.dt_s * np.array([math.cos(d), math.sin(d), 0.0])

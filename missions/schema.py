@@ -357,6 +357,7 @@ class FaultSpec(_Model):
     duration_s: Finite = Field(gt=0.0, le=MAX_MISSION_S, description="how long it lasts [s]")
     value: Finite = Field(default=0.0, description="size, in the kind's unit")
     direction_deg: Finite = Field(default=0.0, ge=-360.0, le=360.0)
+    thruster: int = Field(default=0, ge=0, description="thruster faults: which one (1-based)")
 
     @model_validator(mode="after")
     def _known(self) -> FaultSpec:
@@ -364,7 +365,9 @@ class FaultSpec(_Model):
         return self
 
     def fault(self) -> Fault:
-        return Fault(self.kind, self.start_s, self.duration_s, self.value, self.direction_deg)
+        return Fault(
+            self.kind, self.start_s, self.duration_s, self.value, self.direction_deg, self.thruster
+        )
 
 
 MAX_FAULTS = 50

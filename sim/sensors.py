@@ -13,6 +13,7 @@ a seeded generator, so a run is reproducible and the compiled loop stays free of
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,11 +104,12 @@ def sample(
     x: np.ndarray, held: np.ndarray, noise: np.ndarray, fresh: np.ndarray, y_sensor: np.ndarray
 ) -> np.ndarray:
     """Zero-order hold: entries whose sensor is fresh take truth + noise, others keep ``held``.
-    Heading is wrapped into [-pi, pi) as a compass reports it."""
+    A NaN noise entry is a frozen sensor: fresh, but repeating its held value (an injected
+    fault, control.faults). Heading is wrapped into [-pi, pi) as a compass reports it."""
     y_true = true_outputs(x)
     out = held.copy()
     for i in range(11):
-        if fresh[y_sensor[i]]:
+        if fresh[y_sensor[i]] and not math.isnan(noise[i]):
             out[i] = y_true[i] + noise[i]
     out[4] = ssa(out[4])
     return out

@@ -16,6 +16,7 @@ from app.server import serve_in_thread
 
 CORPUS = Path(__file__).parent / "corpus" / "bad_requests.txt"
 TOKEN = "corpus-test-token-0001"
+INSTRUCTOR = "corpus-instructor-01"
 
 
 @dataclass(frozen=True)
@@ -96,7 +97,12 @@ CASES = read_corpus()
 @pytest.fixture(scope="module")
 def served(tmp_path_factory: pytest.TempPathFactory):
     settings = ConsoleSettings(
-        port=0, view=False, token=TOKEN, recordings_dir=tmp_path_factory.mktemp("rec"), speed=2.0
+        port=0,
+        view=False,
+        token=TOKEN,
+        instructor_token=INSTRUCTOR,
+        recordings_dir=tmp_path_factory.mktemp("rec"),
+        speed=2.0,
     )
     with serve_in_thread(settings) as running:
         yield running
@@ -111,6 +117,7 @@ def test_every_bad_request_gets_its_status_and_words_and_the_loop_goes_on(served
     headers = {
         "token": {"Authorization": f"Bearer {TOKEN}"},
         "wrong": {"Authorization": "Bearer not-the-token-at-all"},
+        "instructor": {"Authorization": f"Bearer {INSTRUCTOR}"},
         "none": {},
     }
     problems = []
@@ -132,7 +139,9 @@ def test_every_bad_request_gets_its_status_and_words_and_the_loop_goes_on(served
                 problems.append(f"{case.label}: answer of {len(text)} bytes echoes the input")
         time.sleep(0.5)
         health = client.get("/api/health")
+        faults = client.get("/api/faults", headers=headers["instructor"]).json()
     assert not problems, "\n".join(problems)
+    assert faults["active"] == [] and faults["scheduled"] == [], "no bad request left a fault"
     assert health.status_code == 200 and health.json()["status"] == "ok"
     assert health.json()["t_s"] > t0, "the loop is still stepping"
 

@@ -29,12 +29,15 @@ from app.console import (
     prepare_run,
     result_markdown,
     station_keeping_mission,
+    trainee_view,
 )
 from app.console import commands as cmd
 from missions import schema
 from web import geometry as geo
 from web.builder_panel import BuilderPanel
+from web.instructor_panel import InstructorPanel
 from web.scene import SceneView
+from web.scores_panel import ScoresPanel
 
 if TYPE_CHECKING:
     from app.console import Console
@@ -109,6 +112,10 @@ class ClientPanel:
             self._build_control(snap)
         with tabs.add_tab("Record"):
             self._build_record()
+        with tabs.add_tab("Scores"):
+            self.scores = ScoresPanel(self)
+        with tabs.add_tab("Instructor"):
+            self.instructor = InstructorPanel(self)
         # not a tab: a hidden tab is drawn 0 px wide, and uPlot's charts came back blank from
         # one (a collapsed folder keeps its width, so the charts stay valid while folded)
         with self.gui.add_folder("Plots", expand_by_default=True):
@@ -723,6 +730,7 @@ class ClientPanel:
         ops = _operations_text(snap)
         if self.operations_md.content != ops:
             self.operations_md.content = ops
+        self.instructor.update(snap)
 
     def _update_readout(self, snap: Snapshot) -> None:
         """Height over the post tops, distance and heading error to the frame, wire tension."""
@@ -875,12 +883,14 @@ def _mission_text(snap: Snapshot) -> str:
 
 
 def _operations_text(snap: Snapshot) -> str:
-    """The latest operations, newest first: time, who, what, outcome."""
-    if not snap.operations:
+    """The latest operations, newest first: time, who, what, outcome (a trainee's view: the
+    instructor's commands are left out, ``trainee_view``)."""
+    operations = trainee_view(snap.operations)
+    if not operations:
         return "*nothing done yet*"
     lines = [
         f"- {op.utc[11:19]} (t {op.t_s:.1f} s) **{op.who}**: {op.action} - {op.outcome}"
-        for op in reversed(snap.operations[-10:])
+        for op in reversed(operations[-10:])
     ]
     return "\n".join(lines)
 

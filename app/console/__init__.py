@@ -14,19 +14,29 @@ from here.
     snapshot.py   Snapshot and the other immutable views
     alarms.py     operator alarms from the log rows
     texts.py      the page's Markdown for results and signal-check counters
+    faults.py     the instructor's commands (InjectFault, ClearFaults) and FaultView
 
 It also passes on the core's rotations (``Rzyx``, ``quaternion_wxyz_from_rpy_radians``) and the
 wire's attachment point, so the view draws with the same geometry as the simulation.
 """
 
+from app import scores
 from app.console import commands
 from app.console.alarms import ALARM_NAMES, Alarm
 from app.console.commands import SPEED_MAX, SPEED_MIN, Command
 from app.console.errors import ConsoleError
+from app.console.faults import ClearFaults, FaultView, InjectFault
 from app.console.instance import Console, initial_run
 from app.console.loop import PacedLoop
+from app.console.operations import trainee_view
 from app.console.replay import RECORDING_NAME, list_recordings, load_replay, recording_path
-from app.console.session import PreparedRun, Session, prepare_run, station_keeping_mission
+from app.console.session import (
+    SCORES_DB,
+    PreparedRun,
+    Session,
+    prepare_run,
+    station_keeping_mission,
+)
 from app.console.settings import ConsoleSettings, allowed_hosts, is_loopback, origin_allowed
 from app.console.snapshot import (
     LoopStats,
@@ -36,8 +46,10 @@ from app.console.snapshot import (
     Snapshot,
 )
 from app.console.texts import counters_markdown, result_markdown
+from app.console.tokens import INSTRUCTOR_TOKEN_ENV
 from app.console.viewer_replay import ViewerReplay
 from control.config import ALLOCATIONS, MODES, Gains
+from control.faults import FAULT_KINDS, THRUSTER_KINDS
 from missions.scoring import SATURATED
 from sim.drawing import attachment_point_n
 from sim.gnc import Rzyx, quaternion_wxyz_from_rpy_radians
@@ -45,17 +57,24 @@ from sim.gnc import Rzyx, quaternion_wxyz_from_rpy_radians
 __all__ = [
     "ALARM_NAMES",
     "ALLOCATIONS",
+    "FAULT_KINDS",
+    "INSTRUCTOR_TOKEN_ENV",
     "MODES",
     "RECORDING_NAME",
     "SATURATED",
+    "SCORES_DB",
     "SPEED_MAX",
     "SPEED_MIN",
+    "THRUSTER_KINDS",
     "Alarm",
+    "ClearFaults",
     "Command",
     "Console",
     "ConsoleError",
     "ConsoleSettings",
+    "FaultView",
     "Gains",
+    "InjectFault",
     "LoopStats",
     "MissionStatus",
     "PacedLoop",
@@ -79,5 +98,7 @@ __all__ = [
     "quaternion_wxyz_from_rpy_radians",
     "recording_path",
     "result_markdown",
+    "scores",
     "station_keeping_mission",
+    "trainee_view",
 ]

@@ -18,6 +18,16 @@ Five alarms, each with a limit taken from the parameter set where the thesis giv
   EKF's model and noise agree with the measurements).
 - ``dropout``: a sensor has delivered no accepted sample for ``dropout_periods`` of its sample
   periods (at least ``dropout_min_s``).
+- ``mount_vector``: the live check of the mounting vector r (the sea trial's wrong sign,
+  thesis 6.2.1). With r mirrored, the control system holds the wrong point still and the real
+  tree swings round it on a circle of radius 2|r| as the heading changes; the wire pulls the
+  real tree with an extra ``-2 k_h R(psi) r`` (NED) that the observer's model does not have, so
+  its position innovations drive its bias estimate (tree axes) to ``R(psi)^T c - 2 k_h r``:
+  a constant offset in tree axes, where a current's force (fixed in NED, ``c``) turns with
+  the heading. Over the last ``mount_window_s`` the monitor fits ``bias = R(psi)^T c + d``
+  (least squares; needs ``mount_spread_deg`` of heading change to tell c from d) and reads
+  ``s = d . m / |m|^2`` with ``m = -2 k_h r``: 0 for the configured r, 1 for a mirrored one.
+  Above ``mount_limit`` (0.5, halfway) it says r looks mirrored.
 
 The monitor only reads rows; it never changes the loop. The last two alarms need the EKF (with
 perfect feedback the sensors are not read and the columns stay zero); they stay inactive then.
@@ -39,7 +49,16 @@ from sim.params import ParameterSet
 from sim.sensors import SENSOR_NAMES
 
 FloatArray = NDArray[np.float64]
-ALARM_NAMES = ("saturation", "position_error", "wire_slack", "innovation", "dropout")
+ALARM_NAMES = (
+    "saturation",
+    "position_error",
+    "wire_slack",
+    "innovation",
+    "dropout",
+    "mount_vector",
+)
+MOUNT_SAMPLE_S = 0.1
+"""The mount check keeps one row in this many seconds."""
 
 
 @dataclass(frozen=True)
@@ -64,6 +83,16 @@ class AlarmLimits:
     """Missing sample periods before a dropout alarm [-]."""
     dropout_min_s: float = 1.0
     """Shortest gap reported as a dropout [s]."""
+    mount_window_s: float = 30.0
+    """Rows the mount check fits over [s] (the issue: flagged within 30 s of a turn)."""
+    mount_spread_deg: float = 20.0
+    """Heading change within the window the mount check needs before it judges [deg]: the
+    fit cannot tell a current's force from the mount's offset with less (measured: at 1 deg
+    of change a correct r read 0.96, at 10 deg and more -0.15 to -0.09)."""
+    mount_limit: float = 0.5
+    """Share of the mirrored-r signature above which r is called mirrored: halfway between 0
+    (the configured r) and 1 (mirrored); measured -0.15 to -0.09 with the right r and 1.37 to
+    1.53 with it mirrored (model-rotation mission, 3 seeds, 10 to 74 deg of turn)."""
 
     @staticmethod
     def for_params(ps: ParameterSet) -> AlarmLimits:
@@ -101,6 +130,9 @@ class AlarmMonitor:
     _sat_since: FloatArray = field(init=False)
     _last_accept: FloatArray = field(init=False)
     _nis: tuple[deque[float], deque[float]] = field(init=False)
+    _mount_rows: deque[tuple[float, float, float]] = field(init=False)
+    _mount_last_k: float = field(init=False, default=-1.0)
+    _mount_alarm: Alarm = field(init=False)
     _t_s: float = field(init=False, default=0.0)
     state: tuple[Alarm, ...] = field(init=False)
 
@@ -109,15 +141,20 @@ class AlarmMonitor:
         self._last_accept = np.full(len(SENSOR_NAMES), np.nan)
         self._nis = (deque(maxlen=self.limits.nis_window), deque(maxlen=self.limits.nis_window))
         self.state = tuple(Alarm(name, False, "") for name in ALARM_NAMES)
+        self._mount_rows = deque(maxlen=int(round(self.limits.mount_window_s / MOUNT_SAMPLE_S)))
+        self._mount_alarm = Alarm("mount_vector", False, "")
 
     def update(
         self,
         rows: LogRows,
         tension_newton: float | None,
         free_setpoint_n: FloatArray | None = None,
+        mount: tuple[float, FloatArray] | None = None,
     ) -> tuple[Alarm, ...]:
-        """Advance with log rows, the present wire tension (None: unknown) and the free-flying
-        ROV's set point [north, east, down, psi] (None: unknown, as in a replay)."""
+        """Advance with log rows, the present wire tension (None: unknown), the free-flying
+        ROV's set point [north, east, down, psi] (None: unknown, as in a replay) and what the
+        control system takes for the wire's horizontal stiffness k_h [N/m] and the mounting
+        vector r [m, tree axes] (None: the mount check stays as it was)."""
         if len(rows) == 0:
             return self.state
         self._t_s = float(rows.t_s[-1])
@@ -127,8 +164,57 @@ class AlarmMonitor:
             self._slack(rows, tension_newton),
             self._innovation(rows),
             self._dropout(rows),
+            self._mount_check(rows, mount),
         )
         return self.state
+
+    def _mount_check(self, rows: LogRows, mount: tuple[float, FloatArray] | None) -> Alarm:
+        """The live mounting-vector check (see the module's notes)."""
+        if not self.uses_sensors or mount is None:
+            return self._mount_alarm
+        k_h, r = mount
+        signature = -2.0 * float(k_h) * np.asarray(r, float)[0:2]
+        size = float(signature @ signature)
+        if size <= 0.0:
+            return self._mount_alarm
+        t, mode = rows.t_s, np.asarray(rows["mode"]).reshape(len(rows), -1)[:, 0]
+        bias, psi = rows["bias_tree"], rows["eta_hat_n"][:, 2]
+        k = np.floor(t / MOUNT_SAMPLE_S + 1e-9)
+        new = np.flatnonzero(k != np.concatenate(([self._mount_last_k], k[:-1])))
+        if new.size == 0:
+            return self._mount_alarm
+        for i in new:
+            if mode[i] > 0.5:  # the ROV is free: the tree's observer is not the one to judge
+                self._mount_rows.clear()
+                continue
+            self._mount_rows.append((float(psi[i]), float(bias[i, 0]), float(bias[i, 1])))
+        self._mount_last_k = float(k[-1])
+        if len(self._mount_rows) < 10:
+            return self._mount_alarm
+        data = np.array(self._mount_rows)
+        heading = np.unwrap(data[:, 0])
+        if math.degrees(float(np.ptp(heading))) < self.limits.mount_spread_deg:
+            return self._mount_alarm  # not turned enough to judge: the last verdict stands
+        c, s = np.cos(heading), np.sin(heading)
+        n = len(heading)
+        a = np.zeros((2 * n, 4))
+        a[0::2, 0], a[0::2, 1], a[0::2, 2] = c, s, 1.0
+        a[1::2, 0], a[1::2, 1], a[1::2, 3] = -s, c, 1.0
+        y = np.empty(2 * n)
+        y[0::2], y[1::2] = data[:, 1], data[:, 2]
+        d = np.linalg.lstsq(a, y, rcond=None)[0][2:4]
+        share = float(d @ signature) / size
+        if share > self.limits.mount_limit:
+            self._mount_alarm = Alarm(
+                "mount_vector",
+                True,
+                f"the mounting vector r looks mirrored (wrong sign): while turning, the "
+                f"observer's force estimate shows {share:.0%} of the mirrored-r signature; "
+                f"check r's sign in the set-up",
+            )
+        else:
+            self._mount_alarm = Alarm("mount_vector", False, "")
+        return self._mount_alarm
 
     def _saturation(self, rows: LogRows) -> Alarm:
         util = rows["thruster_utilisation"][:, : self.n_thrusters]

@@ -60,6 +60,30 @@ class Console:
         self.guesses.failed(client)
         return False, 0.0
 
+    # ----------------------------------------------------------- the instructor
+    @property
+    def instructor_on(self) -> bool:
+        """The instructor's features (faults) are on: an instructor token was set."""
+        return self.settings.instructor_token is not None
+
+    def check_instructor(self, candidate: str | None, client: str) -> tuple[str, float]:
+        """('ok' | 'off' | 'missing' | 'console token' | 'wrong', seconds the client must wait).
+        Wrong tokens count against the client as for the console token (one guess limit)."""
+        wanted = self.settings.instructor_token
+        if wanted is None:
+            return "off", 0.0
+        wait = self.guesses.retry_after_s(client)
+        if wait > 0.0:
+            return "wrong", wait
+        if candidate is None or candidate == "":
+            return "missing", 0.0
+        if secrets.compare_digest(candidate.encode(), wanted.encode()):
+            return "ok", 0.0
+        if self.is_token(candidate):
+            return "console token", 0.0
+        self.guesses.failed(client)
+        return "wrong", 0.0
+
     # ----------------------------------------------------------- missions
     def mission_names(self) -> tuple[list[str], list[str]]:
         """(library names, uploaded names)."""

@@ -217,6 +217,7 @@ class PacedLoop:
             if not future.set_running_or_notify_cancel():
                 continue
             action = describe(command)
+            instructor = bool(getattr(command, "instructor_only", False))
             notes_before = self.session.notes_written
             self.session.actor = who
             try:
@@ -228,24 +229,30 @@ class PacedLoop:
                     future.set_result(result)
             except Exception as err:
                 future.set_exception(err)
-                self._log_operation(who, action, f"refused: {err}", noted=False)
+                self._log_operation(who, action, f"refused: {err}", False, instructor)
             else:
                 noted = self.session.notes_written > notes_before
-                self._log_operation(who, action, "done", noted)
+                self._log_operation(who, action, "done", noted, instructor)
             finally:
                 self.session.actor = None
 
-    def _log_operation(self, who: str, action: str, outcome: str, noted: bool) -> None:
-        """Into the operations log; and into the recording unless the command wrote its own
-        event (which then names ``who``)."""
-        entry = self.operations.add(self.session.sim.t_s, who, action, outcome)
+    def _log_operation(
+        self, who: str, action: str, outcome: str, noted: bool, instructor: bool = False
+    ) -> None:
+        """Into the operations log (an instructor's command marked as such); and into the
+        recording unless the command wrote its own event (which then names ``who``)."""
+        entry = self.operations.add(self.session.sim.t_s, who, action, outcome, instructor)
         self._operations = self.operations.latest()
         if not noted:
-            self.session.note(
-                "operation",
-                f"{who}: {action} ({outcome})",
-                {"who": who, "action": action, "outcome": outcome, "utc": entry.utc},
-            )
+            data: dict[str, object] = {
+                "who": who,
+                "action": action,
+                "outcome": outcome,
+                "utc": entry.utc,
+            }
+            if instructor:
+                data["instructor"] = True
+            self.session.note("operation", f"{who}: {action} ({outcome})", data)
 
     def _fail_pending(self) -> None:
         self.cancel_steps("the console is shutting down")

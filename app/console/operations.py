@@ -33,6 +33,8 @@ class Operation:
     action: str
     outcome: str
     """'done' or 'refused: <why>'."""
+    instructor: bool = False
+    """An instructor's command (a fault): shown to the instructor only (``trainee_view``)."""
 
 
 def describe(command: object) -> str:
@@ -79,12 +81,25 @@ class OperationsLog:
     def __init__(self) -> None:
         self._entries: deque[Operation] = deque(maxlen=KEEP)
 
-    def add(self, t_s: float, who: str, action: str, outcome: str) -> Operation:
+    def add(
+        self, t_s: float, who: str, action: str, outcome: str, instructor: bool = False
+    ) -> Operation:
         entry = Operation(
-            datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"), float(t_s), who, action, outcome
+            datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            float(t_s),
+            who,
+            action,
+            outcome,
+            instructor,
         )
         self._entries.append(entry)
         return entry
 
     def latest(self, n: int = 20) -> tuple[Operation, ...]:
         return tuple(self._entries)[-n:]
+
+
+def trainee_view(operations: tuple[Operation, ...]) -> tuple[Operation, ...]:
+    """What a trainee may see of the operations log: everything but the instructor's commands
+    (the faults they inject or clear; the trainee sees only the faults' effects)."""
+    return tuple(op for op in operations if not op.instructor)

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 from app import scores
 from app.console.alarms import AlarmLimits, AlarmMonitor
 from app.console.errors import ConsoleError
+from app.console.faults import FAULT_LOG_KEEP, fault_views
 from app.console.operations import Operation, trainee_of
 from app.console.replay import Replay, recording_path
 from app.console.snapshot import (
@@ -150,6 +151,8 @@ class Session:
         self.tension_newton: float | None = sim.wire_tension_newton()
         self.error: str | None = None
         self.notices: tuple[str, ...] = ()
+        self._faults_noted = 0
+        """Entries of ``sim.fault_events`` already written as events."""
 
     def replace_run(self, run: PreparedRun) -> None:
         """Swap in a new simulation. A recording in progress goes on in the same file, its
@@ -293,12 +296,14 @@ class Session:
 
     def _take_rows(self, rows: LogRows) -> None:
         self._follow_docking_frame()
+        self._note_faults()
         self.last_row = rows.last()
         self.trend.extend(rows)
         self.tension_newton = self.sim.wire_tension_newton()
         before = {a.name: a.active for a in self.monitor.state}
         free_setpoint = self.sim.free_setpoint_n
-        for alarm in self.monitor.update(rows, self.tension_newton, free_setpoint):
+        mount = (float(self.sim.C.k_h), self.sim.sysm.r_rov_from_tree_tree_m)
+        for alarm in self.monitor.update(rows, self.tension_newton, free_setpoint, mount):
             if alarm.active != before.get(alarm.name):
                 self.note(
                     "alarm",
@@ -310,6 +315,13 @@ class Session:
             self._rec_rows.append(rows.data)
             if sum(len(r) for r in self._rec_rows) >= RECORD_FLUSH_ROWS:
                 self.flush_recording()
+
+    def _note_faults(self) -> None:
+        """Fault starts and ends into the recording (events of kind 'fault')."""
+        events = self.sim.fault_events
+        for t_s, text in events[self._faults_noted :]:
+            self.note("fault", text, {"t_s": round(t_s, 3)})
+        self._faults_noted = len(events)
 
     # ------------------------------------------------------------------ commands
     def require_live(self, what: str) -> None:
@@ -500,6 +512,8 @@ class Session:
             target=tuple(float(v) for v in sim.target),  # type: ignore[arg-type]
             quality_counters=tuple(tuple(int(c) for c in row) for row in sim.quality_counters),
             trend=self._trend(),
+            faults=fault_views(sim) if sim.faults else (),
+            fault_log=tuple(sim.fault_events[-FAULT_LOG_KEEP:]),
         )
 
     def close(self) -> None:

@@ -10,7 +10,7 @@ from pathlib import Path
 from urllib.parse import urlsplit
 
 from app.console.commands import SPEED_MAX, SPEED_MIN
-from app.console.tokens import MIN_TOKEN_CHARS
+from app.console.tokens import MIN_INSTRUCTOR_TOKEN_CHARS, MIN_TOKEN_CHARS
 
 
 @dataclass(frozen=True)
@@ -25,6 +25,9 @@ class ConsoleSettings:
     """Port of the 3D view (viser)."""
     token: str | None = None
     """Token for actions that change the run; None: one is generated at start."""
+    instructor_token: str | None = None
+    """Token of the instructor (faults); None: the instructor's features are off (the API
+    answers 403 saying how to turn them on; the page's instructor tab says the same)."""
     params: str = "full-scale"
     """Parameter set when no mission is given."""
     mission: str | None = None
@@ -63,6 +66,15 @@ class ConsoleSettings:
             raise ValueError(
                 f"token must have at least {MIN_TOKEN_CHARS} printable characters and no spaces"
             )
+        if self.instructor_token is not None:
+            t = self.instructor_token
+            if len(t) < MIN_INSTRUCTOR_TOKEN_CHARS or not t.isprintable() or " " in t:
+                raise ValueError(
+                    f"instructor_token must have at least {MIN_INSTRUCTOR_TOKEN_CHARS} "
+                    f"printable characters and no spaces"
+                )
+            if t == self.token:
+                raise ValueError("instructor_token must differ from the console token")
         if not (math.isfinite(self.speed) and SPEED_MIN <= self.speed <= SPEED_MAX):
             raise ValueError(f"speed must be in [{SPEED_MIN}, {SPEED_MAX}], got {self.speed}")
         if not (math.isfinite(self.depth_m) and 5.0 < self.depth_m <= 4000.0):

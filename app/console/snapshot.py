@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.console.alarms import Alarm
+from app.console.faults import FaultView
 from app.console.operations import Operation
 from control.columns import LogRows
 from control.config import MODES, Gains
@@ -155,6 +156,11 @@ class Snapshot:
     """The tree's target [north, east, psi] (where the reference model is heading; None in a
     replay)."""
     trend: FloatArray = field(default_factory=lambda: _frozen(np.zeros((0, 7))), repr=False)
+    faults: tuple[FaultView, ...] = ()
+    """Injected faults active or scheduled (instructor only: the API and the page show them
+    to the instructor alone)."""
+    fault_log: tuple[tuple[float, str], ...] = ()
+    """The latest fault starts and ends, (time [s], what) (instructor only)."""
 
     @property
     def active_alarms(self) -> tuple[Alarm, ...]:

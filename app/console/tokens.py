@@ -10,6 +10,11 @@ from collections.abc import Callable
 
 MIN_TOKEN_CHARS = 16
 """Shortest token an operator may choose (a generated one has 24 characters)."""
+MIN_INSTRUCTOR_TOKEN_CHARS = 8
+"""Shortest instructor token (typed by hand at a training console; guessing is limited as for
+the console token)."""
+INSTRUCTOR_TOKEN_ENV = "ROV_CONSOLE_INSTRUCTOR_TOKEN"
+"""Environment variable ``rov-console serve`` reads the instructor token from."""
 GUESS_LIMIT = 10
 """Wrong tokens one client may send within the window before it is locked out."""
 GUESS_WINDOW_S = 60.0

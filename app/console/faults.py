@@ -1,0 +1,150 @@
+"""The instructor's commands: inject a fault (now or at a later simulation time) and clear them
+all, and the view of the faults a snapshot carries (``FaultView``).
+
+Only the instructor may send these (the HTTP routes and the page's instructor panel check the
+instructor token, ``Console.check_instructor``). They are logged like every command, but
+marked ``instructor_only``: the operations log shown to trainees leaves them out
+(``app.console.operations.trainee_view``), so a trainee sees only the fault's effects and what
+the control system's own checks and alarms report. The recording keeps everything.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from app.console.errors import ConsoleError
+from control.faults import DURATION_MAX_S, FAULT_KINDS, THRUSTER_KINDS, Fault
+
+if TYPE_CHECKING:
+    from app.console.loop import PacedLoop
+    from control.simulation import Simulation
+
+FAULT_LOG_KEEP = 20
+"""Fault starts and ends a snapshot carries (the newest)."""
+
+
+@dataclass(frozen=True)
+class FaultView:
+    """One injected fault as the instructor sees it."""
+
+    kind: str
+    start_s: float
+    duration_s: float
+    value: float
+    unit: str
+    thruster: int
+    direction_deg: float
+    state: str
+    """'active' or 'scheduled'."""
+    text: str
+    """In words: 'compass bias 20 deg from 30 s for 60 s'."""
+
+
+def fault_views(sim: Simulation) -> tuple[FaultView, ...]:
+    """The faults active now or still to come (past ones are left out), by start."""
+    t = sim.t_s + 1e-9
+    out = []
+    for f in sorted(sim.faults, key=lambda f: f.start_s):
+        if f.end_s <= t:
+            continue
+        out.append(
+            FaultView(
+                f.kind,
+                f.start_s,
+                f.duration_s,
+                f.value,
+                FAULT_KINDS[f.kind][0],
+                f.thruster,
+                f.direction_deg,
+                "active" if f.active(t) else "scheduled",
+                f.describe(),
+            )
+        )
+    return tuple(out)
+
+
+def kinds_text() -> str:
+    """Every kind with its unit and range, one a line (the panel's help, error messages)."""
+    lines = []
+    for kind, (unit, lo, hi) in FAULT_KINDS.items():
+        value = "no value" if unit == "-" else f"value {lo:g} to {hi:g} {unit}"
+        which = ", thruster number" if kind in THRUSTER_KINDS else ""
+        lines.append(f"{kind}: {value}{which}")
+    return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class InjectFault:
+    """A fault of ``kind`` from ``start_s`` (simulation time; None: now) for ``duration_s``."""
+
+    kind: str
+    duration_s: float
+    value: float = 0.0
+    start_s: float | None = None
+    thruster: int = 0
+    direction_deg: float = 0.0
+    instructor_only = True
+
+    def __post_init__(self) -> None:
+        if self.start_s is not None and not (
+            isinstance(self.start_s, int | float) and math.isfinite(self.start_s)
+        ):
+            raise ValueError(f"start_s must be a finite number of seconds, got {self.start_s!r}")
+        self.fault(0.0 if self.start_s is None else max(self.start_s, 0.0))  # ranges
+
+    def fault(self, start_s: float) -> Fault:
+        return Fault(
+            self.kind, start_s, self.duration_s, self.value, self.direction_deg, self.thruster
+        )
+
+    def apply(self, console: PacedLoop) -> object:
+        session = console.session
+        session.require_live("fault")
+        sim = session.sim
+        now = sim.t_s
+        start = now if self.start_s is None else float(self.start_s)
+        if start < now - 1e-9 or start > now + DURATION_MAX_S:
+            raise ValueError(
+                f"start_s must be in [{now:.2f}, {now + DURATION_MAX_S:.0f}] s "
+                f"(now or later, in simulation time), got {start:g}"
+            )
+        fault = self.fault(start)
+        sim.inject_fault(fault)
+        session.note(
+            "instructor",
+            f"fault injected: {fault.describe()}",
+            {
+                "kind": fault.kind,
+                "start_s": fault.start_s,
+                "duration_s": fault.duration_s,
+                "value": fault.value,
+                "thruster": fault.thruster,
+            },
+        )
+        return {
+            "kind": fault.kind,
+            "start_s": fault.start_s,
+            "duration_s": fault.duration_s,
+            "value": fault.value,
+            "thruster": fault.thruster,
+            "text": fault.describe(),
+        }
+
+
+@dataclass(frozen=True)
+class ClearFaults:
+    """End every injected fault now and drop the scheduled ones."""
+
+    instructor_only = True
+
+    def apply(self, console: PacedLoop) -> object:
+        session = console.session
+        session.require_live("clear faults")
+        n = len(fault_views(session.sim))
+        if n == 0:
+            raise ConsoleError("no fault is active or scheduled")
+        session.sim.clear_faults()
+        session.note("instructor", f"faults cleared ({n})", {"cleared": n})
+        return {"cleared": n}

@@ -1,0 +1,121 @@
+"""The pilot's scores and debriefs, one per browser (a tab of ``web.panels.ClientPanel``).
+
+"Show my scores" reads the scores database (``app.scores``) for the name typed under Access:
+the latest runs (who flew them: autopilot, hand or mixed) and the best run of each mission,
+each with a link to its debrief when it was recorded. "Debrief" offers the debrief report
+(``app.report``, served by the API at ``/api/recordings/<name>/report``) of a finished
+recording. Reading needs no token: nothing here changes the run.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from app.console import SCORES_DB, list_recordings
+from app.console import scores as store
+
+if TYPE_CHECKING:
+    from web.panels import ClientPanel
+
+HISTORY_ROWS = 10
+
+
+def report_url(api_base: str, name: str) -> str:
+    return f"{api_base}/api/recordings/{name}/report"
+
+
+def _cell(v: float | None, fmt: str) -> str:
+    return "-" if v is None else format(v, fmt)
+
+
+def _verdict(s: store.Score) -> str:
+    text = "pass" if s.passed else "FAIL"
+    if s.landed is not None:
+        text += ", landed" if s.landed else ", not landed"
+    return text
+
+
+def scores_markdown(rows: list[store.Score], api_base: str, name: str) -> str:
+    """A trainee's latest runs and best run of each mission, as Markdown tables."""
+    if not rows:
+        return f"no scores for **{name}** yet (a mission you start is scored when it ends)"
+
+    def table(title: str, scores: list[store.Score]) -> list[str]:
+        lines = [
+            f"**{title}**",
+            "",
+            "| when | mission | result | miss m | RMS N/E m | flown by | debrief |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for s in scores:
+            link = f"[report]({report_url(api_base, s.log_file)})" if s.log_file else "-"
+            lines.append(
+                f"| {s.utc[5:16].replace('T', ' ')} | {s.mission} | {_verdict(s)} | "
+                f"{_cell(s.miss_m, '.3f')} | {s.rms_north_m:.3f}/{s.rms_east_m:.3f} | "
+                f"{s.flown_by} | {link} |"
+            )
+        return lines
+
+    lines = table(f"latest runs of {name}", rows[:HISTORY_ROWS])
+    lines += ["", *table("best run of each mission", store.best(rows))]
+    return "\n".join(lines)
+
+
+class ScoresPanel:
+    """The scores tab of one browser."""
+
+    def __init__(self, owner: ClientPanel) -> None:
+        self.owner = owner
+        self.console = owner.console
+        gui = owner.gui
+        settings = self.console.settings
+        host = f"[{settings.host}]" if ":" in settings.host else settings.host
+        self.api_base = f"http://{host}:{settings.port}"
+        self.show_button = gui.add_button("Show my scores")
+        self.show_button.on_click(self._on_show)
+        self.scores_md = gui.add_markdown("")
+        names = self._recording_names()
+        self.recording = gui.add_dropdown("Recording", names, initial_value=names[0])
+        self.debrief_button = gui.add_button("Debrief")
+        self.debrief_button.on_click(self._on_debrief)
+        self.debrief_md = gui.add_markdown("")
+
+    def _recording_names(self) -> tuple[str, ...]:
+        names = [r["name"] for r in list_recordings(self.console.settings.recordings_dir)]
+        return tuple(names) or ("(none)",)
+
+    def show(self) -> str:
+        """Fill in the scores of the name typed under Access (and return the text)."""
+        name = " ".join(str(self.owner.name_text.value).split())
+        if not name:
+            text = "enter your name under Access to see your scores"
+        else:
+            try:
+                rows = store.history(self.console.settings.recordings_dir / SCORES_DB, trainee=name)
+                text = scores_markdown(rows, self.api_base, store.trainee_name(name))
+            except ValueError as err:
+                text = f"**cannot read the scores**: {err}"
+        self.scores_md.content = text
+        return text
+
+    def _on_show(self, event: Any) -> None:
+        self.show()
+        names = self._recording_names()
+        self.recording.options = names
+        if self.recording.value not in names:
+            self.recording.value = names[0]  # type: ignore[misc]
+
+    def _on_debrief(self, event: Any) -> None:
+        name = str(self.recording.value)
+        names = self._recording_names()
+        if name not in names or name == "(none)":
+            self.recording.options = names
+            self.debrief_md.content = (
+                "no finished recording chosen (press Show my scores to refresh)"
+            )
+            return
+        if name == self.console.loop.snapshot.recording:
+            self.debrief_md.content = f"**{name}** is being recorded: stop the recording first"
+            return
+        url = report_url(self.api_base, name)
+        self.debrief_md.content = f"[open the debrief of {name}]({url}) (opens the report page)"
