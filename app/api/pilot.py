@@ -170,9 +170,11 @@ async def _fly(websocket: WebSocket, console: Console, who: str, last: dict[str,
     status = dict(last)
 
     async def report() -> None:
-        while True:
-            await asyncio.sleep(STATUS_PERIOD_S)
-            await _send(websocket, {"type": "status", "status": _snapshot_status(console, status)})
+        with contextlib.suppress(WebSocketDisconnect, RuntimeError, OSError, TimeoutError):
+            while True:
+                await asyncio.sleep(STATUS_PERIOD_S)
+                snap_status = _snapshot_status(console, status)
+                await _send(websocket, {"type": "status", "status": snap_status})
 
     reporter = asyncio.create_task(report())
     silent = False
