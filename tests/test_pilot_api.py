@@ -95,8 +95,15 @@ def test_fly_by_socket_and_the_stick_is_zeroed_when_the_page_falls_silent(
         waited = time.monotonic() - start
         assert DEMAND_TIMEOUT_S * 0.9 < waited < DEMAND_TIMEOUT_S + 2.0
         assert list(sim_of(client).pilot_demand) == [0.0, 0.0, 0.0, 0.0]
+        ws.send_json({"type": "demand", "surge": 0.0, "sway": 0.0, "heave": 0.0, "yaw": 1.0})
+        until(ws, lambda m: m.get("status", {}).get("demand", {}).get("yaw") == 1.0, "yaw")
+        time.sleep(1.0)  # the tree turns under the ROV
         ws.send_json({"type": "mode", "pilot": False})
         until(ws, lambda m: m.get("status", {}).get("mode") == "tree", "back on the autopilot")
+        # the autopilot holds the tree where the pilot left it, not at the old target
+        sim = sim_of(client)
+        assert abs(sim.target[2] - sim.eta_estimate[2]) < 0.05
+        assert abs(sim.target[2]) > 0.01
     ops = client.app.state.console.loop.snapshot.operations  # type: ignore[attr-defined]
     mine = [(o.who, o.action) for o in ops if trainee_of(o.who) == "Anna"]
     assert ("pilot (Anna)", "pilot take over: pilot on") in mine

@@ -103,8 +103,10 @@ class PilotHolds:
 @dataclass(frozen=True)
 class PilotTakeOver:
     """``pilot`` True: fly by hand (mode "manual", from a zero stick); False: hand back to the
-    autopilot (``autopilot_mode``). Both bumpless (the kernel starts the new controller from
-    the last commanded thrust). Not while a mission runs its legs: abort it first."""
+    autopilot (``autopilot_mode``), which holds where the pilot left the tree (its target
+    becomes the present estimate) or the ROV (free mode starts at the present pose). Both
+    bumpless (the kernel starts the new controller from the last commanded thrust). Not while
+    a mission runs its legs: abort it first."""
 
     pilot: bool
 
@@ -121,7 +123,11 @@ class PilotTakeOver:
             sim.set_pilot_demand(0.0, 0.0, 0.0, 0.0)
             sim.set_mode("manual")
         else:
-            sim.set_mode(autopilot_mode(sim))  # type: ignore[arg-type]
+            mode = autopilot_mode(sim)
+            if mode == "tree":  # hold the tree where the pilot left it, not the old target
+                north, east, psi = sim.eta_estimate
+                sim.set_target(north, east, psi)
+            sim.set_mode(mode)  # type: ignore[arg-type]
         eng.note("command", f"mode {sim.mode}", {"mode": sim.mode})
         return pilot_status(sim)
 
