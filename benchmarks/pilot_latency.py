@@ -55,6 +55,9 @@ TARGET_VIEW_MS = 150.0
 TAP_S = 0.1
 SETTLE_S = 4.0
 VIEW_THRESHOLD_M = 5e-4
+STILL_AFTER_MS = 150.0
+"""No /rov update for this long before a key: the ROV was still (the scene sends a pose only
+when it moved by more than 0.1 mm, at most 20 times a second)."""
 RAW_PATH = os.environ.get("PILOT_LATENCY_RAW", "")
 """Where to write the raw time stamps (JSON) for a closer look; empty: nowhere."""
 
@@ -189,19 +192,17 @@ def _poll(console, out: list, stop: threading.Event) -> None:
         time.sleep(0.002)
 
 
-def _first_change(keys: list, samples: list, f_max: float) -> list[float]:
-    """Per key press: time from the key to the first sample whose forces moved [ms]."""
+def _first_change(key_t: float, samples: list, f_max: float) -> float:
+    """Time from a key press to the first sample whose forces moved [ms] (NaN: none)."""
     t = np.array([s["t"] for s in samples])
     f = np.array([s["f"] for s in samples])
-    out = []
-    for k in keys:
-        before = np.flatnonzero(t < k["t"])
-        after = np.flatnonzero(t >= k["t"])
-        if len(before) and len(after):
-            moved = after[np.max(np.abs(f[after] - f[before[-1]]), axis=1) > 0.02 * f_max]
-            if len(moved):
-                out.append(float(t[moved[0]] - k["t"]))
-    return out
+    before = np.flatnonzero(t < key_t)
+    after = np.flatnonzero(t >= key_t)
+    if len(before) and len(after):
+        moved = after[np.max(np.abs(f[after] - f[before[-1]]), axis=1) > 0.02 * f_max]
+        if len(moved):
+            return float(t[moved[0]] - key_t)
+    return math.nan
 
 
 def analyse(
@@ -212,15 +213,21 @@ def analyse(
     t_rov = np.array([u["t"] for u in rov])
     p_rov = np.array([u["p"] for u in rov])
     raf = np.array([u["raf"] if u["raf"] is not None else np.nan for u in rov])
-    to_msg, to_frame = [], []
+    to_thr, to_page, to_msg, to_frame = [], [], [], []
     for k in keys:
         tk, sign = k["t"], (1.0 if k["code"] == "KeyW" else -1.0)
+        to_thr.append(_first_change(tk, published, f_max))
+        to_page.append(_first_change(tk, thr, f_max))
         prior = np.flatnonzero(t_rov < tk)
         if len(prior) < 2:
             continue
         i1, i2 = prior[-2], prior[-1]
         v = (p_rov[i2] - p_rov[i1]) / max(t_rov[i2] - t_rov[i1], 1e-3)
-        for j in np.flatnonzero((t_rov >= tk) & (t_rov < tk + 1000.0)):
+        if tk - t_rov[i2] > STILL_AFTER_MS:
+            v[:] = 0.0  # no updates for a while: the ROV was still (the view skips < 0.1 mm)
+        # the view cannot show a move before the thrusters are commanded: look from there on
+        start = tk + np.nan_to_num(np.nanmin([to_thr[-1], to_page[-1], math.inf]), nan=0.0)
+        for j in np.flatnonzero((t_rov >= start) & (t_rov < tk + 2000.0)):
             predicted = p_rov[i2] + v * (t_rov[j] - t_rov[i2])
             if sign * float((p_rov[j] - predicted) @ forward) > VIEW_THRESHOLD_M:
                 to_msg.append(t_rov[j] - tk)
@@ -242,8 +249,8 @@ def analyse(
 
     return {
         "key_presses": len(keys),
-        "to_thrusters": stats(_first_change(keys, published, f_max)),
-        "to_thrusters_on_page": stats(_first_change(keys, thr, f_max)),
+        "to_thrusters": stats(to_thr),
+        "to_thrusters_on_page": stats(to_page),
         "to_view_update": stats(to_msg),
         "to_view_frame": stats(to_frame),
     }
