@@ -29,6 +29,7 @@ from app.api import (
     gains,
     health,
     missions,
+    pilot,
     recordings,
     replay,
     run,
@@ -52,6 +53,7 @@ ROUTERS = (
     replay.router,
     faults.router,
     scores.router,
+    pilot.router,
 )
 
 
@@ -92,6 +94,7 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
     app.state.view = None
     app.state.allowed_hosts = allowed_hosts(settings.host, settings.allow_remote)
     app.state.telemetry_clients = 0
+    app.state.pilot_name = None  # the pilot flying from the pilot page (one at a time)
     for router in ROUTERS:
         app.include_router(router, responses=ERROR_RESPONSES)
     app.add_exception_handler(RequestValidationError, _validation_error)
@@ -150,6 +153,7 @@ def addresses(settings: ConsoleSettings, token: str, viser_port: int | None = No
         f"3D console:  http://{host}:{viser_port or settings.viser_port}/",
         f"HTTP API:    http://{host}:{settings.port}/docs  "
         f"(OpenAPI: /openapi.json, telemetry: ws://{host}:{settings.port}/api/telemetry)",
+        f"pilot page:  http://{host}:{settings.port}/pilot  (keys and gamepad fly the ROV)",
         f"token:       {token}   (needed to change the run; watching needs none)",
     ]
     return "\n".join(lines)

@@ -15,6 +15,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.optimize import linprog
 
 from control import allocation as alloc
 from control import loop, model, quality, reference, refkernel
@@ -27,15 +28,16 @@ Allocation = Literal["pinv", "priority", "qp"]
 Reference = Literal["first", "third"]
 HeadingMode = Literal["shortest", "absolute"]
 Law = Literal["thesis", "feedforward"]
-Mode = Literal["tree", "free"]
+Mode = Literal["tree", "free", "manual"]
 FEEDBACKS: tuple[Feedback, ...] = ("perfect", "ekf")
 ALLOCATIONS: tuple[Allocation, ...] = ("pinv", "priority", "qp")
 REFERENCES: tuple[Reference, ...] = ("first", "third")
 HEADING_MODES: tuple[HeadingMode, ...] = ("shortest", "absolute")
 LAWS: tuple[Law, ...] = ("thesis", "feedforward")
 """thesis: eq. 3.9 alone; feedforward: with reference feedforward through the plant model."""
-MODES: tuple[Mode, ...] = ("tree", "free")
-"""Supervisor modes, by their code in the log (0 tree controller, 1 free-ROV station keeping)."""
+MODES: tuple[Mode, ...] = ("tree", "free", "manual")
+"""Supervisor modes, by their code in the log (0 tree controller, 1 free-ROV station keeping,
+2 flown by hand: the pilot's demand, ``Simulation.set_pilot_demand``)."""
 
 
 @dataclass(frozen=True)
@@ -150,6 +152,27 @@ def system_thruster_config(ps: ParameterSet, sysm: model.SystemModel) -> alloc.T
     return alloc.ThrusterConfig(
         T=sysm.rov_to_tree @ thr.T, k_pos=thr.k_pos, k_neg=thr.k_neg, n_max_rps=thr.n_max_rps
     )
+
+
+def pilot_capacity(ps: ParameterSet) -> FloatArray:
+    """Full stick on each pilot axis [X, Y, Z, N] in the ROV's own axes, row 0 the negative
+    direction and row 1 the positive, as magnitudes [N, N, N, N m]: the largest force
+    (moment) that axis can have ALONE (the other three zero) within the thrusters' force box
+    (a small linear program, as ``model.dof_capacity``; roll and pitch are left to restoring).
+    Several axes at full stick together ask for more than the thrusters give: the allocation
+    saturates them in its priority order."""
+    thr = ps.rov.thrusters
+    rows = thr.T[[0, 1, 2, 5]]
+    bounds = list(zip(-thr.f_max_neg, thr.f_max_pos, strict=True))
+    out = np.zeros((2, 4))
+    for k in range(4):
+        others = [i for i in range(4) if i != k]
+        for j, sign in enumerate((-1.0, 1.0)):
+            res = linprog(
+                -sign * rows[k], A_eq=rows[others], b_eq=np.zeros(3), bounds=bounds, method="highs"
+            )
+            out[j, k] = sign * float(rows[k] @ res.x) if res.success else 0.0
+    return out
 
 
 def control_arrays(

@@ -5,7 +5,7 @@ mission's target held; Python handles commands (targets, gains, modes) between c
 loop stays fast and commands are applied only between steps. The fixed order within a step is
 
     sensors -> quality checks -> observer (EKF) -> reference model -> controller (supervisor:
-    tree PID or free-ROV PID) -> thrust allocation -> thrusters -> plant (RK4)
+    tree PID, free-ROV PID or the pilot's demand) -> thrust allocation -> thrusters -> plant (RK4)
 
 Every step writes one row of the log (see the ``L_*`` column indices).
 """
@@ -53,9 +53,12 @@ from sim.gnc import JIT, Rzyx
 EYE3 = np.eye(3)
 
 # --- modes, allocation kinds, reference kinds ---
-MODE_TREE, MODE_FREE = 0, 1
+MODE_TREE, MODE_FREE, MODE_MANUAL = 0, 1, 2
 ALLOC_PINV, ALLOC_PRIORITY, ALLOC_EXTERNAL = 0, 1, 2
 REF_FIRST, REF_THIRD = 0, 1
+MANUAL_I_BAND_M, MANUAL_I_BAND_RAD = 0.5, np.radians(3.0)
+"""Flown by hand, a hold integrates only within this of its set point (position and depth
+[m], heading [rad]): the overshoot after a stick released at speed does not wind it up."""
 
 # --- controller state vector layout (flat float array) ---
 CS_I = 0  # 0:3 tree integral, NED forces and yaw moment
@@ -68,7 +71,9 @@ CS_FSP = 28  # 28:32 free-ROV set point [north, east, down, psi]
 CS_MODE = 32
 CS_LAST_MODE = 33
 CS_ALLOC_F = 34  # 34:34+M_MAX externally allocated thruster forces (ALLOC_EXTERNAL)
-N_CS = CS_ALLOC_F + M_MAX
+CS_PILOT = CS_ALLOC_F + M_MAX  # 4: the pilot's demand [X, Y, Z, N] in the ROV's axes [N, N m]
+CS_HOLD = CS_PILOT + 4  # 2: the pilot's holds (1.0 on): auto-heading, auto-depth
+N_CS = CS_HOLD + 2
 
 
 class ControlArrays(NamedTuple):
@@ -260,6 +265,65 @@ def _observe(
 
 
 @njit(**JIT)
+def manual_step(x: np.ndarray, y: np.ndarray, cs: np.ndarray, C: ControlArrays, dt: float):
+    """Flown by hand: the pilot's demand (``cs[CS_PILOT:+4]``, ROV axes [X, Y, Z, N]) on the
+    axes the pilot is using; the free-ROV station keeping on the others, with its set point at
+    the pose where the pilot let go (horizontal position always; heading and depth only with
+    the auto-heading and auto-depth holds on, else a released stick is zero thrust). While an
+    axis is under the pilot its set point follows the ROV and its integral (what holds against
+    the current) is frozen. The step that enters this mode starts the holds where the ROV is,
+    their integral set so the thrust does not jump (bumpless, as the free mode). Writes
+    ``cs`` in place; returns the ROV wrench (6,)."""
+    eta4, deta4 = _rov_pose(x, y, not C.feedback_ekf)
+    if int(cs[CS_LAST_MODE]) != MODE_MANUAL:
+        cs[CS_FSP : CS_FSP + 4] = eta4
+        cs[CS_FI : CS_FI + 4] = pid.bumpless_free_integral(
+            cs[CS_TAU : CS_TAU + 6].copy(), eta4, deta4, eta4, C.free_Kp, C.free_Kd
+        )
+    d = cs[CS_PILOT : CS_PILOT + 4]
+    # which of [north+east, down, psi] the pilot flies now
+    flown = np.array(
+        [
+            d[0] != 0.0 or d[1] != 0.0,
+            d[2] != 0.0 or cs[CS_HOLD + 1] < 0.5,
+            d[3] != 0.0 or cs[CS_HOLD] < 0.5,
+        ]
+    )
+    if flown[0]:
+        cs[CS_FSP : CS_FSP + 2] = eta4[0:2]
+    if flown[1]:
+        cs[CS_FSP + 2] = eta4[2]
+    if flown[2]:
+        cs[CS_FSP + 3] = eta4[3]
+    tau, fi, e4 = pid.free_rov_pid(
+        eta4,
+        deta4,
+        cs[CS_FSP : CS_FSP + 4].copy(),
+        cs[CS_FI : CS_FI + 4].copy(),
+        C.free_Kp,
+        C.free_Ki,
+        C.free_Kd,
+        dt,
+    )
+    # conditional integration: a hold catching the ROV after a fast release does not wind up
+    band = np.array([MANUAL_I_BAND_M, MANUAL_I_BAND_M, MANUAL_I_BAND_M, MANUAL_I_BAND_RAD])
+    for k in range(4):
+        if abs(e4[k]) > band[k]:
+            fi[k] = cs[CS_FI + k]
+    if flown[0]:
+        tau[0], tau[1] = d[0], d[1]
+        fi[0:2] = cs[CS_FI : CS_FI + 2]
+    if flown[1]:
+        tau[2] = d[2]
+        fi[2] = cs[CS_FI + 2]
+    if flown[2]:
+        tau[5] = d[3]
+        fi[3] = cs[CS_FI + 3]
+    cs[CS_FI : CS_FI + 4] = fi
+    return tau
+
+
+@njit(**JIT)
 def control_step(
     t: float,
     x: np.ndarray,
@@ -346,6 +410,10 @@ def control_step(
         log_row[L_TAU_TREE : L_TAU_TREE + 3] = tau_tree
         for j in range(4):
             log_row[L_TERMS + 3 * j : L_TERMS + 3 * j + 3] = terms[j]
+    elif mode == MODE_MANUAL:
+        tau_rov6 = manual_step(x, y, cs, C, dt)
+        log_row[L_TAU_ROV : L_TAU_ROV + 6] = tau_rov6
+        tau6 = C.rov_to_tree @ tau_rov6
     else:
         eta4, deta4 = _rov_pose(x, y, not C.feedback_ekf)
         if int(cs[CS_LAST_MODE]) != MODE_FREE:
@@ -409,7 +477,9 @@ def finish_step(
     if C.feedback_ekf:
         # the observer's input: the achieved wrench moved to the tree (eq. 3.6)
         tau_tree = C.A_inv @ np.array([ach[0], ach[1], ach[5]])
-        if int(log_row[L_MODE]) != MODE_TREE:
+        mode = int(log_row[L_MODE])
+        on_tree = mode == MODE_TREE or (mode == MODE_MANUAL and env_k[plant.E_GRIP] > 0.5)
+        if not on_tree:
             tau_tree[:] = 0.0
         xhat, Pc = ekf.predict(
             xhat, Pc, tau_tree, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, C.T_b, C.GQG

@@ -42,6 +42,7 @@ from control.config import (
     HeadingMode,
     Mode,
     control_arrays,
+    pilot_capacity,
     system_thruster_config,
 )
 from control.faults import THRUSTER_KINDS, Fault
@@ -187,6 +188,9 @@ class Simulation:
         self.cs = np.zeros(loop.N_CS)
         self.cs[loop.CS_MODE] = loop.MODE_TREE if start_gripping else loop.MODE_FREE
         self.cs[loop.CS_LAST_MODE] = -1.0  # first step initialises the reference bumplessly
+        self.cs[loop.CS_HOLD : loop.CS_HOLD + 2] = 1.0  # the pilot's holds start on
+        self.pilot_capacity = pilot_capacity(ps)
+        """Full stick on [surge, sway, heave, yaw], (2, 4): backwards, forwards [N, N m]."""
         self.xhat, self.P_cov = self._initial_estimate()
         w = quality.WINDOW
         self.Q = loop.QualityState(
@@ -433,11 +437,45 @@ class Simulation:
         self.C = self.C._replace(Kp=new_kp, Ki=np.array(gains.ki), Kd=new_kd)
 
     def set_mode(self, mode: Mode) -> None:
-        """Supervisor switch (section 3.4): tree controller or free-ROV station keeping. The
-        new controller starts from the last commanded thrust (no jump)."""
+        """Supervisor switch (section 3.4): tree controller, free-ROV station keeping or flown
+        by hand ("manual", log code 2). The new controller starts from the last commanded
+        thrust (no jump)."""
         if mode not in MODES:
             raise ValueError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
-        self.cs[loop.CS_MODE] = loop.MODE_TREE if mode == "tree" else loop.MODE_FREE
+        self.cs[loop.CS_MODE] = MODES.index(mode)
+
+    def set_pilot_demand(self, surge: float, sway: float, heave: float, yaw: float) -> None:
+        """The pilot's stick in the ROV's own axes, each a fraction in [-1, 1] of that axis's
+        full thrust alone (``pilot_capacity``: surge forward, sway to starboard, heave down,
+        yaw clockwise seen from above, all positive; full is that direction's own capacity,
+        ``pilot_capacity``). It acts in the "manual" mode; zero on an axis hands it to the
+        holds (see ``control.loop.manual_step``). Held until changed."""
+        values = []
+        for name, v in (("surge", surge), ("sway", sway), ("heave", heave), ("yaw", yaw)):
+            values.append(_in_range(f"pilot {name}", float(v), -1.0, 1.0, "(fraction of full)"))
+        frac = np.array(values)
+        full = np.where(frac >= 0.0, self.pilot_capacity[1], self.pilot_capacity[0])
+        self.cs[loop.CS_PILOT : loop.CS_PILOT + 4] = frac * full
+
+    @property
+    def pilot_demand(self) -> FloatArray:
+        """The pilot's demand as fractions [surge, sway, heave, yaw] (a copy)."""
+        d = self.cs[loop.CS_PILOT : loop.CS_PILOT + 4]
+        return d / np.where(d >= 0.0, self.pilot_capacity[1], self.pilot_capacity[0])
+
+    def set_pilot_holds(self, heading: bool, depth: bool) -> None:
+        """Auto-heading and auto-depth in the manual mode: on, a released yaw (heave) stick
+        holds the heading (depth) where it was let go; off, it is zero moment (force)."""
+        for name, v in (("heading hold", heading), ("depth hold", depth)):
+            if not isinstance(v, bool | np.bool_):
+                raise ValueError(f"{name} must be true or false, got {v!r}")
+        self.cs[loop.CS_HOLD] = 1.0 if heading else 0.0
+        self.cs[loop.CS_HOLD + 1] = 1.0 if depth else 0.0
+
+    @property
+    def pilot_holds(self) -> tuple[bool, bool]:
+        """(auto-heading, auto-depth)."""
+        return bool(self.cs[loop.CS_HOLD] > 0.5), bool(self.cs[loop.CS_HOLD + 1] > 0.5)
 
     def set_grip(self, gripping: bool) -> None:
         """Physically grip (True) or release (False) the tree."""

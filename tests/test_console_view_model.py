@@ -229,7 +229,7 @@ def test_builder_reads_bounds_and_kinds_from_the_models() -> None:
     move = {s.name: s for s in mb.field_specs(schema.leg_models()["move"])}
     assert move["heading_deg"].optional and move["relative"].kind == "bool"
     mode = {s.name: s for s in mb.field_specs(schema.leg_models()["mode"])}
-    assert mode["mode"].choices == ("tree", "free") and mode["grip"].kind == "tristate"
+    assert mode["mode"].choices == ("tree", "free", "manual") and mode["grip"].kind == "tristate"
     waypoints = {s.name: s for s in mb.field_specs(schema.leg_models()["waypoints"])}
     assert waypoints["points_ne_m"].kind == "json"
 

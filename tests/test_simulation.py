@@ -258,7 +258,9 @@ BAD_COMMANDS = [
         "crane tip target must be finite",
         id="vessel-target",
     ),
-    pytest.param(lambda s: s.set_mode("x"), "mode must be one of tree, free, got 'x'", id="mode"),
+    pytest.param(
+        lambda s: s.set_mode("x"), "mode must be one of tree, free, manual, got 'x'", id="mode"
+    ),
     pytest.param(lambda s: s.set_grip("yes"), "grip must be true or false, got 'yes'", id="grip"),
     pytest.param(
         lambda s: s.set_allocation("magic"),

@@ -18,6 +18,7 @@ import numpy as np
 import viser
 
 from app.console import (
+    MODES,
     SATURATED,
     ConsoleError,
     Gains,
@@ -236,7 +237,7 @@ class ClientPanel:
 
     def _build_control(self, snap: Snapshot) -> None:
         gui = self.gui
-        self.mode = self._guard(gui.add_dropdown("Mode", ("tree", "free"), initial_value=snap.mode))
+        self.mode = self._guard(gui.add_dropdown("Mode", MODES, initial_value=snap.mode))
         self.mode.on_update(self._when_client(lambda: cmd.SetMode(self.mode.value)))
         self.allocation = self._guard(
             gui.add_dropdown(

@@ -229,10 +229,12 @@ class PacedLoop:
                     future.set_result(result)
             except Exception as err:
                 future.set_exception(err)
-                self._log_operation(who, action, f"refused: {err}", False, instructor)
+                if not getattr(command, "quiet", False):  # e.g. the pilot's stick, 20 a second
+                    self._log_operation(who, action, f"refused: {err}", False, instructor)
             else:
                 noted = self.session.notes_written > notes_before
-                self._log_operation(who, action, "done", noted, instructor)
+                if not getattr(command, "quiet", False):
+                    self._log_operation(who, action, "done", noted, instructor)
             finally:
                 self.session.actor = None
 

@@ -1,0 +1,206 @@
+"""The pilot page (GET /pilot) and its WebSocket (/api/pilot): flying the ROV by hand with
+the keyboard or a gamepad.
+
+viser's page cannot pass keys or gamepads to the server (its client uses keys only for its own
+pointer modifiers), so the console serves a small page of its own beside it, which embeds the
+3D view and reads the keyboard and the browser's Gamepad API.
+
+Protocol (JSON text messages). The page opens the socket and first sends
+``{"type": "hello", "token": ..., "name": ...}``; a wrong token, a bad name or a second pilot
+gets ``{"type": "error", "message": ...}`` and the socket closes. Then:
+
+- ``{"type": "demand", "surge": s, "sway": s, "heave": s, "yaw": s}`` (each in [-1, 1]), sent
+  every 50 ms and on every key change;
+- ``{"type": "holds", "heading": bool, "depth": bool}``;
+- ``{"type": "mode", "pilot": bool}`` (take over / hand back to the autopilot).
+
+The console answers each with ``{"type": "status", "status": {...}}`` (or an error message)
+and sends the status every 0.1 s. When nothing arrives for ``DEMAND_TIMEOUT_S`` or the socket
+closes, the demand goes to zero.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from fastapi import APIRouter, Request, WebSocket, WebSocketDisconnect
+from fastapi.responses import HTMLResponse
+
+from app.api.guards import origin_allowed
+from app.console import Console, ConsoleError
+from app.console.pilot import (
+    DEMAND_TIMEOUT_S,
+    PilotConnected,
+    PilotDemand,
+    PilotDisconnected,
+    PilotHolds,
+    PilotTakeOver,
+    pilot_name,
+)
+
+router = APIRouter(tags=["pilot"])
+PAGE = (Path(__file__).parent / "pilot_page.html").read_text(encoding="utf-8")
+HELLO_TIMEOUT_S = 30.0
+"""The page must sign in within this long after opening the socket."""
+STATUS_PERIOD_S = 0.1
+COMMAND_TIMEOUT_S = 5.0
+MAX_MESSAGE_CHARS = 1000
+
+
+@router.get("/pilot", response_class=HTMLResponse)
+def pilot_page(request: Request) -> HTMLResponse:
+    """The pilot's page: the 3D view beside the pilot's readout; keys and gamepad fly."""
+    view = request.app.state.view
+    port = view.port if view is not None else 0  # 0: the page says the 3D view is off
+    return HTMLResponse(PAGE.replace("__VIEW_PORT__", str(port)))
+
+
+class PilotRefused(Exception):
+    """The page is told why and the socket closes."""
+
+
+async def _send(websocket: WebSocket, message: dict[str, Any]) -> None:
+    await asyncio.wait_for(websocket.send_json(message), COMMAND_TIMEOUT_S)
+
+
+async def _command(console: Console, command: object, who: str) -> Any:
+    future = console.loop.submit(command, who)  # type: ignore[arg-type]
+    return await asyncio.wait_for(asyncio.wrap_future(future), COMMAND_TIMEOUT_S)
+
+
+def _snapshot_status(console: Console, last: dict[str, Any]) -> dict[str, Any]:
+    """The latest published state, with the holds and demand the loop last confirmed."""
+    snap = console.loop.snapshot
+    rov = snap.rov_eta_n
+    return {
+        **last,
+        "mode": snap.mode,
+        "heading_deg": math.degrees(rov[5]) % 360.0,
+        "depth_m": rov[2],
+        "t_s": snap.t_s,
+    }
+
+
+async def _sign_in(websocket: WebSocket, console: Console) -> str:
+    """The pilot's name once the hello checks out, else PilotRefused with the reason."""
+    try:
+        hello = await asyncio.wait_for(websocket.receive_json(), HELLO_TIMEOUT_S)
+    except TimeoutError:
+        raise PilotRefused(f"sign in within {HELLO_TIMEOUT_S:g} s of connecting") from None
+    except ValueError:
+        raise PilotRefused("the first message must be JSON: {type: hello, token, name}") from None
+    if not isinstance(hello, dict) or hello.get("type") != "hello":
+        raise PilotRefused("the first message must be {type: hello, token, name}")
+    client = f"ws:{websocket.client.host if websocket.client else '?'}"
+    token = hello.get("token")
+    ok, wait = console.check_token(token if isinstance(token, str) else None, client)
+    if wait > 0.0:
+        raise PilotRefused(f"too many wrong tokens from this client: try again in {wait:.0f} s")
+    if not ok:
+        raise PilotRefused("wrong token: flying needs the console token (printed at start-up)")
+    try:
+        return pilot_name(hello.get("name"))
+    except ValueError as err:
+        raise PilotRefused(str(err)) from None
+
+
+def _parse(text: str) -> object:
+    """One message from the page as a command, or ValueError saying what is wrong."""
+    if len(text) > MAX_MESSAGE_CHARS:
+        raise ValueError(f"message longer than {MAX_MESSAGE_CHARS} characters")
+    try:
+        m = json.loads(text)
+    except ValueError:
+        raise ValueError("message is not JSON") from None
+    kind = m.get("type") if isinstance(m, dict) else None
+    if kind == "demand":
+        return PilotDemand(*(m.get(axis, 0.0) for axis in ("surge", "sway", "heave", "yaw")))
+    if kind == "holds":
+        return PilotHolds(m.get("heading"), m.get("depth"))
+    if kind == "mode":
+        return PilotTakeOver(m.get("pilot"))
+    raise ValueError("message type must be demand, holds or mode")
+
+
+@router.websocket("/api/pilot")
+async def pilot_socket(websocket: WebSocket) -> None:
+    """Fly by hand (see the module's protocol)."""
+    state = websocket.app.state
+    console: Console = state.console
+    if not origin_allowed(websocket.headers.get("origin"), state.allowed_hosts):
+        await websocket.close(code=1008, reason="origin not allowed")
+        return
+    await websocket.accept()
+    try:
+        name = await _sign_in(websocket, console)
+        flying = state.pilot_name
+        if flying is not None:
+            raise PilotRefused(f"{flying} is flying: one pilot at a time")
+    except PilotRefused as err:
+        with contextlib.suppress(Exception):
+            await _send(websocket, {"type": "error", "message": str(err)})
+            await websocket.close(code=1008, reason=str(err)[:120])
+        return
+    except WebSocketDisconnect:
+        return
+    state.pilot_name = name
+    who = f"pilot ({name})"
+    reason = "page closed"
+    try:
+        last = await _command(console, PilotConnected(), who)
+        await _send(websocket, {"type": "welcome", "name": name, "status": last})
+        reason = await _fly(websocket, console, who, last)
+    except (WebSocketDisconnect, RuntimeError, OSError, TimeoutError):
+        reason = "connection lost"
+    finally:
+        state.pilot_name = None
+        with contextlib.suppress(Exception):
+            console.loop.submit(PilotDisconnected(reason), who)
+        with contextlib.suppress(Exception):
+            await websocket.close()
+
+
+async def _fly(websocket: WebSocket, console: Console, who: str, last: dict[str, Any]) -> str:
+    """Apply the page's messages until it goes; returns why it went."""
+    status = dict(last)
+
+    async def report() -> None:
+        with contextlib.suppress(WebSocketDisconnect, RuntimeError, OSError, TimeoutError):
+            while True:
+                await asyncio.sleep(STATUS_PERIOD_S)
+                snap_status = _snapshot_status(console, status)
+                await _send(websocket, {"type": "status", "status": snap_status})
+
+    reporter = asyncio.create_task(report())
+    silent = False
+    try:
+        while not reporter.done():
+            try:
+                text = await asyncio.wait_for(websocket.receive_text(), DEMAND_TIMEOUT_S)
+            except TimeoutError:
+                if not silent:  # once per silence: zero the stick (logged)
+                    silent = True
+                    status.update(
+                        await _command(
+                            console, PilotDisconnected(f"no input for {DEMAND_TIMEOUT_S:g} s"), who
+                        )
+                    )
+                continue
+            silent = False
+            try:
+                command = _parse(text)
+                status.update(await _command(console, command, who))
+            except (ValueError, ConsoleError) as err:
+                await _send(websocket, {"type": "error", "message": str(err)})
+                continue
+            await _send(websocket, {"type": "status", "status": status})
+        return "status could not be sent"
+    except WebSocketDisconnect:
+        return "page closed"
+    finally:
+        reporter.cancel()

@@ -1,0 +1,155 @@
+"""The pilot page in a real headless Chromium with real key events: hold W and the ROV goes
+forward in its own frame; let go and it holds station; P hands over to the autopilot and back;
+a wrong token is refused with a message. (The console's own server and API client fixtures
+come from ``tests/browser.py``.)"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator
+
+import httpx
+import numpy as np
+import pytest
+
+from app.server import RunningServer
+from tests.browser import CHROMIUM, CHROMIUM_ARGS, wait_for
+
+NAME = "Test Pilot"
+
+
+@pytest.fixture(scope="module")
+def pilot(server: RunningServer) -> Iterator:
+    if not CHROMIUM.exists():
+        pytest.skip("Debian's chromium is missing")
+    sync_api = pytest.importorskip("playwright.sync_api")
+    with sync_api.sync_playwright() as pw:
+        browser = pw.chromium.launch(
+            executable_path=str(CHROMIUM), args=CHROMIUM_ARGS, headless=True
+        )
+        try:
+            pg = browser.new_page(viewport={"width": 1200, "height": 800})
+            pg.goto(f"{server.base_url}/pilot")
+            yield pg
+        finally:
+            browser.close()
+
+
+def sign_in(pg, token: str) -> None:
+    pg.fill("#name", NAME)
+    pg.fill("#token", token)
+    pg.click("#fly")
+
+
+def text(pg, selector: str) -> str:
+    return str(pg.locator(selector).text_content() or "")
+
+
+def rov(api: httpx.Client) -> tuple[np.ndarray, float, str, float]:
+    """The ROV's (north, east, down), heading [rad], the mode and the simulation time [s],
+    from /api/state."""
+    s = api.get("/api/state").json()
+    e = s["rov_eta_n"]
+    position = np.array([e["north_m"], e["east_m"], e["down_m"]])
+    return position, math.radians(e["heading_deg"]), s["mode"], s["t_s"]
+
+
+def test_wrong_token_is_refused_with_a_message(pilot) -> None:
+    sign_in(pilot, "certainly-not-the-console-token")
+    wait_for(lambda: "wrong token" in text(pilot, "#message"), 10.0, "the refusal")
+    assert text(pilot, "#message") == (
+        "wrong token: flying needs the console token (printed at start-up)"
+    )
+    assert pilot.locator("#panel").is_hidden()
+
+
+def test_hold_w_flies_forward_and_letting_go_holds_station(
+    pilot, server: RunningServer, api: httpx.Client
+) -> None:
+    sign_in(pilot, server.token)
+    wait_for(lambda: text(pilot, "#message") == f"flying as {NAME}", 15.0, "signed in")
+    assert api.put("/api/control/grip", json={"grip": False}).status_code == 200
+    pilot.keyboard.press("p")
+    wait_for(lambda: text(pilot, "#mode") == "PILOT (by hand)", 10.0, "pilot mode on the page")
+    assert rov(api)[2] == "manual"
+    time.sleep(1.0)
+    start, psi, _, t0 = rov(api)
+    forward = np.array([math.cos(psi), math.sin(psi)])
+    side = np.array([-math.sin(psi), math.cos(psi)])
+    track = []
+    pilot.keyboard.down("w")
+    deadline = time.monotonic() + 30.0
+    while time.monotonic() < deadline:  # 2 s of simulated time (the loop may lag under load)
+        p, _, _, t = rov(api)
+        track.append((t - t0, float((p - start)[0:2] @ forward)))
+        if t - t0 > 2.0:
+            break
+        time.sleep(0.05)
+    assert text(pilot, "#v-surge") == "0.50"  # the key is half stick
+    pilot.keyboard.up("w")
+    release = rov(api)[0]
+    t, along = np.array(track).T
+    t, first = np.unique(t, return_index=True)  # one sample per published state
+    along = along[first]
+    moving = t > t[np.argmax(along > 1e-3)]  # from the first visible move on
+    early = np.polyfit(t[moving][:4], along[moving][:4], 1)[0]
+    late = np.polyfit(t[t > 1.5], along[t > 1.5], 1)[0]
+    assert along[-1] > 0.5  # metres forward in 2 s (half stick, free ROV)
+    assert late > early + 0.2 and late > 0.3  # the surge speed grows [m/s]
+    assert abs(float((release - start)[0:2] @ side)) < 0.2 * along[-1]  # not sideways
+    wait_for(lambda: text(pilot, "#v-surge") == "0.00", 5.0, "the stick back at zero")
+    t_release = rov(api)[3]
+    wait_for(lambda: rov(api)[3] > t_release + 10.0, 60.0, "10 s of simulated time")
+    held = rov(api)[0]
+    # the station keeping brings it back to where W was let go (0.09 m after 10 s simulated)
+    assert np.linalg.norm((held - release)[0:2]) < 0.5
+
+
+def test_p_hands_over_to_the_autopilot_and_back_and_h_toggles_auto_heading(
+    pilot, server: RunningServer, api: httpx.Client
+) -> None:
+    if text(pilot, "#mode") != "PILOT (by hand)":
+        sign_in(pilot, server.token)
+        pilot.keyboard.press("p")
+    wait_for(lambda: text(pilot, "#mode") == "PILOT (by hand)", 10.0, "pilot mode")
+    pilot.keyboard.press("p")
+    wait_for(lambda: text(pilot, "#mode") == "AUTOPILOT (free)", 10.0, "autopilot")
+    assert rov(api)[2] == "free"
+    pilot.keyboard.press("p")
+    wait_for(lambda: text(pilot, "#mode") == "PILOT (by hand)", 10.0, "pilot again")
+    assert rov(api)[2] == "manual"
+    pilot.keyboard.press("h")
+    wait_for(lambda: text(pilot, "#hold-heading") == "off", 10.0, "auto-heading off")
+    assert server.console.loop.session.sim.pilot_holds == (False, True)
+    pilot.keyboard.press("h")
+    wait_for(lambda: text(pilot, "#hold-heading") == "on", 10.0, "auto-heading on")
+    who = {o.who for o in server.console.loop.snapshot.operations}
+    assert f"pilot ({NAME})" in who
+
+
+FAKE_GAMEPAD = """
+Object.defineProperty(navigator, "getGamepads", {value: () => [null, {
+  id: "test pad", connected: true, axes: window.__axes || [0, 0, 0, 0], buttons: [],
+}]});
+"""
+
+
+def test_gamepad_axes_with_a_dead_band_reach_the_demand(pilot) -> None:
+    """A gamepad (the Gamepad API, faked in the page: headless Chromium has none): the left
+    stick's Y is surge (up is forward), X is sway; inside 0.15 the stick is zero, beyond it
+    the rest of the travel maps onto 0..1."""
+    context = pilot.context.browser.new_context()
+    try:
+        context.add_init_script(FAKE_GAMEPAD)
+        pg = context.new_page()
+        pg.goto(pilot.url)
+        pg.evaluate("window.__axes = [0.1, -0.6, 0.0, 1.0]")
+        assert text(pg, "#v-surge") == "0.00"  # nothing is sent (nor drawn) before sign-in
+        pg.evaluate("drawBars(demand())")  # what the page sends every 50 ms once signed in
+        assert text(pg, "#pad") == "Gamepad: test pad"
+        assert text(pg, "#v-surge") == f"{(0.6 - 0.15) / 0.85:.2f}"  # 0.53
+        assert text(pg, "#v-sway") == "0.00"  # 0.1 is inside the dead band
+        assert text(pg, "#v-heave") == "1.00"
+    finally:
+        context.close()
