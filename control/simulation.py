@@ -218,6 +218,8 @@ class Simulation:
         self.current_params = current or steady_current(0.0, 0.0)
         self.current_state = envmod.initial_current(self.current_params)
         self.wave_field = envmod.make_wave_field(waves, self.rng) if waves is not None else None
+        self.wave_load = waves.load if waves is not None else envmod.DEFAULT_WAVE_LOAD
+        """How the waves load the bodies (sim.environment.WAVE_LOADS)."""
         self.crane_tip_n = finite_vector("crane_tip_n", crane_tip_n, 3)
         self.wire_length_m = site.wire_length_for_depth(
             ps, tree_depth_m, self.crane_tip_n[2], self.current_state.speed_mps
@@ -840,11 +842,15 @@ class Simulation:
         accel_n = np.zeros_like(water_n)
         if self.wave_field is not None:
             t = self.t_s + self.dt_s * np.arange(n)
+            # the tree's centre, kept inside the water column (a tree in the seabed's contact
+            # spring sits a few centimetres into it)
+            depth = min(max(float(self.x[2]), 0.0), self.wave_field.water_depth_m)
             v_w, a_w = envmod.wave_kinematics_n(
-                self.wave_field, t, float(self.x[2]), float(self.x[0]), float(self.x[1])
+                self.wave_field, t, depth, float(self.x[0]), float(self.x[1])
             )
             water_n = water_n + v_w
-            accel_n = accel_n + a_w
+            if self.wave_load != "drag":
+                accel_n = accel_n + a_w
         base = site.wire_environment(
             ps, self.wire_length_m, self.crane_tip_n, float(np.mean(speeds)), float(np.mean(dirs))
         )

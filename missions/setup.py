@@ -44,10 +44,15 @@ def build_simulation(
     )
     waves = None
     if s.waves is not None:
+        water_depth = s.waves.water_depth_m
+        if water_depth is None and s.docking_frame is not None:
+            water_depth = s.docking_frame.landing_depth_m
         waves = envmod.WaveParams(
             significant_height_m=s.waves.significant_height_m,
             peak_period_s=s.waves.peak_period_s,
             direction_rad=math.radians(s.waves.direction_deg),
+            load=s.waves.load,
+            water_depth_m=math.inf if water_depth is None else water_depth,
         )
     settings = ControlSettings(
         feedback=feedback or s.feedback,

@@ -53,14 +53,24 @@ def _rms_about(values: np.ndarray, centre: np.ndarray | float) -> float:
     return float(np.sqrt(np.mean((values - centre) ** 2)))
 
 
-def wave_case(period_s: float, hs_m: float, duration_s: float, seed: int) -> tuple[Row, Row]:
+def wave_case(
+    period_s: float,
+    hs_m: float,
+    duration_s: float,
+    seed: int,
+    load: str = envmod.DEFAULT_WAVE_LOAD,
+    ps: params.ParameterSet | None = None,
+) -> tuple[Row, Row]:
     """One sea state at 100 m, no current: uncontrolled (ROV attached, thrusters off; RMS about
-    the mean, eq. 4.1) and controlled (station keeping; RMS about the set point, eq. 4.2)."""
-    ps = params.load("full-scale")
+    the mean, eq. 4.1) and controlled (station keeping; RMS about the set point, eq. 4.2).
+    ``load``: the wave load (sim.environment.WAVE_LOADS); ``ps``: the parameter set (default
+    full-scale)."""
+    ps = ps or params.load("full-scale")
     waves = envmod.WaveParams(
         significant_height_m=hs_m,
         peak_period_s=period_s,
         direction_rad=math.radians(WAVE_DIRECTION_DEG),
+        load=load,
     )
     warmup = 120.0
     sim = Simulation(ps, tree_depth_m=100.0, waves=waves, seed=seed, control=False)
