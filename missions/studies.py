@@ -53,6 +53,74 @@ def _rms_about(values: np.ndarray, centre: np.ndarray | float) -> float:
     return float(np.sqrt(np.mean((values - centre) ** 2)))
 
 
+WARMUP_S = 120.0
+"""Simulated time before the statistics start [s] (the swing from rest dies out in about
+four periods)."""
+
+
+def _sea(period_s: float, hs_m: float, load: str) -> envmod.WaveParams:
+    return envmod.WaveParams(
+        significant_height_m=hs_m,
+        peak_period_s=period_s,
+        direction_rad=math.radians(WAVE_DIRECTION_DEG),
+        load=load,
+    )
+
+
+def uncontrolled_case(
+    period_s: float,
+    hs_m: float,
+    duration_s: float,
+    seed: int,
+    load: str = envmod.DEFAULT_WAVE_LOAD,
+    ps: params.ParameterSet | None = None,
+) -> tuple[float, float, float]:
+    """One sea state at 100 m, no current, ROV attached with its thrusters off: RMS of north
+    and east about their means (eq. 4.1) [m] and of the heading [deg].
+    ``load``: the wave load (sim.environment.WAVE_LOADS); ``ps``: the parameter set (default
+    full-scale)."""
+    ps = ps or params.load("full-scale")
+    sim = Simulation(
+        ps, tree_depth_m=100.0, waves=_sea(period_s, hs_m, load), seed=seed, control=False
+    )
+    sim.run_for(WARMUP_S)
+    traj = sim.run_for(duration_s)["tree_eta_n"]
+    psi = np.unwrap(traj[:, 5])
+    return (
+        _rms_about(traj[:, 0], traj[:, 0].mean()),
+        _rms_about(traj[:, 1], traj[:, 1].mean()),
+        math.degrees(_rms_about(psi, psi.mean())),
+    )
+
+
+def controlled_case(
+    period_s: float,
+    hs_m: float,
+    duration_s: float,
+    seed: int,
+    load: str = envmod.DEFAULT_WAVE_LOAD,
+    ps: params.ParameterSet | None = None,
+) -> tuple[float, float, float]:
+    """The same sea with station keeping: RMS about the set point (eq. 4.2) [m, m, deg]."""
+    ps = ps or params.load("full-scale")
+    cl = Simulation(
+        ps,
+        tree_depth_m=100.0,
+        waves=_sea(period_s, hs_m, load),
+        seed=seed,
+        settings=ControlSettings(feedforward=True),
+    )
+    set_point = cl.eta_estimate
+    cl.run_for(WARMUP_S)
+    log = cl.run_for(duration_s)["tree_eta_n"]
+    err_psi = np.array([ssa(v) for v in log[:, 5] - set_point[2]])
+    return (
+        _rms_about(log[:, 0], set_point[0]),
+        _rms_about(log[:, 1], set_point[1]),
+        math.degrees(_rms_about(err_psi, 0.0)),
+    )
+
+
 def wave_case(
     period_s: float,
     hs_m: float,
@@ -61,39 +129,9 @@ def wave_case(
     load: str = envmod.DEFAULT_WAVE_LOAD,
     ps: params.ParameterSet | None = None,
 ) -> tuple[Row, Row]:
-    """One sea state at 100 m, no current: uncontrolled (ROV attached, thrusters off; RMS about
-    the mean, eq. 4.1) and controlled (station keeping; RMS about the set point, eq. 4.2).
-    ``load``: the wave load (sim.environment.WAVE_LOADS); ``ps``: the parameter set (default
-    full-scale)."""
-    ps = ps or params.load("full-scale")
-    waves = envmod.WaveParams(
-        significant_height_m=hs_m,
-        peak_period_s=period_s,
-        direction_rad=math.radians(WAVE_DIRECTION_DEG),
-        load=load,
-    )
-    warmup = 120.0
-    sim = Simulation(ps, tree_depth_m=100.0, waves=waves, seed=seed, control=False)
-    sim.run_for(warmup)
-    traj = sim.run_for(duration_s)["tree_eta_n"]
-    psi = np.unwrap(traj[:, 5])
-    unc = (
-        _rms_about(traj[:, 0], traj[:, 0].mean()),
-        _rms_about(traj[:, 1], traj[:, 1].mean()),
-        math.degrees(_rms_about(psi, psi.mean())),
-    )
-    cl = Simulation(
-        ps, tree_depth_m=100.0, waves=waves, seed=seed, settings=ControlSettings(feedforward=True)
-    )
-    set_point = cl.eta_estimate
-    cl.run_for(warmup)
-    log = cl.run_for(duration_s)["tree_eta_n"]
-    err_psi = np.array([ssa(v) for v in log[:, 5] - set_point[2]])
-    ctl = (
-        _rms_about(log[:, 0], set_point[0]),
-        _rms_about(log[:, 1], set_point[1]),
-        math.degrees(_rms_about(err_psi, 0.0)),
-    )
+    """One sea state of table 4.1: uncontrolled and controlled rows beside the thesis's."""
+    unc = uncontrolled_case(period_s, hs_m, duration_s, seed, load, ps)
+    ctl = controlled_case(period_s, hs_m, duration_s, seed, load, ps)
     thesis_unc, thesis_ctl = TABLE_4_1[(period_s, hs_m)]
     label = f"T = {period_s:g} s, Hs = {hs_m:g} m"
     return Row(f"{label}  uncontrolled", unc, thesis_unc), Row(
