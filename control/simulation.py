@@ -48,6 +48,7 @@ from control.faults import Fault
 from control.startup import StartupReport, check_mount_vector
 from sim import environment as envmod
 from sim import plant, sensors, site
+from sim import vessel as vesselmod
 from sim import wire as wm
 from sim.docking import DockingFrame
 from sim.gnc import Rzyx, ssa
@@ -145,6 +146,7 @@ class Simulation:
         chunk_steps: int = 100,
         plant_ps: ParameterSet | None = None,
         start_gripping: bool = True,
+        vessel: vesselmod.VesselMotion | None = None,
     ) -> None:
         if not (DT_RANGE_S[0] <= dt_s <= DT_RANGE_S[1]):
             raise ValueError(
@@ -160,6 +162,8 @@ class Simulation:
         self.chunk_steps = chunk_steps
         self.has_rov = has_rov
         self.control_on = control
+        self.vessel_motion = vessel
+        """The vessel's wave-frequency motion at the crane tip (None: the tip stands still)."""
         self._init_plant(
             tree_depth_m,
             crane_tip_n,
@@ -613,7 +617,22 @@ class Simulation:
         noise = sensors.draw_noise(self.sensor_cfg, self.rng, self.step_index, n)
         if self.faults:
             self._faults_in_chunk(env, noise)
+        self._vessel_in_chunk(env, n)
         return env, noise
+
+    def _vessel_in_chunk(self, env: FloatArray, n: int) -> None:
+        """Add the vessel's wave-frequency motion to the crane tip (sim.vessel); the crane
+        tip's mean position (``crane_tip_n``, where the vessel keeps station) is unchanged."""
+        if self.vessel_motion is None or self.wave_field is None:
+            return
+        t = self.t_s + self.dt_s * np.arange(n)
+        env[:, plant.E_CT : plant.E_CT + 3] += vesselmod.crane_tip_motion_n(
+            self.wave_field,
+            t,
+            self.vessel_motion,
+            float(self.crane_tip_n[0]),
+            float(self.crane_tip_n[1]),
+        )
 
     # ------------------------------------------------------------------ injected faults
     def inject_fault(self, fault: Fault) -> None:

@@ -100,6 +100,28 @@ class WaveSetup(_Model):
     )
 
 
+class VesselSetup(_Model):
+    """The installation vessel moving with the sea (sim.vessel: a typical 130 m construction
+    vessel's RAOs; the crane tip moves with its heave, surge, sway, roll and pitch). Needs
+    ``waves``; without them the crane tip stands still."""
+
+    heading_deg: float | None = Field(
+        default=None,
+        ge=-360.0,
+        le=360.0,
+        description="vessel heading [deg]; default: bow into the waves (head sea)",
+    )
+    heave_compensation: bool = Field(
+        default=False, description="the crane's active heave compensation is on"
+    )
+    heave_compensation_efficiency: float = Field(
+        default=0.8,
+        ge=0.0,
+        le=1.0,
+        description="fraction of the crane tip's vertical motion the compensation removes [-]",
+    )
+
+
 class PlantVariation(_Model):
     """Differences between the real tree and what the controller is configured with
     (thesis section 4.2.3)."""
@@ -136,6 +158,7 @@ class Setup(_Model):
     heading_deg: float = Field(default=0.0, ge=-360.0, le=360.0, description="initial heading")
     current: CurrentSetup = CurrentSetup(speed_mps=0.0, direction_deg=0.0)
     waves: WaveSetup | None = None
+    vessel: VesselSetup | None = None
     feedback: Feedback = "perfect"
     allocation: Allocation = "priority"
     reference: Reference = "third"

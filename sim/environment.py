@@ -519,7 +519,7 @@ def make_wave_field(params: WaveParams, rng: np.random.Generator) -> WaveField:
     )
 
 
-def _harmonic_sums(
+def harmonic_sums(
     t_s: NDArray[np.float64],
     omega_rad_s: NDArray[np.float64],
     offset_rad: NDArray[np.float64],
@@ -549,7 +549,7 @@ def _as_times(t_s: ArrayLike) -> NDArray[np.float64]:
     return t
 
 
-def _phase_offset(field: WaveField, north_m: float, east_m: float) -> NDArray[np.float64]:
+def phase_offset(field: WaveField, north_m: float, east_m: float) -> NDArray[np.float64]:
     """Phase of each component at t = 0 at (north, east): epsilon_k - k_k x_along [rad], (m,)."""
     _require_finite("north_m", north_m)
     _require_finite("east_m", east_m)
@@ -567,8 +567,8 @@ def surface_elevation_m(
     Same phase convention as eq. 2.53: the horizontal velocity is in phase with zeta.
     """
     t = _as_times(t_s)
-    offset = _phase_offset(field, north_m, east_m)
-    sin_sum, _ = _harmonic_sums(t, field.omega_rad_s, offset, field.amplitude_m[:, None])
+    offset = phase_offset(field, north_m, east_m)
+    sin_sum, _ = harmonic_sums(t, field.omega_rad_s, offset, field.amplitude_m[:, None])
     return sin_sum[:, 0]
 
 
@@ -599,14 +599,14 @@ def wave_kinematics_n(
             f"depth_m must lie in [0, water_depth_m] = [0, {field.water_depth_m!r}], "
             f"got {depth_m!r}"
         )
-    offset = _phase_offset(field, north_m, east_m)
+    offset = phase_offset(field, north_m, east_m)
     along, vertical = depth_factors(field.wavenumber_rad_m, depth_m, field.water_depth_m)
     speed_h = field.omega_rad_s * field.amplitude_m * along
     speed_v = field.omega_rad_s * field.amplitude_m * vertical
     weights = np.stack(
         [speed_h, field.omega_rad_s * speed_h, speed_v, field.omega_rad_s * speed_v], axis=1
     )
-    sin_sum, cos_sum = _harmonic_sums(t, field.omega_rad_s, offset, weights)
+    sin_sum, cos_sum = harmonic_sums(t, field.omega_rad_s, offset, weights)
     cos_b, sin_b = math.cos(field.direction_rad), math.sin(field.direction_rad)
     u, du = sin_sum[:, 0], cos_sum[:, 1]
     velocity_n = np.stack([u * cos_b, u * sin_b, -cos_sum[:, 2]], axis=1)
