@@ -4,7 +4,7 @@ and weight (table 4.2). Each returns rows of our numbers beside the thesis's."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -14,6 +14,7 @@ from missions import runner, schema
 from sim import environment as envmod
 from sim import params
 from sim.gnc import ssa
+from sim.vessel import VesselMotion
 
 # Thesis table 4.1: (T, Hs) -> (uncontrolled N, E, psi_deg), (controlled N, E, psi_deg)
 TABLE_4_1 = {
@@ -47,6 +48,8 @@ class Row:
     label: str
     ours: tuple[float, float, float]
     thesis: tuple[float, float, float]
+    variant: str = ""
+    """How the case was modelled or scored (a ``SeaVariant``'s name, a table 4.2 window)."""
 
 
 def _rms_about(values: np.ndarray, centre: np.ndarray | float) -> float:
@@ -94,6 +97,47 @@ def _sea(period_s: float, hs_m: float, load: str) -> envmod.WaveParams:
     )
 
 
+@dataclass(frozen=True)
+class SeaVariant:
+    """One way of modelling table 4.1's sea: the wave load, the vessel and the tree's W0."""
+
+    name: str
+    load: str = envmod.DEFAULT_WAVE_LOAD
+    """The wave load (sim.environment.WAVE_LOADS)."""
+    vessel: bool = False
+    """The crane tip moves with the vessel (sim.vessel, bow into the waves)."""
+    weight_newton: float | None = None
+    """The tree's submerged weight W0 [N]; None: the parameter set's (solid steel)."""
+
+    def parameter_set(self) -> params.ParameterSet:
+        ps = params.load("full-scale")
+        if self.weight_newton is None:
+            return ps
+        return params.with_submerged_weight(ps, self.weight_newton)
+
+    def vessel_motion(self) -> VesselMotion | None:
+        if not self.vessel:
+            return None
+        return VesselMotion(heading_rad=math.radians(WAVE_DIRECTION_DEG + 180.0))
+
+
+VOLUME_WEIGHT_NEWTON = params.submerged_weight_from_volume(36000.0, params.ADDED_MASS_VOLUME_M3)
+"""W0 of the thesis's added-mass volume reading (195.3 kN)."""
+
+TABLE_4_1_VARIANTS = (
+    SeaVariant("drag", load="drag"),
+    SeaVariant("drag, W0 195 kN", load="drag", weight_newton=VOLUME_WEIGHT_NEWTON),
+    SeaVariant("drag + vessel", load="drag", vessel=True),
+    SeaVariant("morison", load="morison"),
+    SeaVariant("morison + vessel", load="morison", vessel=True),
+)
+"""Table 4.1's sea modelled side by side: each wave load without and with the vessel's
+motion, and the drag load on the lighter reading of the tree (the one that reproduces the
+thesis's uncontrolled figures in all four sea states)."""
+
+DEFAULT_VARIANT = SeaVariant("morison")
+
+
 def uncontrolled_case(
     period_s: float,
     hs_m: float,
@@ -101,15 +145,21 @@ def uncontrolled_case(
     seed: int,
     load: str = envmod.DEFAULT_WAVE_LOAD,
     ps: params.ParameterSet | None = None,
+    vessel: VesselMotion | None = None,
 ) -> tuple[float, float, float]:
     """One sea state at 100 m, no current, ROV attached with its thrusters off: RMS of north
     and east about their means (eq. 4.1) [m] and of the heading about its running mean over
     ``HEADING_WINDOW_S`` [deg] (``rms_about_running_mean``: the heading wanders).
     ``load``: the wave load (sim.environment.WAVE_LOADS); ``ps``: the parameter set (default
-    full-scale)."""
+    full-scale); ``vessel``: the vessel's motion at the crane tip (default: none)."""
     ps = ps or params.load("full-scale")
     sim = Simulation(
-        ps, tree_depth_m=100.0, waves=_sea(period_s, hs_m, load), seed=seed, control=False
+        ps,
+        tree_depth_m=100.0,
+        waves=_sea(period_s, hs_m, load),
+        seed=seed,
+        control=False,
+        vessel=vessel,
     )
     sim.run_for(WARMUP_S)
     traj = sim.run_for(duration_s)["tree_eta_n"]
@@ -128,6 +178,7 @@ def controlled_case(
     seed: int,
     load: str = envmod.DEFAULT_WAVE_LOAD,
     ps: params.ParameterSet | None = None,
+    vessel: VesselMotion | None = None,
 ) -> tuple[float, float, float]:
     """The same sea with station keeping: RMS about the set point (eq. 4.2) [m, m, deg]."""
     ps = ps or params.load("full-scale")
@@ -137,6 +188,7 @@ def controlled_case(
         waves=_sea(period_s, hs_m, load),
         seed=seed,
         settings=ControlSettings(feedforward=True),
+        vessel=vessel,
     )
     set_point = cl.eta_estimate
     cl.run_for(WARMUP_S)
@@ -156,10 +208,11 @@ def wave_case(
     seed: int,
     load: str = envmod.DEFAULT_WAVE_LOAD,
     ps: params.ParameterSet | None = None,
+    vessel: VesselMotion | None = None,
 ) -> tuple[Row, Row]:
     """One sea state of table 4.1: uncontrolled and controlled rows beside the thesis's."""
-    unc = uncontrolled_case(period_s, hs_m, duration_s, seed, load, ps)
-    ctl = controlled_case(period_s, hs_m, duration_s, seed, load, ps)
+    unc = uncontrolled_case(period_s, hs_m, duration_s, seed, load, ps, vessel)
+    ctl = controlled_case(period_s, hs_m, duration_s, seed, load, ps, vessel)
     thesis_unc, thesis_ctl = TABLE_4_1[(period_s, hs_m)]
     label = f"T = {period_s:g} s, Hs = {hs_m:g} m"
     return Row(f"{label}  uncontrolled", unc, thesis_unc), Row(
@@ -167,11 +220,29 @@ def wave_case(
     )
 
 
-def table_4_1(duration_s: float = 600.0, seed: int = 0) -> list[Row]:
+def table_4_1(
+    duration_s: float = 600.0,
+    seed: int = 0,
+    variants: tuple[SeaVariant, ...] = (DEFAULT_VARIANT,),
+) -> list[Row]:
+    """Table 4.1 for each variant of the sea's model; a row's ``variant`` names it."""
     rows: list[Row] = []
-    for period, hs in TABLE_4_1:
-        rows.extend(wave_case(period, hs, duration_s, seed))
+    for variant in variants:
+        ps = variant.parameter_set()
+        vessel = variant.vessel_motion()
+        for period, hs in TABLE_4_1:
+            for row in wave_case(period, hs, duration_s, seed, variant.load, ps, vessel):
+                rows.append(replace(row, variant=variant.name))
     return rows
+
+
+def variant_named(name: str) -> SeaVariant:
+    """The variant of ``TABLE_4_1_VARIANTS`` called ``name``; ValueError lists the names."""
+    for variant in TABLE_4_1_VARIANTS:
+        if variant.name == name:
+            return variant
+    names = ", ".join(repr(v.name) for v in TABLE_4_1_VARIANTS)
+    raise ValueError(f"variant must be one of {names}, got {name!r}")
 
 
 TABLE_4_2_WINDOWS = {
@@ -199,9 +270,10 @@ def table_4_2(seed: int | None = None) -> list[Row]:
             r = runner.run_mission(mission, seed=seed, feedforward=feedforward)
             rows.append(
                 Row(
-                    f"{param:6s} {change:>5s}  ({name}; {window})",
+                    f"{param:6s} {change:>5s}  ({name})",
                     (r.rms_north_m, r.rms_east_m, r.rms_heading_deg),
                     (float(thesis[0]), float(thesis[1]), float(thesis[2])),
+                    variant=window,
                 )
             )
     return rows

@@ -63,3 +63,41 @@ def test_table_4_2_windows_are_labelled_and_differ_as_the_thesis_explains():
         "rotation + square, --law thesis",
         "square, feedforward",
     }
+
+
+def _study_cli(*args: str):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    return subprocess.run(
+        [sys.executable, "-m", "app.cli", "study", *args],
+        capture_output=True,
+        text=True,
+        cwd=root,
+        timeout=300,
+    )
+
+
+def test_study_cli_rejects_an_unknown_variant_naming_the_choices():
+    proc = _study_cli("table-4.1", "--variant", "inertia")
+    assert proc.returncode == 2
+    assert "--variant" in proc.stderr and "'morison + vessel'" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_study_cli_puts_the_variants_side_by_side():
+    """Two variants, the shortest run allowed: one JSON row per case and variant, and the
+    vessel's motion makes the uncontrolled long-period north motion larger."""
+    import json
+
+    variants = ("--variant", "drag", "--variant", "drag + vessel")
+    proc = _study_cli("table-4.1", "--duration", "130", *variants, "--json")
+    assert proc.returncode == 0, proc.stderr
+    rows = json.loads(proc.stdout)
+    assert len(rows) == 16
+    assert {r["variant"] for r in rows} == {"drag", "drag + vessel"}
+    key = "T = 30 s, Hs = 8 m  uncontrolled"
+    north = {r["variant"]: r["ours"][0] for r in rows if r["case"] == key}
+    assert north["drag + vessel"] > north["drag"]
