@@ -21,7 +21,7 @@ an unbiased estimate of the spectrum's variance). In deep water (the thesis's eq
 the wave number is omega^2 / g and the velocity decays as exp(-k z), z the depth (positive
 down). With a finite water depth h the wave number solves omega^2 = g k tanh(k h) and the
 velocity decays as cosh(k (h - z)) / sinh(k h) (horizontal) and sinh(k (h - z)) / sinh(k h)
-(vertical) (linear Airy theory; e.g. Faltinsen 1990, table 2.1; DNV-RP-C205, section 3.2).
+(vertical) (linear Airy theory, as in any text on ocean waves).
 
 How the waves load a body (``WAVE_LOADS``) is chosen with the sea: ``drag`` (only the relative
 velocity enters, through the damping: what table 4.1 of the thesis behaves like) or

@@ -8,7 +8,7 @@ mass-spring-damper (heave, roll, pitch) or a free body following the water (surg
 excited by the wave averaged over the hull:
 
 - the pressure under the keel is that of the wave at the draft T: a factor exp(-k T)
-  (Smith's correction; Faltinsen 1990, section 3.3; Newman 1977, section 6.19);
+  (the Smith correction of strip theory);
 - a force is the pressure averaged along the length L and across the beam B:
   sinc(k L cos(beta) / 2) sinc(k B sin(beta) / 2), and a moment its first moment,
   3 (sin u - u cos u) / u^3 (pitch along L, roll across B). Both tend to 1 in long waves,
@@ -17,8 +17,9 @@ excited by the wave averaged over the hull:
 - heave, roll and pitch have their own natural period and damping ratio:
   H = excitation / (1 - r^2 + 2 i zeta r), r = omega / omega_n.
 
-This is the textbook shape of a monohull's RAOs (Faltinsen 1990, ch. 3 and 5; Journee and
-Massie, Offshore Hydromechanics, ch. 6 and 8): long-wave limits exact, resonance where the
+This is the textbook shape of a monohull's RAOs (as in Faltinsen, Sea Loads on Ships and
+Offshore Structures, 1990; Journee and Massie, Offshore Hydromechanics): long-wave limits
+exact, resonance where the
 natural periods are, cancellation in waves shorter than the hull. It is not a particular
 vessel's RAO table; a user with one can give the periods and damping that match it.
 
@@ -60,8 +61,8 @@ class VesselParams:
     """Heave natural period [s]: 2 pi sqrt((m + A33) / (rho g A_wp)) with m = rho L B T Cb
     (Cb = 0.7), A33 about m, and A_wp = 0.85 L B: 7.0 s."""
     heave_damping_ratio: float = 0.2
-    """Heave damping ratio [-]: radiation damping is large in heave for a ship (0.15-0.3;
-    Faltinsen 1990, fig. 5.10): the heave RAO peaks at about 1.3-1.5."""
+    """Heave damping ratio [-]: radiation damping is large in heave for a ship (0.15-0.3 is
+    the usual range): the beam-sea heave RAO peaks at 1.3."""
     pitch_period_s: float = 6.5
     """Pitch natural period [s]: close to heave for a ship (k55 about 0.25 L, GM_L about L)."""
     pitch_damping_ratio: float = 0.2
@@ -116,8 +117,7 @@ class VesselMotion:
     motion."""
     heave_compensation_efficiency: float = 0.8
     """Fraction of the tip's vertical motion the compensation removes [-], in [0, 1]
-    (active systems are specified at 80-95 %; DNV-ST-N001 asks for the figure to be
-    documented for the lift)."""
+    (active systems are commonly specified at 80-95 %; 0.8 is the cautious end)."""
 
     def __post_init__(self) -> None:
         if not math.isfinite(self.heading_rad):
