@@ -49,6 +49,7 @@ from control.faults import THRUSTER_KINDS, Fault
 from control.startup import StartupReport, check_mount_vector
 from sim import environment as envmod
 from sim import plant, sensors, site
+from sim import vessel as vesselmod
 from sim import wire as wm
 from sim.docking import DockingFrame
 from sim.gnc import Rzyx, ssa
@@ -146,6 +147,7 @@ class Simulation:
         chunk_steps: int = 100,
         plant_ps: ParameterSet | None = None,
         start_gripping: bool = True,
+        vessel: vesselmod.VesselMotion | None = None,
     ) -> None:
         if not (DT_RANGE_S[0] <= dt_s <= DT_RANGE_S[1]):
             raise ValueError(
@@ -161,6 +163,8 @@ class Simulation:
         self.chunk_steps = chunk_steps
         self.has_rov = has_rov
         self.control_on = control
+        self.vessel_motion = vessel
+        """The vessel's wave-frequency motion at the crane tip (None: the tip stands still)."""
         self._init_plant(
             tree_depth_m,
             crane_tip_n,
@@ -222,6 +226,8 @@ class Simulation:
         self.current_params = current or steady_current(0.0, 0.0)
         self.current_state = envmod.initial_current(self.current_params)
         self.wave_field = envmod.make_wave_field(waves, self.rng) if waves is not None else None
+        self.wave_load = waves.load if waves is not None else envmod.DEFAULT_WAVE_LOAD
+        """How the waves load the bodies (sim.environment.WAVE_LOADS)."""
         self.crane_tip_n = finite_vector("crane_tip_n", crane_tip_n, 3)
         self.wire_length_m = site.wire_length_for_depth(
             ps, tree_depth_m, self.crane_tip_n[2], self.current_state.speed_mps
@@ -654,7 +660,22 @@ class Simulation:
         noise = sensors.draw_noise(self.sensor_cfg, self.rng, self.step_index, n)
         if self.faults:
             self._faults_in_chunk(env, noise)
+        self._vessel_in_chunk(env, n)
         return env, noise
+
+    def _vessel_in_chunk(self, env: FloatArray, n: int) -> None:
+        """Add the vessel's wave-frequency motion to the crane tip (sim.vessel); the crane
+        tip's mean position (``crane_tip_n``, where the vessel keeps station) is unchanged."""
+        if self.vessel_motion is None or self.wave_field is None:
+            return
+        t = self.t_s + self.dt_s * np.arange(n)
+        env[:, plant.E_CT : plant.E_CT + 3] += vesselmod.crane_tip_motion_n(
+            self.wave_field,
+            t,
+            self.vessel_motion,
+            float(self.crane_tip_n[0]),
+            float(self.crane_tip_n[1]),
+        )
 
     # ------------------------------------------------------------------ injected faults
     def inject_fault(self, fault: Fault) -> None:
@@ -913,11 +934,15 @@ class Simulation:
         accel_n = np.zeros_like(water_n)
         if self.wave_field is not None:
             t = self.t_s + self.dt_s * np.arange(n)
+            # the tree's centre, kept inside the water column (a tree in the seabed's contact
+            # spring sits a few centimetres into it)
+            depth = min(max(float(self.x[2]), 0.0), self.wave_field.water_depth_m)
             v_w, a_w = envmod.wave_kinematics_n(
-                self.wave_field, t, float(self.x[2]), float(self.x[0]), float(self.x[1])
+                self.wave_field, t, depth, float(self.x[0]), float(self.x[1])
             )
             water_n = water_n + v_w
-            accel_n = accel_n + a_w
+            if self.wave_load != "drag":
+                accel_n = accel_n + a_w
         base = site.wire_environment(
             ps, self.wire_length_m, self.crane_tip_n, float(np.mean(speeds)), float(np.mean(dirs))
         )

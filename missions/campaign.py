@@ -600,6 +600,7 @@ def run_mission_of(base: schema.Mission, inputs: RunInputs) -> schema.Mission:
     s["depth_m"] = v["depth_m"]
     if not math.isnan(float(v["wave_height_m"])):
         s["waves"] = {
+            **(s.get("waves") or {}),
             "significant_height_m": v["wave_height_m"],
             "peak_period_s": v["wave_period_s"],
             "direction_deg": v["wave_direction_deg"],

@@ -28,7 +28,11 @@ from pydantic import (
 
 from control.config import Allocation, Feedback, Mode, Reference
 from control.faults import Fault
+from sim.environment import DEFAULT_WAVE_LOAD
 from sim.params import KdVector, KiVector, KpVector
+
+WaveLoad = Literal["drag", "morison"]
+"""sim.environment.WAVE_LOADS, as a type for the file's validation."""
 
 FORMAT_VERSION = 1
 LIBRARY_DIR = Path(__file__).with_name("library")
@@ -80,6 +84,42 @@ class WaveSetup(_Model):
     significant_height_m: float = Field(ge=0.0, le=30.0)
     peak_period_s: float = Field(gt=0.0, le=40.0)
     direction_deg: float = Field(ge=-360.0, le=360.0)
+    load: WaveLoad = Field(
+        default=typing.cast(WaveLoad, DEFAULT_WAVE_LOAD),
+        description="how the waves load the tree and the ROV: 'morison' (relative-velocity "
+        "drag, added mass and Froude-Krylov on the water's acceleration; the default, the "
+        "complete load) or 'drag' (relative-velocity drag only, as table 4.1 of the thesis "
+        "behaves)",
+    )
+    water_depth_m: float | None = Field(
+        default=None,
+        ge=1.0,
+        le=11000.0,
+        description="seabed depth for the wave kinematics [m]; default: the docking frame's "
+        "landing depth if the mission has one, else deep water",
+    )
+
+
+class VesselSetup(_Model):
+    """The installation vessel moving with the sea (sim.vessel: a typical 130 m construction
+    vessel's RAOs; the crane tip moves with its heave, surge, sway, roll and pitch). Needs
+    ``waves``; without them the crane tip stands still."""
+
+    heading_deg: float | None = Field(
+        default=None,
+        ge=-360.0,
+        le=360.0,
+        description="vessel heading [deg]; default: bow into the waves (head sea)",
+    )
+    heave_compensation: bool = Field(
+        default=False, description="the crane's active heave compensation is on"
+    )
+    heave_compensation_efficiency: float = Field(
+        default=0.8,
+        ge=0.0,
+        le=1.0,
+        description="fraction of the crane tip's vertical motion the compensation removes [-]",
+    )
 
 
 class PlantVariation(_Model):
@@ -118,6 +158,7 @@ class Setup(_Model):
     heading_deg: float = Field(default=0.0, ge=-360.0, le=360.0, description="initial heading")
     current: CurrentSetup = CurrentSetup(speed_mps=0.0, direction_deg=0.0)
     waves: WaveSetup | None = None
+    vessel: VesselSetup | None = None
     feedback: Feedback = "perfect"
     allocation: Allocation = "priority"
     reference: Reference = "third"

@@ -13,6 +13,7 @@ from missions import schema
 from sim import environment as envmod
 from sim import params as params_mod
 from sim.docking import DockingFrame
+from sim.vessel import VesselMotion
 
 
 def build_simulation(
@@ -44,10 +45,24 @@ def build_simulation(
     )
     waves = None
     if s.waves is not None:
+        water_depth = s.waves.water_depth_m
+        if water_depth is None and s.docking_frame is not None:
+            water_depth = s.docking_frame.landing_depth_m
         waves = envmod.WaveParams(
             significant_height_m=s.waves.significant_height_m,
             peak_period_s=s.waves.peak_period_s,
             direction_rad=math.radians(s.waves.direction_deg),
+            load=s.waves.load,
+            water_depth_m=math.inf if water_depth is None else water_depth,
+        )
+    vessel = None
+    if s.vessel is not None:
+        wave_heading = 0.0 if s.waves is None else s.waves.direction_deg
+        heading = wave_heading + 180.0 if s.vessel.heading_deg is None else s.vessel.heading_deg
+        vessel = VesselMotion(
+            heading_rad=math.radians(heading),
+            heave_compensation=s.vessel.heave_compensation,
+            heave_compensation_efficiency=s.vessel.heave_compensation_efficiency,
         )
     settings = ControlSettings(
         feedback=feedback or s.feedback,
@@ -74,6 +89,7 @@ def build_simulation(
         tree_heading_rad=math.radians(s.heading_deg),
         plant_ps=plant_ps,
         start_gripping=s.start_gripping,
+        vessel=vessel,
     )
     chart = charted_frame(mission)
     if s.docking_frame is not None and chart is not None:

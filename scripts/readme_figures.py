@@ -293,53 +293,121 @@ def render_failures(res: Results) -> str:
 
 
 def compute_table_4_1() -> Results:
+    """Table 4.1 with every way of modelling the sea (studies.TABLE_4_1_VARIANTS), 600 s per
+    sea state, seed 0."""
     from missions import studies
 
     return {
         "rows": [
-            {"label": row.label, "ours": list(row.ours), "thesis": list(row.thesis)}
-            for row in studies.table_4_1()
+            {
+                "label": row.label,
+                "variant": row.variant,
+                "ours": list(row.ours),
+                "thesis": list(row.thesis),
+            }
+            for row in studies.table_4_1(variants=studies.TABLE_4_1_VARIANTS)
         ]
     }
 
 
+def _ratio_span(ratios: list[float]) -> str:
+    return f"{sig(min(ratios))} to {sig(max(ratios))}"
+
+
 def render_table_4_1(res: Results) -> str:
-    rows = {r["label"].split("  ")[0] + " " + r["label"].split()[-1]: r for r in res["rows"]}
+    import numpy as np
+
+    rows = res["rows"]
+    variants = list(dict.fromkeys(r["variant"] for r in rows))
+    cases = list(dict.fromkeys(r["label"] for r in rows))
+    by_key = {(r["label"], r["variant"]): r for r in rows}
+    lines: list[str] = []
+    for title, k in (("RMS north [m]", 0), ("RMS heading [deg]", 2)):
+        lines += [
+            f"| {title} | thesis | " + " | ".join(variants) + " |",
+            "|---|" + "---|" * (len(variants) + 1),
+        ]
+        for case in cases:
+            state, kind = case.split("  ")
+            thesis = by_key[(case, variants[0])]["thesis"][k]
+            cells = [sig(by_key[(case, v)]["ours"][k]) for v in variants]
+            lines.append(f"| {state}, {kind.strip()} | {sig(thesis)} | " + " | ".join(cells) + " |")
+        lines.append("")
+
+    def unc_ratios(variant: str) -> list[float]:
+        return [
+            by_key[(c, variant)]["ours"][0] / by_key[(c, variant)]["thesis"][0]
+            for c in cases
+            if c.endswith("uncontrolled")
+        ]
+
+    def north(case: str, variant: str) -> float:
+        return float(by_key[(case, variant)]["ours"][0])
+
+    light, solid, full = unc_ratios("drag, W0 195 kN"), unc_ratios("drag"), unc_ratios("morison")
+    within = all(0.7 <= r <= 1.3 for r in light)
+    unc_cases = [c for c in cases if c.endswith("uncontrolled")]
+    vessel_gain = [north(c, "morison + vessel") / north(c, "morison") for c in unc_cases]
+    most = unc_cases[int(np.argmax(vessel_gain))].split("  ")[0]
+    long_unc, long_ctl = "T = 30 s, Hs = 8 m  uncontrolled", "T = 30 s, Hs = 8 m  controlled"
+    cut = reduction(north(long_unc, "morison"), north(long_ctl, "morison"))
+    cut_vessel = reduction(north(long_unc, "morison + vessel"), north(long_ctl, "morison + vessel"))
+    text = " ".join(
+        [
+            "Heading: uncontrolled, the RMS about its 120 s running mean (the tree's heading",
+            "has no stiffness and wanders, so about its mean it grows with the run);",
+            "controlled, about the set point. Why ours and the thesis's differ: the forcing",
+            "and the tree's weight, not the wave direction or the spectrum's discretisation.",
+            "With the drag load (the water's velocity only, through the damping) on the tree",
+            "the thesis's added-mass volume implies (W0 = 195 kN), the uncontrolled north RMS",
+            f"is {_ratio_span(light)} times the thesis's in the four sea states",
+            f"{'(within 30 %)' if within else ''}; with the solid-steel 307 kN, whose stiffer",
+            "wire puts the swing (27 s instead of 34 s) nearer the seas,",
+            f"{_ratio_span(solid)} times. The complete Morison load (added mass and",
+            "Froude-Krylov on the water's acceleration, our default) gives",
+            f"{_ratio_span(full)} times: at 100 m the tree is inertia-dominated",
+            "(Keulegan-Carpenter number 3 to 5), so the thesis's results behave as drag-only",
+            "forcing although its equation 2.11 prints the added-mass term. The vessel's motion",
+            "at the crane tip (a 130 m construction vessel, bow into the waves, no heave",
+            "compensation) multiplies the uncontrolled north RMS by a further",
+            f"{_ratio_span(vessel_gain)}, most in the sea {most}, where the water at 100 m",
+            "hardly moves and the vessel does. The finding stands in every model: control cuts",
+            "the long-period motion (T = 30 s, Hs = 8 m, Morison load: north RMS",
+            f"{cut}; with the vessel moving, {cut_vessel}).",
+        ]
+    )
+    return "\n".join([*lines, para(text)])
+
+
+def compute_table_4_2() -> Results:
+    """Table 4.2 in both windows (studies.TABLE_4_2_WINDOWS), seed 0."""
+    from missions import studies
+
+    return {
+        "rows": [
+            {
+                "label": row.label,
+                "variant": row.variant,
+                "ours": list(row.ours),
+                "thesis": list(row.thesis),
+            }
+            for row in studies.table_4_2()
+        ]
+    }
+
+
+def render_table_4_2(res: Results) -> str:
     lines = [
-        "| sea state | | RMS N [m] ours / thesis | RMS E [m] ours / thesis "
+        "| case | scored over, law | RMS N [m] ours / thesis | RMS E [m] ours / thesis "
         "| RMS heading [deg] ours / thesis |",
         "|---|---|---|---|---|",
     ]
     for r in res["rows"]:
-        state, kind = r["label"].split("  ")
         ours, thesis = r["ours"], r["thesis"]
         cells = [f"{sig(ours[k])} / {sig(thesis[k])}" for k in range(3)]
-        lines.append(f"| {state} | {kind.strip()} | " + " | ".join(cells) + " |")
-
-    def pair(state: str) -> tuple[list[float], list[float]]:
-        return rows[f"{state} uncontrolled"]["ours"], rows[f"{state} controlled"]["ours"]
-
-    short_unc, short_ctl = pair("T = 10 s, Hs = 8 m")
-    long_unc, long_ctl = pair("T = 30 s, Hs = 8 m")
-    larger = all(
-        r["ours"][0] > r["thesis"][0] for r in res["rows"] if r["label"].endswith("uncontrolled")
-    )
-    short_north = reduction(short_unc[0], short_ctl[0])
-    short_words = (
-        "control leaves the short 10 s sea's north motion about the same"
-        if short_north == "about the same"
-        else f"control changes the short 10 s sea's north motion ({short_north})"
-    )
-    finding = (
-        f"Our wave-induced motions are {'larger than' if larger else 'not all larger than'} the "
-        "thesis's (its wave direction, spectrum discretisation and damping are not stated; we "
-        f"infer the direction from its east/north ratio), but the finding is the same: "
-        f"{short_words} (its heading RMS {reduction(short_unc[2], short_ctl[2])}) and control "
-        f"cuts the long-period motion (T = 30 s, Hs = 8 m: north RMS "
-        f"{reduction(long_unc[0], long_ctl[0])}, heading RMS "
-        f"{reduction(long_unc[2], long_ctl[2])})."
-    )
-    return "\n".join([*lines, "", para(finding)])
+        label = " ".join(r["label"].split()).replace("- - (", "baseline (")
+        lines.append(f"| {label} | {r['variant']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
 
 
 # ------------------------------------------------------------------------------ log size
@@ -375,6 +443,7 @@ BLOCKS: dict[str, tuple[Callable[[], Results], Callable[[Results], str]]] = {
     "limits": (compute_limits, render_limits),
     "failures": (compute_failures, render_failures),
     "table-4.1": (compute_table_4_1, render_table_4_1),
+    "table-4.2": (compute_table_4_2, render_table_4_2),
     "log-size": (compute_log_size, render_log_size),
 }
 

@@ -14,11 +14,18 @@ the free path is the same process as reflecting step by step, because the increm
 symmetric. The state carries which side of the fold the walk is on, so one long run and the
 same run cut into chunks give the same samples (up to round-off).
 
-Waves (eq. 2.52-2.56): a sum of linear deep-water components. Each component's amplitude
-comes from the two-parameter ITTC (modified Pierson-Moskowitz) spectrum, with a random phase
-and a random frequency inside its own band (so the sea never repeats exactly, and the sum
-of A_k^2 / 2 is an unbiased estimate of the spectrum's variance). Velocity decays as
-exp(-k z) with z the depth (positive down).
+Waves (eq. 2.52-2.56): a sum of linear components. Each component's amplitude comes from
+the two-parameter ITTC (modified Pierson-Moskowitz) spectrum, with a random phase and a random
+frequency inside its own band (so the sea never repeats exactly, and the sum of A_k^2 / 2 is
+an unbiased estimate of the spectrum's variance). In deep water (the thesis's eq. 2.52-2.56)
+the wave number is omega^2 / g and the velocity decays as exp(-k z), z the depth (positive
+down). With a finite water depth h the wave number solves omega^2 = g k tanh(k h) and the
+velocity decays as cosh(k (h - z)) / sinh(k h) (horizontal) and sinh(k (h - z)) / sinh(k h)
+(vertical) (linear Airy theory, as in any text on ocean waves).
+
+How the waves load a body (``WAVE_LOADS``) is chosen with the sea: ``drag`` (only the relative
+velocity enters, through the damping: what table 4.1 of the thesis behaves like) or
+``morison`` (also the added mass and the Froude-Krylov force on the water's acceleration).
 """
 
 from __future__ import annotations
@@ -45,6 +52,22 @@ the horizontal velocity variance at the surface; at 10 m depth and more, for pea
 
 _BLOCK_ELEMENTS = 1 << 21
 """Largest (time x component) phase matrix built at once [-]; bounds memory for long records."""
+
+WAVE_LOADS = ("drag", "morison")
+"""How waves load the tree and the ROV:
+
+- ``drag``: the water velocity enters only through the relative velocity (damping on
+  nu - nu_c); the water's acceleration is not applied. Table 4.1 of the thesis behaves like
+  this (MODEL_NOTES, second round: its T = 10 s figure and its growth with H_s).
+- ``morison``: as ``drag``, plus the inertia part of Morison's equation on the water's
+  acceleration a: the added mass M_A a and the Froude-Krylov force rho V a (the pressure
+  gradient of the undisturbed wave, rho V = m - W0 / g for the tree, B / g for the ROV).
+  The physically complete load; at 100 m the tree's Keulegan-Carpenter number is about 3 to 5,
+  so inertia dominates."""
+
+DEFAULT_WAVE_LOAD = "morison"
+"""The default wave load: the complete one, because an installation is planned with these
+numbers; ``drag`` reproduces the thesis's table 4.1 and is chosen explicitly for that."""
 
 _RATIO_CLIP = 1.0e3
 """Largest omega_p / omega evaluated in the spectrum [-]; beyond it exp(-1.25 r^4) is 0.0."""
@@ -302,9 +325,14 @@ class WaveParams:
     """Direction beta the waves travel towards, from north, clockwise [rad] (eq. 2.55-2.56)."""
     n_components: int = 200
     """Number of wave components n [-], in [10, 5000] (eq. 2.54)."""
+    load: str = DEFAULT_WAVE_LOAD
+    """How the waves load the bodies, one of ``WAVE_LOADS`` [-]."""
+    water_depth_m: float = math.inf
+    """Depth of the seabed h [m], in [1, inf]; inf: deep water (the thesis's eq. 2.52-2.56)."""
 
     def __post_init__(self) -> None:
-        """Check H_s >= 0, T_p > 0, finite direction, 10 <= n_components <= 5000."""
+        """Check H_s >= 0, T_p > 0, finite direction, 10 <= n_components <= 5000, a known
+        load and a water depth of at least 1 m."""
         _require_at_least("significant_height_m", self.significant_height_m, 0.0)
         _require_finite("peak_period_s", self.peak_period_s)
         if self.peak_period_s <= 0.0:
@@ -313,11 +341,21 @@ class WaveParams:
         n = self.n_components
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 10 <= n <= 5000:
             raise ValueError(f"n_components must be an integer in [10, 5000], got {n!r}")
+        if self.load not in WAVE_LOADS:
+            raise ValueError(f"load must be one of {', '.join(WAVE_LOADS)}, got {self.load!r}")
+        _require_water_depth(self.water_depth_m)
+
+
+def _require_water_depth(water_depth_m: float) -> None:
+    """Raise ValueError unless 1 <= water_depth_m <= inf (inf: deep water)."""
+    if not (isinstance(water_depth_m, (int, float)) and 1.0 <= water_depth_m <= math.inf):
+        raise ValueError(f"water_depth_m must lie in [1, inf] (inf: deep), got {water_depth_m!r}")
 
 
 @dataclass(frozen=True, eq=False)
 class WaveField:
-    """One realisation of the sea: n linear deep-water components (eq. 2.52-2.54).
+    """One realisation of the sea: n linear components (eq. 2.52-2.54), in deep water or over
+    a seabed at ``water_depth_m``.
 
     The arrays are stored as read-only float64 copies of shape (n,).
     """
@@ -327,11 +365,13 @@ class WaveField:
     amplitude_m: NDArray[np.float64]
     """Amplitude A_k = sqrt(2 S(omega_k) d_omega_k) [m], >= 0 (eq. 2.52)."""
     wavenumber_rad_m: NDArray[np.float64]
-    """Wave number k_k = omega_k^2 / g [rad/m] (deep-water dispersion)."""
+    """Wave number k_k [rad/m]: omega^2 = g k tanh(k h) (omega^2 / g in deep water)."""
     phase_rad: NDArray[np.float64]
     """Random phase epsilon_k [rad], uniform in [0, 2 pi) (eq. 2.53)."""
     direction_rad: float
     """Direction beta the waves travel towards, from north, clockwise [rad] (eq. 2.55)."""
+    water_depth_m: float = math.inf
+    """Depth of the seabed h [m]; inf: deep water."""
 
     def __post_init__(self) -> None:
         """Store read-only float64 copies; check equal 1-D shapes and finite values."""
@@ -349,6 +389,7 @@ class WaveField:
         if np.any(self.amplitude_m < 0.0):
             raise ValueError("amplitude_m must lie in [0, inf)")
         _require_finite("direction_rad", self.direction_rad)
+        _require_water_depth(self.water_depth_m)
 
 
 class WaveKinematics(NamedTuple):
@@ -364,6 +405,48 @@ def deep_water_wavenumber(omega_rad_s: ArrayLike) -> NDArray[np.float64]:
     """Deep-water dispersion k = omega^2 / g [rad/m] for omega [rad/s], any shape."""
     omega = np.asarray(omega_rad_s, dtype=np.float64)
     return omega * omega / GRAVITY_MPS2
+
+
+def wavenumber(omega_rad_s: ArrayLike, water_depth_m: float = math.inf) -> NDArray[np.float64]:
+    """Wave number k [rad/m] of the linear dispersion relation omega^2 = g k tanh(k h).
+
+    omega_rad_s [rad/s] any shape, > 0; water_depth_m h [m] in [1, inf]. Deep water (h = inf)
+    gives omega^2 / g exactly. Otherwise Newton's method on x = k h for
+    x tanh(x) = y = omega^2 h / g (x tanh x increases with x, so the root is unique), from
+    Eckart's approximation x0 = y / sqrt(tanh y) (within 5 % everywhere); stops at a relative
+    change below 1e-14 (four to six steps).
+    """
+    _require_water_depth(water_depth_m)
+    omega = np.asarray(omega_rad_s, dtype=np.float64)
+    if math.isinf(water_depth_m):
+        return deep_water_wavenumber(omega)
+    y = omega * omega * water_depth_m / GRAVITY_MPS2
+    x = y / np.sqrt(np.tanh(np.maximum(y, 1e-300)))
+    for _ in range(50):
+        t = np.tanh(x)
+        step = (x * t - y) / (t + x * (1.0 - t * t))
+        x = x - step
+        if np.all(np.abs(step) <= 1e-14 * np.maximum(x, 1e-300)):
+            break
+    return x / water_depth_m
+
+
+def depth_factors(
+    k_rad_m: NDArray[np.float64], depth_m: float, water_depth_m: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Linear-wave decay with depth: (cosh k (h - z) / sinh k h, sinh k (h - z) / sinh k h).
+
+    The first scales the horizontal particle velocity, the second the vertical one, against
+    omega A at the surface; z = depth_m (positive down, 0 <= z <= h). Written with
+    exponentials, (e^{-k z} +- e^{-k (2 h - z)}) / (1 - e^{-2 k h}), so large k h neither
+    overflows nor loses digits; h = inf gives exp(-k z) for both (the thesis's eq. 2.53).
+    """
+    decay = np.exp(-k_rad_m * depth_m)
+    if math.isinf(water_depth_m):
+        return decay, decay
+    mirror = np.exp(-k_rad_m * (2.0 * water_depth_m - depth_m))
+    denominator = -np.expm1(-2.0 * k_rad_m * water_depth_m)
+    return (decay + mirror) / denominator, (decay - mirror) / denominator
 
 
 def ittc_spectrum(
@@ -415,7 +498,8 @@ def make_wave_field(params: WaveParams, rng: np.random.Generator) -> WaveField:
 
     Component k: frequency omega_k uniform in band k (width d_omega), amplitude
     A_k = sqrt(2 S(omega_k) d_omega) so that A_k^2 / 2 = S(omega_k) d_omega (eq. 2.52), phase
-    uniform in [0, 2 pi), wave number k = omega^2 / g. Random frequencies make the
+    uniform in [0, 2 pi), wave number from the dispersion relation at the params' water depth
+    (omega^2 / g in deep water). Random frequencies make the
     frequencies incommensurate, so the record has no repetition period, and make
     E[sum A_k^2 / 2] equal the spectrum's variance over the bands exactly. H_s = 0 gives zero
     amplitudes. Consumes 2 n uniforms of ``rng`` (n frequencies, then n phases).
@@ -428,13 +512,14 @@ def make_wave_field(params: WaveParams, rng: np.random.Generator) -> WaveField:
     return WaveField(
         omega_rad_s=omega,
         amplitude_m=np.sqrt(2.0 * spectrum * width),
-        wavenumber_rad_m=deep_water_wavenumber(omega),
+        wavenumber_rad_m=wavenumber(omega, params.water_depth_m),
         phase_rad=phase,
         direction_rad=float(params.direction_rad),
+        water_depth_m=float(params.water_depth_m),
     )
 
 
-def _harmonic_sums(
+def harmonic_sums(
     t_s: NDArray[np.float64],
     omega_rad_s: NDArray[np.float64],
     offset_rad: NDArray[np.float64],
@@ -464,7 +549,7 @@ def _as_times(t_s: ArrayLike) -> NDArray[np.float64]:
     return t
 
 
-def _phase_offset(field: WaveField, north_m: float, east_m: float) -> NDArray[np.float64]:
+def phase_offset(field: WaveField, north_m: float, east_m: float) -> NDArray[np.float64]:
     """Phase of each component at t = 0 at (north, east): epsilon_k - k_k x_along [rad], (m,)."""
     _require_finite("north_m", north_m)
     _require_finite("east_m", east_m)
@@ -482,8 +567,8 @@ def surface_elevation_m(
     Same phase convention as eq. 2.53: the horizontal velocity is in phase with zeta.
     """
     t = _as_times(t_s)
-    offset = _phase_offset(field, north_m, east_m)
-    sin_sum, _ = _harmonic_sums(t, field.omega_rad_s, offset, field.amplitude_m[:, None])
+    offset = phase_offset(field, north_m, east_m)
+    sin_sum, _ = harmonic_sums(t, field.omega_rad_s, offset, field.amplitude_m[:, None])
     return sin_sum[:, 0]
 
 
@@ -494,27 +579,36 @@ def wave_kinematics_n(
     north_m: float = 0.0,
     east_m: float = 0.0,
 ) -> WaveKinematics:
-    """Linear deep-water particle velocity and acceleration in NED (eq. 2.53-2.56).
+    """Linear particle velocity and acceleration in NED (eq. 2.53-2.56, finite depth).
 
-    With theta_k as in ``surface_elevation_m``, c_k = omega_k A_k exp(-k_k z) and z = depth_m
-    (positive down, >= 0):
+    With theta_k as in ``surface_elevation_m``, z = depth_m (positive down, 0 <= z <= h),
+    (c_k, s_k) = omega_k A_k ``depth_factors`` (both omega_k A_k exp(-k_k z) in deep water):
 
         u   = sum c_k sin(theta_k)          horizontal, along beta   (eq. 2.53-2.54)
-        w   = -sum c_k cos(theta_k)         vertical, NED z (down); 90 deg out of phase
+        w   = -sum s_k cos(theta_k)         vertical, NED z (down); 90 deg out of phase
         du  = sum omega_k c_k cos(theta_k)  exact time derivatives
-        dw  = sum omega_k c_k sin(theta_k)
+        dw  = sum omega_k s_k sin(theta_k)
 
     and velocity_n = [u cos(beta), u sin(beta), w] (eq. 2.55-2.56), likewise accel_n.
     t_s (n,) [s]; returns WaveKinematics(velocity_n (n, 3) [m/s], accel_n (n, 3) [m/s^2]).
     """
     t = _as_times(t_s)
     _require_at_least("depth_m", depth_m, 0.0)
-    offset = _phase_offset(field, north_m, east_m)
-    speed_amp = field.omega_rad_s * field.amplitude_m * np.exp(-field.wavenumber_rad_m * depth_m)
-    weights = np.stack([speed_amp, field.omega_rad_s * speed_amp], axis=1)
-    sin_sum, cos_sum = _harmonic_sums(t, field.omega_rad_s, offset, weights)
+    if depth_m > field.water_depth_m:
+        raise ValueError(
+            f"depth_m must lie in [0, water_depth_m] = [0, {field.water_depth_m!r}], "
+            f"got {depth_m!r}"
+        )
+    offset = phase_offset(field, north_m, east_m)
+    along, vertical = depth_factors(field.wavenumber_rad_m, depth_m, field.water_depth_m)
+    speed_h = field.omega_rad_s * field.amplitude_m * along
+    speed_v = field.omega_rad_s * field.amplitude_m * vertical
+    weights = np.stack(
+        [speed_h, field.omega_rad_s * speed_h, speed_v, field.omega_rad_s * speed_v], axis=1
+    )
+    sin_sum, cos_sum = harmonic_sums(t, field.omega_rad_s, offset, weights)
     cos_b, sin_b = math.cos(field.direction_rad), math.sin(field.direction_rad)
     u, du = sin_sum[:, 0], cos_sum[:, 1]
-    velocity_n = np.stack([u * cos_b, u * sin_b, -cos_sum[:, 0]], axis=1)
-    accel_n = np.stack([du * cos_b, du * sin_b, sin_sum[:, 1]], axis=1)
+    velocity_n = np.stack([u * cos_b, u * sin_b, -cos_sum[:, 2]], axis=1)
+    accel_n = np.stack([du * cos_b, du * sin_b, sin_sum[:, 3]], axis=1)
     return WaveKinematics(velocity_n, accel_n)

@@ -80,7 +80,12 @@ class TreeSpec(_Strict):
     submerged_weight_newton: float | None = Field(
         default=None,
         gt=0.0,
-        description="W0 [N]; default m g (1 - rho_w/rho_steel)",
+        description="W0, weight in water [N]; default m g (1 - rho_w/rho_steel). The thesis "
+        "never states it; two readings: a solid steel tree, 36 t x 9.81 x (1 - 1025/7850) = "
+        "307.0 kN (the full-scale default, MODEL_NOTES), or the volume behind the thesis's "
+        "added mass (15.7 m^3, eq. 2.18): 36 t x 9.81 - 1025 x 9.81 x 15.7 = 195.3 kN. W0 "
+        "sets the wire's horizontal stiffness (eq. 2.30) and so how far the ROV can push the "
+        "tree; it also gives the displaced water m - W0/g of the Froude-Krylov wave force",
         validation_alias=AliasChoices("submerged_weight_newton", "submerged_weight_n"),
     )
     attachment_height_m: PositiveFloat = Field(
@@ -494,6 +499,29 @@ def tree_drag_coefficients(
     d_nl[5] = rho * cd_rot * H * (L**4 + W**4) / 64.0
     d_l[3:6] = 0.01 * d_nl[3:6]
     return d_l, d_nl
+
+
+ADDED_MASS_VOLUME_M3 = 15.7
+"""Volume of the full-scale tree behind its added mass in the thesis (eq. 2.18) [m^3]: the
+second reading of its submerged weight (``submerged_weight_from_volume``)."""
+
+
+def submerged_weight_from_volume(mass_kg: float, volume_m3: float) -> float:
+    """W0 = m g - rho_w g V [N] of a body of mass m [kg] displacing V [m^3] (36 t and the
+    15.7 m^3 of eq. 2.18: 195.3 kN)."""
+    return mass_kg * wire_mod.GRAVITY - wire_mod.RHO_WATER * wire_mod.GRAVITY * volume_m3
+
+
+def with_submerged_weight(ps: ParameterSet, weight_newton: float) -> ParameterSet:
+    """The same parameter set with the tree's submerged weight W0 set to ``weight_newton``
+    [N] (> 0; checked like a file's value)."""
+    try:
+        tree = TreeSpec.model_validate(
+            {**ps.spec.tree.model_dump(), "submerged_weight_newton": weight_newton}
+        )
+    except ValidationError as err:
+        raise ParameterError(_format_validation_error(f"{ps.name} tree", err)) from None
+    return build(ps.spec.model_copy(update=dict(tree=tree)))
 
 
 def _tree_params(spec: TreeSpec, wire: wire_mod.WireProperties) -> TreeParams:

@@ -43,7 +43,7 @@ N_STATE = 24
 
 # Environment vector layout.
 E_VC = 0  # 0:3 water velocity (current + waves) at the work site, NED [m/s]
-E_AC = 3  # 3:6 water acceleration, NED [m/s^2]
+E_AC = 3  # 3:6 water acceleration, NED [m/s^2] (zero with the ``drag`` wave load)
 E_CT = 6  # 6:9 crane tip (where the wire leaves the vessel), NED [m]
 E_LREST = 9  # depth below the crane tip of the unloaded wire's end [m]
 E_KH = 10  # horizontal wire stiffness at the load [N/m] (eq. 2.30, corrected)
@@ -98,6 +98,8 @@ class PlantArrays(NamedTuple):
     post_k: float  # stiffness of one post against the tree (funnel wall, bottom, side) [N/m]
     post_c: float  # damping of one post contact [N s/m]
     friction_mu: float  # friction coefficient on the landing surface / post tops [-]
+    tree_fk_mass: float  # displaced water rho V of the tree, m - W0 / g, >= 0 [kg]
+    rov_fk_mass: float  # displaced water rho V of the ROV, B / g [kg]
 
 
 def plant_arrays(
@@ -136,7 +138,23 @@ def plant_arrays(
         coupling_C=ps.coupling.damping.copy(),
         has_rov=bool(has_rov),
         **_contact_params(ps),
+        tree_fk_mass=displaced_mass_kg(ps),
+        rov_fk_mass=float(r.buoyancy_newton) / GRAVITY_MPS2,
     )
+
+
+GRAVITY_MPS2 = 9.81
+"""[m/s^2] (MODEL_NOTES, conventions)."""
+
+
+def displaced_mass_kg(ps: ParameterSet) -> float:
+    """Mass of the water the tree displaces, rho V = m - W0 / g [kg], never below 0.
+
+    Follows the submerged weight W0 of the parameter set, so both readings of the thesis
+    (solid steel, W0 = 307 kN: 4.7 t; the added-mass volume 15.7 m^3, W0 = 195 kN: 16.1 t)
+    give their own Froude-Krylov force. A W0 above m g (a robustness study's +50 %) is a
+    tree heavier than its mass in air, which has no volume: 0."""
+    return max(ps.tree.mass_kg - ps.tree.submerged_weight_newton / GRAVITY_MPS2, 0.0)
 
 
 def _contact_params(ps: ParameterSet) -> dict:
@@ -475,11 +493,23 @@ def contact_energy(x: np.ndarray, env: np.ndarray, P: PlantArrays) -> float:
 
 
 @njit(**JIT)
+def _froude_krylov(tau: np.ndarray, fk_mass: float, R_nb: np.ndarray, a_c_n: np.ndarray) -> None:
+    """Add the Froude-Krylov force rho V a (the undisturbed wave's pressure gradient over the
+    body, Morison's equation) to ``tau``'s force, body axes. The water's acceleration is
+    taken uniform over the body and acting at the centre of buoyancy, taken at the origin:
+    no moment. Zero when the wave load is ``drag`` (the acceleration is zero then)."""
+    f_b = mtv(R_nb, a_c_n)
+    for i in range(3):
+        tau[i] += fk_mass * f_b[i]
+
+
+@njit(**JIT)
 def tree_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarray) -> np.ndarray:
     """Net weight, wire, push and hydrodynamic forces on the tree, tree axes (eq. 2.44)."""
     nu = x[6:12]
     nu_rel, v_c_dot_b = _relative_velocity(R_t, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3])
     tau = _hydro(P.tree_M_rb, P.tree_M_a, P.tree_D_l, P.tree_D_nl, nu, nu_rel, v_c_dot_b)
+    _froude_krylov(tau, P.tree_fk_mass, R_t, env[E_AC : E_AC + 3])
     f_n = env[E_PUSH : E_PUSH + 3].copy()
     f_n[2] += P.tree_W0
     tau[0:3] += mtv(R_t, f_n)
@@ -500,6 +530,7 @@ def rov_wrench(
     eta, nu = x[12:18], x[18:24]
     nu_rel, v_c_dot_b = _relative_velocity(R_r, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3])
     tau = _hydro(P.rov_M_rb, P.rov_M_a, P.rov_D_l, P.rov_D_nl, nu, nu_rel, v_c_dot_b)
+    _froude_krylov(tau, P.rov_fk_mass, R_r, env[E_AC : E_AC + 3])
     tau -= gvect(P.rov_W, P.rov_B, eta[4], eta[3], P.rov_r_cg, P.rov_r_cb)
     tau += mv(P.thr_T, thrust_from_speed(n_rps, P.thr_k_pos, P.thr_k_neg, P.thr_n_max))
     return tau

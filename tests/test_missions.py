@@ -190,10 +190,12 @@ def test_run_command_rejects_a_bad_file_with_exit_2(tmp_path):
 
 
 def test_table_4_1_control_suppresses_the_long_period_motion():
-    """Thesis 4.1.3: with T = 30 s, Hs = 8 m the controller cuts the north and heading RMS."""
+    """Thesis 4.1.3: with T = 30 s, Hs = 8 m the controller cuts the north and heading RMS.
+    The uncontrolled heading is measured about its running mean (it wanders: about the mean
+    it once made this ratio look 5 times better); measured 1.17 against 3.89 deg."""
     unc, ctl = studies.wave_case(30.0, 8.0, duration_s=200.0, seed=0)
     assert ctl.ours[0] < 0.7 * unc.ours[0]
-    assert ctl.ours[2] < 0.2 * unc.ours[2]
+    assert ctl.ours[2] < 0.5 * unc.ours[2]
     assert np.all(np.isfinite(unc.ours + ctl.ours))
 
 

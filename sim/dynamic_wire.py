@@ -1,0 +1,222 @@
+"""The lift wire as a lumped-mass line (MoorDyn), to check the quasi-static wire against.
+
+MoorDyn (PyPI ``moordyn``, MoorDyn-C v2; Hall and Goupee 2015) models the wire as point
+masses joined by axial springs with internal damping, with weight, buoyancy and Morison drag
+and added mass on each node. Here it carries the tree as a free point (its mass, its
+displaced volume from W0, and an added-mass coefficient that gives the tree's A33) below a
+crane tip that can move.
+
+What it is used for (``tests/test_dynamic_wire.py``):
+
+- the static hang: the load's horizontal stiffness at the end of the wire against the closed
+  form k = w / ln((W0 + w L) / W0) (eq. 2.30, corrected) that the quasi-static plant uses;
+- the vertical natural period against T0 = 2 pi sqrt((M + A33 + m_wire L / 3) / (EA / L))
+  (the spring-mass estimate with a third of the wire's mass, Rayleigh's; MODEL_NOTES takes it
+  from DNV's recommended practice for marine operations, not checked here against the text).
+
+It is not coupled into the compiled plant (``sim.plant``): the simulations keep the
+quasi-static wire. Optional: the module imports ``moordyn`` only when called.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sim import wire as wire_mod
+from sim.params import ParameterSet
+
+WAVE_SPEED_FRACTION = 0.04
+"""MoorDyn's internal step as a fraction of the time an axial wave needs to cross one segment
+[-]. Its explicit integrator diverged at 0.16 (100 m, 20 segments); 0.04 is stable from 100 m
+to 1000 m."""
+
+
+@dataclass(frozen=True)
+class HangingLine:
+    """One wire with the tree at its end, as MoorDyn is given it."""
+
+    ps: ParameterSet
+    length_m: float
+    """Unstretched wire length L [m]."""
+    n_segments: int = 20
+    """Segments of the lumped-mass line [-]."""
+    pull_newton: float = 0.0
+    """Steady horizontal pull on the tree, north [N] (through a soft, weightless line to a
+    far anchor; 0: none)."""
+    relax_drag_area_m2: float = 0.0
+    """Drag area C_D A of the tree's point [m^2]: damps the swing while MoorDyn relaxes to
+    the static hang (statics do not depend on it)."""
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.length_m) and 1.0 <= self.length_m <= 4000.0):
+            raise ValueError(f"length_m must lie in [1, 4000], got {self.length_m!r}")
+        if not 2 <= self.n_segments <= 500:
+            raise ValueError(f"n_segments must lie in [2, 500], got {self.n_segments!r}")
+
+    @property
+    def time_step_s(self) -> float:
+        """MoorDyn's internal step [s] (see ``WAVE_SPEED_FRACTION``)."""
+        w = self.ps.wire
+        speed = math.sqrt(w.axial_stiffness_newton / w.mass_per_length_kg_m)
+        return WAVE_SPEED_FRACTION * self.length_m / self.n_segments / speed
+
+    def static_depth_m(self) -> float:
+        """Depth of the load below the crane tip in the static hang [m]: L stretched by the
+        load and by the wire's own submerged weight (W0 L + w L^2 / 2) / EA."""
+        w = self.ps.wire.submerged_weight_per_length()
+        ea = self.ps.wire.axial_stiffness_newton
+        w0 = self.ps.tree.submerged_weight_newton
+        return self.length_m + (w0 * self.length_m + 0.5 * w * self.length_m**2) / ea
+
+    def input_text(self, relax_s: float) -> str:
+        """The MoorDyn input file (v2 format). ``relax_s``: time MoorDyn's initial-condition
+        solver may take to find the static hang (0: start from the stretched straight line)."""
+        ps = self.ps
+        rho, g = wire_mod.RHO_WATER, wire_mod.GRAVITY
+        m = ps.tree.mass_kg
+        w0 = ps.tree.submerged_weight_newton
+        volume = max((m * g - w0) / (rho * g), 1e-6)
+        ca = ps.tree.M_a[2, 2] / (rho * volume)
+        wire = ps.wire
+        depth = self.static_depth_m()
+        lines = [
+            "--------------------- MoorDyn Input File ---------------------",
+            "rov-console lift wire (sim.dynamic_wire)",
+            "---------------------- LINE TYPES ----------------------------",
+            "TypeName Diam Mass/m EA BA/-zeta EI Cd Ca CdAx CaAx",
+            "(name) (m) (kg/m) (N) (N-s/-) (N-m^2) (-) (-) (-) (-)",
+            f"wire {wire.diameter_m} {wire.mass_per_length_kg_m} "
+            f"{wire.axial_stiffness_newton} -0.001 0.0 {wire.drag_coefficient} 1.0 0.0 0.0",
+        ]
+        far = 1000.0 * self.length_m
+        stretch = far  # the pull line is stretched by its own length: force ~ EA, soft
+        if self.pull_newton > 0.0:
+            lines.append(f"pull 1e-5 1e-6 {self.pull_newton} -0.001 0.0 0.0 0.0 0.0 0.0")
+        lines += [
+            "---------------------- POINTS --------------------------------",
+            "ID Attachment X Y Z Mass Volume CdA Ca",
+            "(#) (-) (m) (m) (m) (kg) (m^3) (m^2) (-)",
+            "1 Coupled 0.0 0.0 0.0 0.0 0.0 0.0 0.0",
+            f"2 Free 0.0 0.0 {-depth} {m} {volume} {self.relax_drag_area_m2} {ca}",
+        ]
+        if self.pull_newton > 0.0:
+            lines.append(f"3 Fixed {far + stretch} 0.0 {-depth} 0.0 0.0 0.0 0.0")
+        lines += [
+            "---------------------- LINES ---------------------------------",
+            "ID LineType AttachA AttachB UnstrLen NumSegs Outputs",
+            "(#) (name) (#) (#) (m) (-) (-)",
+            f"1 wire 1 2 {self.length_m} {self.n_segments} -",
+        ]
+        if self.pull_newton > 0.0:
+            lines.append(f"2 pull 2 3 {far} 4 -")
+        lines += [
+            "---------------------- OPTIONS -------------------------------",
+            f"{self.time_step_s} dtM",
+            f"{g} g",
+            f"{rho} rho",
+            f"{depth + 1000.0} WtrDpth",
+            "0 writeLog",
+            f"{relax_s} TmaxIC",
+            "1 ICgenDynamic",
+            "8.0 CdScaleIC",
+            "1e-5 threshIC",
+            "--------------------------------------------------------------",
+        ]
+        return "\n".join(lines) + "\n"
+
+
+def _quiet(fn: Callable[..., Any], *args: Any) -> Any:
+    """Call ``fn`` with the process's standard output sent to /dev/null (MoorDyn prints)."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, 1)
+    try:
+        return fn(*args)
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(null)
+
+
+class _Run:
+    """A MoorDyn system built from a ``HangingLine``; close it with ``close``."""
+
+    def __init__(self, line: HangingLine, relax_s: float) -> None:
+        import moordyn  # type: ignore[import-untyped]
+
+        self._md = moordyn
+        self._dir = tempfile.TemporaryDirectory()
+        path = Path(self._dir.name) / "wire.txt"
+        path.write_text(line.input_text(relax_s))
+        self.system = _quiet(moordyn.Create, str(path))
+        if _quiet(moordyn.Init, self.system, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]) != 0:
+            raise RuntimeError("MoorDyn could not initialise the wire")
+        self.load = moordyn.GetPoint(self.system, 2)
+        self.t_s = 0.0
+
+    def load_position(self) -> np.ndarray:
+        """The tree's point, MoorDyn axes (x, y, z up) from the crane tip [m]."""
+        return np.asarray(self._md.GetPointPos(self.load), dtype=float)
+
+    def step(self, top: list[float], top_velocity: list[float], dt_s: float) -> np.ndarray:
+        """Advance by dt_s with the crane tip at ``top``; returns the force on the tip [N]."""
+        force = _quiet(self._md.Step, self.system, top, top_velocity, self.t_s, dt_s)
+        self.t_s += dt_s
+        return np.asarray(force, dtype=float)
+
+    def close(self) -> None:
+        self._md.Close(self.system)
+        self._dir.cleanup()
+
+
+def vertical_natural_period_s(line: HangingLine, duration_s: float = 20.0) -> float:
+    """The tree's bounce on the wire [s]: MoorDyn from the static hang, the crane tip raised
+    2 cm over 0.3 s (a raised cosine), then the spectral peak of the tree's depth over the
+    rest of ``duration_s`` (Hann window, padded 16 times)."""
+    run = _Run(line, relax_s=0.0)
+    try:
+        dt, ramp, rise = 0.005, 0.3, 0.02
+        depths = []
+        for _ in range(int(round(duration_s / dt))):
+            t = run.t_s
+            top = rise * 0.5 * (1.0 - math.cos(math.pi * min(t, ramp) / ramp))
+            v = rise * math.pi / (2.0 * ramp) * math.sin(math.pi * t / ramp) if t < ramp else 0.0
+            run.step([0.0, 0.0, top], [0.0, 0.0, v], dt)
+            depths.append(run.load_position()[2])
+    finally:
+        run.close()
+    z = np.asarray(depths[int(1.0 / dt) :])
+    z = (z - z.mean()) * np.hanning(z.shape[0])
+    n = 16 * z.shape[0]
+    spectrum = np.abs(np.fft.rfft(z, n=n))
+    freqs = np.fft.rfftfreq(n, dt)
+    return float(1.0 / freqs[1 + int(np.argmax(spectrum[1:]))])
+
+
+def t0_estimate_s(ps: ParameterSet, length_m: float) -> float:
+    """T0 = 2 pi sqrt((M + A33 + m_wire L / 3) / (EA / L)) [s]."""
+    mass = ps.tree.mass_kg + ps.tree.M_a[2, 2] + ps.wire.mass_per_length_kg_m * length_m / 3.0
+    return 2.0 * math.pi * math.sqrt(mass * length_m / ps.wire.axial_stiffness_newton)
+
+
+def pulled_offset_m(line: HangingLine, relax_s: float = 300.0) -> float:
+    """Horizontal offset of the tree [m] when pulled north with ``line.pull_newton``: the
+    static equilibrium MoorDyn's initial-condition solver (dynamic relaxation) finds."""
+    if line.pull_newton <= 0.0:
+        raise ValueError(f"pull_newton must be > 0 N, got {line.pull_newton!r}")
+    run = _Run(line, relax_s=relax_s)
+    try:
+        return float(run.load_position()[0])
+    finally:
+        run.close()

@@ -1,0 +1,57 @@
+"""The lift wire as a lumped-mass line (MoorDyn) against the quasi-static wire and the
+spring-mass period (issue 14). Not coupled into the plant: these check the quasi-static model."""
+
+import pytest
+
+from sim import dynamic_wire as dw
+from sim import params, wire
+
+FULL = params.load("full-scale")
+
+
+def test_vertical_period_at_400_m_is_the_spring_mass_estimate():
+    """T0 = 2 pi sqrt((M + A33 + m_wire L / 3) / (EA / L)) = 2 pi sqrt(61 198 x 400 / 4e8)
+    = 1.554 s; MoorDyn's 20-segment line gives 1.551 s (spectral peak, 0.03 Hz bins near it):
+    the issue's bound is 5 %. The estimate is Rayleigh's; the exact rod-with-end-mass root
+    differs from it by about m_wire / (45 M), 0.4 % here."""
+    t0 = dw.t0_estimate_s(FULL, 400.0)
+    assert t0 == pytest.approx(1.554, abs=0.001)
+    assert dw.vertical_natural_period_s(dw.HangingLine(FULL, 400.0)) == pytest.approx(t0, rel=0.05)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("length_m", [100.0, 1000.0])
+def test_vertical_period_at_100_and_1000_m(length_m):
+    """Measured 0.762 against 0.761 s (100 m) and 2.555 against 2.556 s (1000 m)."""
+    t0 = dw.t0_estimate_s(FULL, length_m)
+    assert dw.vertical_natural_period_s(dw.HangingLine(FULL, length_m)) == pytest.approx(
+        t0, rel=0.05
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("length_m", [100.0, 400.0])
+def test_static_horizontal_stiffness_matches_the_quasi_static_wire(length_m):
+    """A 1 kN pull on the tree's point: MoorDyn's static hang moves it F / k with
+    k = w / ln((W0 + w L) / W0) (eq. 2.30, corrected) within 2 % (measured 0.16 % at 100 m,
+    0.08 % at 400 m)."""
+    pull = 1000.0
+    line = dw.HangingLine(FULL, length_m, pull_newton=pull, relax_drag_area_m2=200.0)
+    k = wire.horizontal_stiffness(
+        FULL.wire.submerged_weight_per_length(), FULL.tree.submerged_weight_newton, length_m
+    )
+    assert dw.pulled_offset_m(line, relax_s=600.0) == pytest.approx(pull / k, rel=0.02)
+
+
+def test_hanging_line_checks_its_inputs_and_writes_the_tree():
+    with pytest.raises(ValueError, match="length_m must lie in"):
+        dw.HangingLine(FULL, 0.5)
+    with pytest.raises(ValueError, match="n_segments must lie in"):
+        dw.HangingLine(FULL, 100.0, n_segments=1)
+    with pytest.raises(ValueError, match="pull_newton must be > 0 N"):
+        dw.pulled_offset_m(dw.HangingLine(FULL, 100.0))
+    text = dw.HangingLine(FULL, 100.0).input_text(0.0)
+    # the tree's point: its mass and the volume that makes its weight in water W0
+    assert "2 Free 0.0 0.0 -100.0" in text and " 36000.0 " in text
+    volume = (36000.0 * 9.81 - FULL.tree.submerged_weight_newton) / (1025.0 * 9.81)
+    assert f" {volume} " in text
