@@ -94,8 +94,10 @@ def test_replay_is_per_browser_while_the_live_run_goes_on(
         for pg in (page, other):
             click(pg, "Top-down")
         time.sleep(2.0)
+        # the same paused live scene in both (a few pixels differ: measured 0.1-1.04, with
+        # labels and the last track redraw)
         live_difference = _scene_difference(page, other)
-        assert live_difference < 1.0, "both pages show the same live scene"
+        assert live_difference < 2.0, "both pages show the same live scene"
 
         # page A opens the first recording and scrubs to near its end
         _open(page, first)
@@ -104,7 +106,9 @@ def test_replay_is_per_browser_while_the_live_run_goes_on(
         field(page, "Replay time s").press("Enter")
         wait_for(lambda: abs(_status(page)[1] - (replay_t0 + 35.0)) < 0.5, 10.0, "page A to scrub")
         time.sleep(2.0)  # the scene of A's replay drawn
-        assert _scene_difference(page, other) > 5.0, "page A shows its replay, B the live run"
+        replay_difference = _scene_difference(page, other)
+        print(f"scene differences: live {live_difference:.2f}, replay {replay_difference:.2f}")
+        assert replay_difference > max(5.0, 3.0 * live_difference), "A replays, B is live"
         # page B still shows the live run, its time advancing once the run goes on; the loop
         # steps on
         state = api.get("/api/state").json()
@@ -144,7 +148,7 @@ def test_replay_is_per_browser_while_the_live_run_goes_on(
         wait_for(lambda: _status(other)[0] == "live", 10.0, "page B live again")
         api.post("/api/run/pause").raise_for_status()
         time.sleep(2.0)
-        assert _scene_difference(page, other) < 1.0, "both pages show the live scene again"
+        assert _scene_difference(page, other) < 2.0, "both pages show the live scene again"
         api.post("/api/run/resume").raise_for_status()
         assert server.app.state.view.errors == []
     finally:
