@@ -41,6 +41,34 @@ def _time_plant(x, n, env, P, dt, reps):
 
 
 @njit(cache=True)
+def _time_rhs(x, n, env, P, reps):
+    s = 0.0
+    for _ in range(reps):
+        s += plant.rhs(x, n, env, P)[0]
+    return s
+
+
+@njit(cache=True)
+def _time_log_row(x, y, env, P, reps):
+    row = np.zeros(loop.N_LOG)
+    for k in range(reps):
+        loop.write_plant_row(row, k * 0.01, x, y, env, P)
+    return row
+
+
+@njit(cache=True)
+def _time_control_step(x, y, xhat, Pc, cs, target, C, Q, reps):
+    row = np.zeros(loop.N_LOG)
+    fresh = np.zeros(5, dtype=np.bool_)  # no fresh sample: EKF corrections timed apart
+    tau = np.zeros(6)
+    for k in range(reps):
+        tau, _, _, cs = loop.control_step(
+            k * 0.01, x, y, fresh, xhat, Pc, cs, target, C, Q, 0.01, row
+        )
+    return tau
+
+
+@njit(cache=True)
 def _time_sensors(x, held, noise, fresh, reps):
     for _ in range(reps):
         held = sensors.sample(x, held, noise, fresh, sensors.Y_SENSOR)
@@ -150,6 +178,8 @@ def main() -> None:
     x = sim.plant_state
     cost = {
         "plant RK4 step (4 rhs)": _per_call(_time_plant, x, n, env, sim.arrays, 0.01),
+        "plant right-hand side": _per_call(_time_rhs, x, n, env, sim.arrays),
+        "log row (plant columns)": _per_call(_time_log_row, x, sim.held_y, env, sim.arrays),
         "sensor sampling": _per_call(
             _time_sensors, x, sim.held_y, np.zeros(11), np.ones(5, dtype=np.bool_)
         ),
@@ -158,6 +188,17 @@ def main() -> None:
         "reference (3rd order)": _per_call(_time_reference, np.zeros(9), np.ones(3), C.ref_params),
         "controller (PID + FF)": _per_call(_time_controller, C),
         "allocation (priority)": _per_call(_time_allocation, C),
+        "control step, no new sample": _per_call(
+            _time_control_step,
+            x,
+            sim.held_y,
+            sim.xhat,
+            sim.P_cov,
+            sim.cs,
+            np.array([2.0, 2.0, 0.5]),
+            C,
+            sim.Q,
+        ),
     }
     print("cost per call, measured alone (us):")
     for name, us in cost.items():

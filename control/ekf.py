@@ -95,14 +95,17 @@ def predict(
     with Phi = I + h df/dx (forward-difference Jacobian, step 1e-6 scaled to each state)."""
     f0 = model_rhs(x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
     phi = np.eye(9)
+    xp = x.copy()  # one work copy: each column perturbs one state and puts it back
     for j in range(9):
         eps = 1e-6 * max(1.0, abs(x[j]))
-        xp = x.copy()
-        xp[j] += eps
+        xp[j] = x[j] + eps
         fj = model_rhs(xp, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+        xp[j] = x[j]
         for i in range(9):
             phi[i, j] += dt * (fj[i] - f0[i]) / eps
-    x_new = x + dt * f0
+    x_new = np.empty(9)
+    for i in range(9):
+        x_new[i] = x[i] + dt * f0[i]
     P_new = phi @ P @ phi.T + GQG
     return x_new, 0.5 * (P_new + P_new.T)
 

@@ -560,12 +560,28 @@ def rhs(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays) -> np
 def rk4_step(
     x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays, dt: float
 ) -> np.ndarray:
-    """One classical Runge-Kutta step with inputs held over the step."""
+    """One classical Runge-Kutta step with inputs held over the step.
+
+    The stages share one work array and the sums are explicit loops (no temporary arrays);
+    each element is computed with the same operations in the same order as the vector form
+    ``x + (dt / 6) * (k1 + 2 k2 + 2 k3 + k4)``, so the result is bit for bit the same."""
+    n = x.shape[0]
+    h2 = 0.5 * dt
+    xs = np.empty(n)
     k1 = rhs(x, n_rps, env, P)
-    k2 = rhs(x + 0.5 * dt * k1, n_rps, env, P)
-    k3 = rhs(x + 0.5 * dt * k2, n_rps, env, P)
-    k4 = rhs(x + dt * k3, n_rps, env, P)
-    return x + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    for i in range(n):
+        xs[i] = x[i] + h2 * k1[i]
+    k2 = rhs(xs, n_rps, env, P)
+    for i in range(n):
+        xs[i] = x[i] + h2 * k2[i]
+    k3 = rhs(xs, n_rps, env, P)
+    for i in range(n):
+        xs[i] = x[i] + dt * k3[i]
+    k4 = rhs(xs, n_rps, env, P)
+    h6 = dt / 6.0
+    for i in range(n):
+        xs[i] = x[i] + h6 * (((k1[i] + 2.0 * k2[i]) + 2.0 * k3[i]) + k4[i])
+    return xs
 
 
 @njit(**JIT)
