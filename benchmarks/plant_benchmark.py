@@ -8,6 +8,16 @@ import argparse
 import math
 import time
 
+import numpy as np
+
+from benchmarks.control_benchmark import (
+    _per_call,
+    _time_log_row,
+    _time_plant,
+    _time_rhs,
+    _time_sensors,
+    load_text,
+)
 from control.simulation import Simulation
 from sim import environment as envmod
 from sim import params
@@ -45,8 +55,23 @@ def main() -> None:
     print(f"{args.params}: {args.duration:.0f} s simulated, {steps} steps at 100 Hz")
     print(
         f"  wall time {best:.3f} s, {steps / best:,.0f} steps/s, "
-        f"real-time factor {args.duration / best:,.0f}x"
+        f"real-time factor {args.duration / best:,.0f}x, {best / steps * 1e6:.1f} us per step"
     )
+    print(f"  ({load_text()})")
+    env = sim._environment_chunk(1)[0]
+    n = np.zeros(ps.rov.thrusters.T.shape[1])
+    x = sim.plant_state
+    cost = {
+        "plant RK4 step (4 rhs)": _per_call(_time_plant, x, n, env, sim.arrays, 0.01),
+        "plant right-hand side": _per_call(_time_rhs, x, n, env, sim.arrays),
+        "sensor sampling": _per_call(
+            _time_sensors, x, sim.held_y, np.zeros(11), np.ones(5, dtype=np.bool_)
+        ),
+        "log row (plant columns)": _per_call(_time_log_row, x, sim.held_y, env, sim.arrays),
+    }
+    print(f"cost per call, measured alone, best of 5 (us; {load_text()}):")
+    for name, us in cost.items():
+        print(f"  {name:26s} {us:7.2f}")
 
 
 if __name__ == "__main__":

@@ -51,29 +51,50 @@ def model_rhs(
     T_b: np.ndarray,
 ) -> np.ndarray:
     """f(x, tau) of the control plant model; tau in tree axes [N, N, N m]."""
-    c, s = np.cos(x[2]), np.sin(x[2])
-    nu = x[3:6]
     xdot = np.empty(9)
-    xdot[0] = c * nu[0] - s * nu[1]
-    xdot[1] = s * nu[0] + c * nu[1]
-    xdot[2] = nu[2]
+    _model_rhs_into(xdot, x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+    return xdot
+
+
+@njit(**JIT)
+def _model_rhs_into(
+    xdot: np.ndarray,
+    x: np.ndarray,
+    tau: np.ndarray,
+    M_inv: np.ndarray,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    T_b: np.ndarray,
+) -> None:
+    """``model_rhs`` written into ``xdot`` (9,), with scalars for the 3-vectors (the same
+    operations in the same order, no temporary arrays)."""
+    c, s = np.cos(x[2]), np.sin(x[2])
+    nu0, nu1, nu2 = x[3], x[4], x[5]
+    xdot[0] = c * nu0 - s * nu1
+    xdot[1] = s * nu0 + c * nu1
+    xdot[2] = nu2
     # NED-frame forces: wire spring and bias, rotated into the tree's axes
     fn = -k_h * (x[0] - p_eq[0]) + x[6]
     fe = -k_h * (x[1] - p_eq[1]) + x[7]
-    force = np.empty(3)
-    force[0] = tau[0] + c * fn + s * fe
-    force[1] = tau[1] - s * fn + c * fe
-    force[2] = tau[2] + x[8]
-    cor = coriolis3(M, nu)
-    for i in range(3):
-        force[i] -= cor[i] + (D_l[i] + D_nl[i] * abs(nu[i])) * nu[i]
+    # C(nu) nu as in coriolis3
+    ax = M[0, 0] * nu0 + M[0, 1] * nu1 + M[0, 2] * nu2
+    ay = M[1, 0] * nu0 + M[1, 1] * nu1 + M[1, 2] * nu2
+    f0 = tau[0] + c * fn + s * fe
+    f1 = tau[1] - s * fn + c * fe
+    f2 = tau[2] + x[8]
+    f0 -= -ay * nu2 + (D_l[0] + D_nl[0] * abs(nu0)) * nu0
+    f1 -= ax * nu2 + (D_l[1] + D_nl[1] * abs(nu1)) * nu1
+    f2 -= (ay * nu0 - ax * nu1) + (D_l[2] + D_nl[2] * abs(nu2)) * nu2
     for i in range(3):
         acc = 0.0
-        for j in range(3):
-            acc += M_inv[i, j] * force[j]
+        acc += M_inv[i, 0] * f0
+        acc += M_inv[i, 1] * f1
+        acc += M_inv[i, 2] * f2
         xdot[3 + i] = acc
         xdot[6 + i] = -x[6 + i] / T_b[i]
-    return xdot
 
 
 @njit(**JIT)
@@ -95,14 +116,18 @@ def predict(
     with Phi = I + h df/dx (forward-difference Jacobian, step 1e-6 scaled to each state)."""
     f0 = model_rhs(x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
     phi = np.eye(9)
+    xp = x.copy()  # one work copy: each column perturbs one state and puts it back
+    fj = np.empty(9)
     for j in range(9):
         eps = 1e-6 * max(1.0, abs(x[j]))
-        xp = x.copy()
-        xp[j] += eps
-        fj = model_rhs(xp, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+        xp[j] = x[j] + eps
+        _model_rhs_into(fj, xp, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+        xp[j] = x[j]
         for i in range(9):
             phi[i, j] += dt * (fj[i] - f0[i]) / eps
-    x_new = x + dt * f0
+    x_new = np.empty(9)
+    for i in range(9):
+        x_new[i] = x[i] + dt * f0[i]
     P_new = phi @ P @ phi.T + GQG
     return x_new, 0.5 * (P_new + P_new.T)
 

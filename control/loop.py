@@ -51,6 +51,24 @@ from sim import plant, sensors, thrusters
 from sim.gnc import JIT, Rzyx
 
 EYE3 = np.eye(3)
+# the EKF's measured state rows (constant, so no array is made per correction)
+_ROWS_PSI = np.array([2])
+_ROWS_NE = np.array([0, 1])
+_ROWS_R = np.array([5])
+_ROWS_UV = np.array([3, 4])
+
+
+@njit(**JIT)
+def _matvec(A: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """A @ v for the small matrices of the loop, by a plain loop (no BLAS call)."""
+    out = np.empty(A.shape[0])
+    for i in range(A.shape[0]):
+        acc = 0.0
+        for j in range(A.shape[1]):
+            acc += A[i, j] * v[j]
+        out[i] = acc
+    return out
+
 
 # --- modes, allocation kinds, reference kinds ---
 MODE_TREE, MODE_FREE, MODE_MANUAL = 0, 1, 2
@@ -246,19 +264,29 @@ def _observe(
             )
     ne, psi_m, uv, rate = tree_measurements(y, xhat[2], C)
     if accepted[sensors.COMPASS]:
-        xhat, P, nis = ekf.correct(
-            xhat, P, np.array([psi_m]), np.array([2]), np.array([C.r_psi]), 0
-        )
+        z1 = np.empty(1)
+        z1[0] = psi_m
+        r1 = np.empty(1)
+        r1[0] = C.r_psi
+        xhat, P, nis = ekf.correct(xhat, P, z1, _ROWS_PSI, r1, 0)
         log_row[L_NIS + 2] = nis[0]
     if accepted[sensors.POSITION]:
         ne, psi_m, uv, rate = tree_measurements(y, xhat[2], C)
-        xhat, P, nis = ekf.correct(xhat, P, ne, np.array([0, 1]), np.array([C.r_pos, C.r_pos]), -1)
+        r2 = np.empty(2)
+        r2[0] = r2[1] = C.r_pos
+        xhat, P, nis = ekf.correct(xhat, P, ne, _ROWS_NE, r2, -1)
         log_row[L_NIS] = nis[0]
         log_row[L_NIS + 1] = nis[1]
     if accepted[sensors.GYRO]:
-        xhat, P, _ = ekf.correct(xhat, P, np.array([rate]), np.array([5]), np.array([C.r_gyro]), -1)
+        z1 = np.empty(1)
+        z1[0] = rate
+        r1 = np.empty(1)
+        r1[0] = C.r_gyro
+        xhat, P, _ = ekf.correct(xhat, P, z1, _ROWS_R, r1, -1)
     if accepted[sensors.DVL]:
-        xhat, P, _ = ekf.correct(xhat, P, uv, np.array([3, 4]), np.array([C.r_dvl, C.r_dvl]), -1)
+        r2 = np.empty(2)
+        r2[0] = r2[1] = C.r_dvl
+        xhat, P, _ = ekf.correct(xhat, P, uv, _ROWS_UV, r2, -1)
     for k in range(5):
         log_row[L_ACCEPT + k] = 1.0 if accepted[k] else 0.0
     return xhat, P
@@ -403,17 +431,20 @@ def control_step(
         tau6[1] = tau_tree[1]
         tau6[2] = C.heave_newton
         tau6[5] = tau_tree[2]
-        tau3 = C.A @ tau_tree
-        log_row[L_TAU_ROV : L_TAU_ROV + 6] = np.array(
-            [tau3[0], tau3[1], C.heave_newton, 0.0, 0.0, tau3[2]]
-        )
+        tau3 = _matvec(C.A, tau_tree)
+        log_row[L_TAU_ROV] = tau3[0]
+        log_row[L_TAU_ROV + 1] = tau3[1]
+        log_row[L_TAU_ROV + 2] = C.heave_newton
+        log_row[L_TAU_ROV + 3] = 0.0
+        log_row[L_TAU_ROV + 4] = 0.0
+        log_row[L_TAU_ROV + 5] = tau3[2]
         log_row[L_TAU_TREE : L_TAU_TREE + 3] = tau_tree
         for j in range(4):
             log_row[L_TERMS + 3 * j : L_TERMS + 3 * j + 3] = terms[j]
     elif mode == MODE_MANUAL:
         tau_rov6 = manual_step(x, y, cs, C, dt)
         log_row[L_TAU_ROV : L_TAU_ROV + 6] = tau_rov6
-        tau6 = C.rov_to_tree @ tau_rov6
+        tau6 = _matvec(C.rov_to_tree, tau_rov6)
     else:
         eta4, deta4 = _rov_pose(x, y, not C.feedback_ekf)
         if int(cs[CS_LAST_MODE]) != MODE_FREE:
@@ -433,13 +464,16 @@ def control_step(
         )
         cs[CS_FI : CS_FI + 4] = fi
         log_row[L_TAU_ROV : L_TAU_ROV + 6] = tau_rov6
-        tau6 = C.rov_to_tree @ tau_rov6
+        tau6 = _matvec(C.rov_to_tree, tau_rov6)
     cs[CS_LAST_MODE] = mode
     cs[CS_TAU : CS_TAU + 6] = log_row[L_TAU_ROV : L_TAU_ROV + 6]
     log_row[L_ETA_HAT : L_ETA_HAT + 3] = eta
-    log_row[L_NU_HAT : L_NU_HAT + 3] = (
-        xhat[3:6] if C.feedback_ekf else np.array([x[6], x[7], x[11]])
-    )
+    if C.feedback_ekf:
+        log_row[L_NU_HAT : L_NU_HAT + 3] = xhat[3:6]
+    else:
+        log_row[L_NU_HAT] = x[6]
+        log_row[L_NU_HAT + 1] = x[7]
+        log_row[L_NU_HAT + 2] = x[11]
     log_row[L_BIAS : L_BIAS + 3] = xhat[6:9]
     log_row[L_ETA_D : L_ETA_D + 3] = ref[0:3]
     log_row[L_DETA_D : L_DETA_D + 3] = ref[3:6]
@@ -465,7 +499,7 @@ def finish_step(
     row's plant columns. Returns (x_next, xhat, Pc). The one step body after allocation: the
     compiled chunk and the Python chunk (QP allocation) both end every step here."""
     n = speeds_from_forces(f, C)
-    ach = C.T6 @ f
+    ach = _matvec(C.T6, f)
     m = f.shape[0]
     for i in range(m):
         lim = C.f_hi[i] if f[i] >= 0.0 else -C.f_lo[i]
@@ -476,7 +510,9 @@ def finish_step(
     x_next = plant.rk4_step(x, n, env_k, P, dt)
     if C.feedback_ekf:
         # the observer's input: the achieved wrench moved to the tree (eq. 3.6)
-        tau_tree = C.A_inv @ np.array([ach[0], ach[1], ach[5]])
+        ach3 = np.empty(3)
+        ach3[0], ach3[1], ach3[2] = ach[0], ach[1], ach[5]
+        tau_tree = _matvec(C.A_inv, ach3)
         mode = int(log_row[L_MODE])
         on_tree = mode == MODE_TREE or (mode == MODE_MANUAL and env_k[plant.E_GRIP] > 0.5)
         if not on_tree:
@@ -509,7 +545,9 @@ def log_site(row: np.ndarray, x: np.ndarray, env_k: np.ndarray, P: plant.PlantAr
     row[L_CRANE + 1] = env_k[plant.E_CT + 1]
     row[L_WIRE_LEN] = env_k[plant.E_LREST]
     R_t = Rzyx(x[3], x[4], x[5])
-    p_att = x[0:3] + R_t @ P.tree_r_att
+    p_att = _matvec(R_t, P.tree_r_att)
+    for i in range(3):
+        p_att[i] += x[i]
     f = plant.wire_force_n(p_att, env_k, P.tree_W0)
     row[L_TENSION] = np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
 

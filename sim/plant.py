@@ -194,8 +194,11 @@ def _contact_params(ps: ParameterSet) -> dict:
 def _hydro(M_rb, M_a, D_l, D_nl, nu, nu_r, nu_c_dot_lin):
     """Rigid-body Coriolis, added-mass Coriolis, damping and the added-mass part of the water's
     acceleration, as forces on the right-hand side (eq. 2.11-2.12)."""
-    tau = -coriolis_force(M_rb, nu) - coriolis_force(M_a, nu_r)
+    c_rb = coriolis_force(M_rb, nu)
+    c_a = coriolis_force(M_a, nu_r)
+    tau = np.empty(6)
     for i in range(6):
+        tau[i] = -c_rb[i] - c_a[i]
         tau[i] -= (D_l[i] + D_nl[i] * abs(nu_r[i])) * nu_r[i]
         for j in range(3):
             tau[i] += M_a[i, j] * nu_c_dot_lin[j]
@@ -209,7 +212,11 @@ def _relative_velocity(R_nb, nu, v_c_n, a_c_n):
     nu_r = nu.copy()
     nu_r[0:3] -= v_c_b
     # d/dt (R^T v_c) = R^T a_c - omega x (R^T v_c)
-    v_c_dot_b = mtv(R_nb, a_c_n) - cross(nu[3:6], v_c_b)
+    v_c_dot_b = mtv(R_nb, a_c_n)
+    w = nu[3:6]
+    v_c_dot_b[0] -= w[1] * v_c_b[2] - w[2] * v_c_b[1]
+    v_c_dot_b[1] -= w[2] * v_c_b[0] - w[0] * v_c_b[2]
+    v_c_dot_b[2] -= w[0] * v_c_b[1] - w[1] * v_c_b[0]
     return nu_r, v_c_dot_b
 
 
@@ -560,12 +567,28 @@ def rhs(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays) -> np
 def rk4_step(
     x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays, dt: float
 ) -> np.ndarray:
-    """One classical Runge-Kutta step with inputs held over the step."""
+    """One classical Runge-Kutta step with inputs held over the step.
+
+    The stages share one work array and the sums are explicit loops (no temporary arrays);
+    each element is computed with the same operations in the same order as the vector form
+    ``x + (dt / 6) * (k1 + 2 k2 + 2 k3 + k4)``, so the result is bit for bit the same."""
+    n = x.shape[0]
+    h2 = 0.5 * dt
+    xs = np.empty(n)
     k1 = rhs(x, n_rps, env, P)
-    k2 = rhs(x + 0.5 * dt * k1, n_rps, env, P)
-    k3 = rhs(x + 0.5 * dt * k2, n_rps, env, P)
-    k4 = rhs(x + dt * k3, n_rps, env, P)
-    return x + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    for i in range(n):
+        xs[i] = x[i] + h2 * k1[i]
+    k2 = rhs(xs, n_rps, env, P)
+    for i in range(n):
+        xs[i] = x[i] + h2 * k2[i]
+    k3 = rhs(xs, n_rps, env, P)
+    for i in range(n):
+        xs[i] = x[i] + dt * k3[i]
+    k4 = rhs(xs, n_rps, env, P)
+    h6 = dt / 6.0
+    for i in range(n):
+        xs[i] = x[i] + h6 * (((k1[i] + 2.0 * k2[i]) + 2.0 * k3[i]) + k4[i])
+    return xs
 
 
 @njit(**JIT)
