@@ -30,6 +30,7 @@ from app.api import (
     health,
     missions,
     pilot,
+    plots,
     recordings,
     replay,
     run,
@@ -54,6 +55,7 @@ ROUTERS = (
     faults.router,
     scores.router,
     pilot.router,
+    plots.router,
 )
 
 
@@ -154,6 +156,7 @@ def addresses(settings: ConsoleSettings, token: str, viser_port: int | None = No
         f"HTTP API:    http://{host}:{settings.port}/docs  "
         f"(OpenAPI: /openapi.json, telemetry: ws://{host}:{settings.port}/api/telemetry)",
         f"pilot page:  http://{host}:{settings.port}/pilot  (keys and gamepad fly the ROV)",
+        f"plots page:  http://{host}:{settings.port}/plots  (also in the 3D console's Plots)",
         f"token:       {token}   (needed to change the run; watching needs none)",
     ]
     return "\n".join(lines)

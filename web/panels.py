@@ -45,12 +45,6 @@ if TYPE_CHECKING:
 
 SPEEDS = ("0.25", "0.5", "1", "2", "5", "10", "20", "50")
 STATUS_EVERY_S = 0.2
-PLOTS_EVERY_S = 0.5
-PLOT_WINDOW_S = 120.0
-PLOT_MIN_SPAN = (0.2, 0.2, 2.0)
-"""Smallest vertical span of the north, east [m] and heading [deg] plots."""
-PLOT_POINTS_PER_S = 2.0
-"""Points a second of simulated time drawn in the plots."""
 EDIT_HOLD_S = 30.0
 """An input the operator has edited keeps the edit this long before it follows the live value
 again (unless its command is sent first)."""
@@ -95,11 +89,8 @@ class ClientPanel:
         self.last_error = ""
         """What went wrong with the last command this browser sent ('' when it was done)."""
         self._status_wall = 0.0
-        self._plots_wall = 0.0
-        self.updates_sent = {"status": 0, "plots": 0, "plot_bytes": 0}
-        """Status-line and plot refreshes made, and the bytes of plot data assigned
-        (``benchmarks/page_rates.py`` reads them)."""
-        self._plots_key: tuple[str, str, float, int] | None = None
+        self.updates_sent = {"status": 0}
+        """Status-line refreshes made (``benchmarks/page_rates.py`` reads them)."""
         self._scene_version = -1
         self._replay_name: str | None = None
         snap = console.loop.snapshot
@@ -117,8 +108,7 @@ class ClientPanel:
             self.scores = ScoresPanel(self)
         with tabs.add_tab("Instructor"):
             self.instructor = InstructorPanel(self)
-        # not a tab: a hidden tab is drawn 0 px wide, and uPlot's charts came back blank from
-        # one (a collapsed folder keeps its width, so the charts stay valid while folded)
+        # not a tab: the plots page redraws whenever it is shown again (its own ResizeObserver)
         with self.gui.add_folder("Plots", expand_by_default=True):
             self._build_plots()
         self._set_enabled(False)
@@ -314,35 +304,21 @@ class ClientPanel:
             )
 
     def _build_plots(self) -> None:
-        gui = self.gui
-        self.plots = []
-        for title, unit in (("North", "m"), ("East", "m"), ("Heading", "deg")):
-            empty = np.array([-PLOT_WINDOW_S, 0.0])
-            series = (
-                {"label": "t - now [s]"},
-                {"label": f"tree {unit}", "stroke": "#1f5fd0", "width": 2},
-                {"label": f"reference {unit}", "stroke": "#d03030", "width": 1.5, "dash": (6, 4)},
-                # an invisible pair of points that keeps the vertical scale at least
-                # PLOT_MIN_SPAN wide: otherwise millimetre ringing about 1 m is drawn over the
-                # whole height with every tick labelled "1"
-                {
-                    "label": "min. span",
-                    "stroke": "rgba(0,0,0,0)",
-                    "width": 0,
-                    "points": {"show": False},
-                },
-            )
-            self.plots.append(
-                gui.add_uplot(
-                    (empty, empty, empty, empty),
-                    series,  # type: ignore[arg-type]
-                    title=f"{title} [{unit}], last {PLOT_WINDOW_S:.0f} s",
-                    aspect=2.0,
-                    # a fixed window in time before now: the x scale never depends on the
-                    # chart's size or on earlier data, so nothing stale is kept between updates
-                    scales={"x": {"time": False, "range": (-PLOT_WINDOW_S, 0.0)}},
-                )
-            )
+        """The plots page of the console's HTTP API (``app.api.plots``) in an iframe: viser's
+        uPlot handle re-sends its whole data at each assignment (no append), 48 kB/s for two
+        updates a second; the page gets the window once, then only the new rows."""
+        settings = self.console.settings
+        host = settings.host
+        if host in ("0.0.0.0", "::"):  # a wildcard bind: the loopback name on this machine
+            host = "127.0.0.1"
+        host = f"[{host}]" if ":" in host else host
+        self.plots_url = f"http://{host}:{settings.port}/plots?viewer={self.client.client_id}"
+        self.plots_html = self.gui.add_html(
+            f'<iframe src="{self.plots_url}" title="plots" '
+            'style="width:100%;height:530px;border:0;display:block"></iframe>'
+            f'<a href="{self.plots_url}" target="_blank" rel="noopener" '
+            'style="font-size:12px">open the plots in their own tab</a>'
+        )
 
     def _build_record(self) -> None:
         gui = self.gui
@@ -671,9 +647,6 @@ class ClientPanel:
             self._status_wall = _next_due(self._status_wall, STATUS_EVERY_S, now)
             self._update_status(view, snap)
             self.updates_sent["status"] += 1
-        if now >= self._plots_wall:
-            self._plots_wall = _next_due(self._plots_wall, PLOTS_EVERY_S, now)
-            self._update_plots(view)
 
     def _shown(self, live: Snapshot) -> Snapshot:
         """What this browser shows: its replay (drawn in its own scope of the scene, which
@@ -826,43 +799,6 @@ class ClientPanel:
             self._make_replay_slider(rp.start_s, rp.end_s, rp.marks)
         if abs(self.replay_time.value - rp.t_s) > 0.05:
             self.replay_time.value = round(rp.t_s, 1)
-
-    def _update_plots(self, snap: Snapshot) -> None:
-        trend = snap.trend
-        if len(trend) < 2:
-            return
-        # viser re-sends a plot's whole data at every assignment (its uPlot has no append,
-        # and a tuple of arrays is never found equal to the last), so nothing is assigned
-        # when there is nothing new: a paused run or replay sent its full window twice a second
-        key = (
-            snap.source,
-            snap.replay.name if snap.replay else "",
-            float(trend[-1, 0]),
-            len(trend),
-        )
-        if key == self._plots_key:
-            return
-        self._plots_key = key
-        recent = trend[trend[:, 0] >= trend[-1, 0] - PLOT_WINDOW_S]
-        # PLOT_POINTS_PER_S a second (a trace a few hundred pixels wide needs no more): the
-        # whole window goes out at each update (viser's uPlot has no append), so this is what
-        # keeps the message small
-        first_of_bin = np.unique(np.floor(recent[:, 0] * PLOT_POINTS_PER_S), return_index=True)[1]
-        recent = recent[np.union1d(first_of_bin, [len(recent) - 1])]
-        t = recent[:, 0] - trend[-1, 0]
-        data = (
-            (t, recent[:, 1], recent[:, 4]),
-            (t, recent[:, 2], recent[:, 5]),
-            (t, np.degrees(recent[:, 3]), np.degrees(recent[:, 6])),
-        )
-        for plot, series, span in zip(self.plots, data, PLOT_MIN_SPAN, strict=True):
-            mid = 0.5 * (float(np.min(series[1:])) + float(np.max(series[1:])))
-            frame = np.full(len(t), np.nan)
-            frame[0], frame[-1] = mid - span / 2, mid + span / 2
-            arrays = tuple(np.ascontiguousarray(a) for a in (*series, frame))
-            plot.data = arrays
-            self.updates_sent["plot_bytes"] += sum(a.nbytes for a in arrays)
-        self.updates_sent["plots"] += 1
 
 
 def _next_due(due: float, period: float, now: float) -> float:

@@ -23,7 +23,7 @@ from web.panels import ClientPanel
 from web.scene import SceneView
 
 if TYPE_CHECKING:
-    from app.console import Console
+    from app.console import Console, Snapshot
 
 FRAME_HZ = 20.0
 """Scene updates per second."""
@@ -97,6 +97,14 @@ class ConsoleView:
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
             self._panels.pop(client.client_id, None)
+
+    def shown_snapshot(self, client_id: int | None, live: Snapshot) -> Snapshot:
+        """What browser ``client_id`` shows: its own replay when it has one open, else the live
+        run (the plots page follows it)."""
+        with self._lock:
+            panel = self._panels.get(client_id) if client_id is not None else None
+        replay = panel.replay if panel is not None else None
+        return replay.snapshot(live) if replay is not None else live
 
     def _publish(self) -> None:
         """Frames on a fixed schedule (``FRAME_HZ``, not a fixed wait after each frame's work:

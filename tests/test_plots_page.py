@@ -1,0 +1,149 @@
+"""The console's plots page (``app.api.plots``): what its socket sends (the window once, then
+only new rows), in a real headless Chromium inside the 3D console's "Plots" folder.
+
+Defect (issue 10): viser's uPlot handles were assigned the whole 120 s window at every update
+(viser has no append), 47.6 kB/s of plot data while running."""
+
+from __future__ import annotations
+
+import io
+import itertools
+import json
+import time
+from types import SimpleNamespace
+from typing import Any
+
+import httpx
+import numpy as np
+import pytest
+from PIL import Image
+
+from app.api.plots import POINTS_PER_S, WINDOW_S, PlotFeed
+from app.server import RunningServer
+from tests.browser import save, wait_for
+
+
+def _trend(t0: float, t1: float) -> np.ndarray:
+    t = np.arange(round(t0 * 10), round(t1 * 10) + 1) / 10.0
+    return np.column_stack([t, np.sin(t), np.cos(t), 0.1 * t, 0 * t, 0 * t, 0 * t + 0.5])
+
+
+def _snap(trend: np.ndarray, source: str = "live", name: str = "") -> Any:
+    replay = SimpleNamespace(name=name) if source == "replay" else None
+    return SimpleNamespace(trend=trend, source=source, replay=replay)
+
+
+def test_feed_sends_the_window_once_then_only_new_rows() -> None:
+    feed = PlotFeed()
+    first = feed.message(_snap(_trend(0.0, 200.0)))
+    assert first is not None and first["type"] == "window" and first["source"] == "live"
+    t = [r[0] for r in first["rows"]]
+    assert t[0] >= 200.0 - WINDOW_S and t[-1] == 200.0
+    assert len(t) == WINDOW_S * POINTS_PER_S + 1, "2 rows a second over 120 s (both ends)"
+    assert first["rows"][-1][3] == pytest.approx(np.degrees(20.0), abs=1e-3), "degrees"
+    assert feed.message(_snap(_trend(0.0, 200.0))) is None, "nothing new: nothing sent"
+    assert feed.message(_snap(_trend(0.0, 200.4))) is None, "same half-second bin as sent"
+    nxt = feed.message(_snap(_trend(0.0, 201.7)))
+    assert nxt is not None and nxt["type"] == "append"
+    assert [r[0] for r in nxt["rows"]] == [200.5, 201.0, 201.5]
+    back = feed.message(_snap(_trend(0.0, 5.0)))  # the run was reset: time went back
+    assert back is not None and back["type"] == "window" and back["rows"][-1][0] == 5.0
+    rp = feed.message(_snap(_trend(0.0, 5.0), "replay", "dive"))
+    assert rp is not None and rp["type"] == "window" and rp["name"] == "dive"
+
+
+def _frame(page) -> Any:
+    wait_for(lambda: any("/plots" in f.url for f in page.frames), 30.0, "the plots iframe")
+    frame = next(f for f in page.frames if "/plots" in f.url)
+    wait_for(
+        lambda: (frame.evaluate("() => (window.__plots || {}).rows || 0")) > 10,
+        30.0,
+        "rows in the plots page",
+    )
+    return frame
+
+
+def _ink(png: bytes) -> tuple[int, int]:
+    """Blue-dominated (tree) and red-dominated (reference) pixels in the right 40 % of a
+    screenshot (the recent end of the traces; the legend's swatches are on the left; the
+    grid, axes and text are grey: no colour dominates there)."""
+    img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=int)
+    r, _, b = np.moveaxis(img[:, int(0.6 * img.shape[1]) :], -1, 0)
+    return int(np.sum(b - r > 60)), int(np.sum(r - b > 60))
+
+
+def test_plots_draw_and_keep_their_window_after_folding(page, api: httpx.Client) -> None:
+    api.put("/api/run/speed", json={"speed": 5.0}).raise_for_status()
+    try:
+        frame = _frame(page)
+        shot = page.locator("iframe").first.screenshot()
+        save(shot, "console_plots.png")
+        blue, red = _ink(shot)
+        assert blue > 40 and red > 40, f"traces drawn: {blue} blue, {red} red pixels"
+        folder = page.locator("xpath=//*[normalize-space(.)='Plots']").first
+        folder.click()  # fold
+        time.sleep(2.0)
+        folder.click()  # and unfold: viser drops a folded folder's content, so the iframe
+        time.sleep(2.0)  # is a new one, sent the window afresh
+        frame = _frame(page)
+        stats = frame.evaluate("() => window.__plots")
+        assert len(stats["ticks"]) == 3
+        for ticks, width in zip(stats["ticks"], stats["widths"], strict=True):
+            assert ticks[0] == -120 and ticks[-1] == 0, "a fixed window before now"
+            assert width > 100, "drawn at the panel's width again"
+        blue, red = _ink(page.locator("iframe").first.screenshot())
+        assert blue > 40 and red > 40, "drawn again after unfolding"
+    finally:
+        api.put("/api/run/speed", json={"speed": 1.0}).raise_for_status()
+
+
+def test_socket_sends_only_new_rows_and_nothing_while_paused(
+    page, server: RunningServer, api: httpx.Client
+) -> None:
+    api.post("/api/run/resume").raise_for_status()
+    api.put("/api/run/speed", json={"speed": 5.0}).raise_for_status()
+    try:
+        frame = _frame(page)
+        frame.goto(frame.url)  # a fresh page and socket, logged from its first message
+        frame = _frame(page)
+
+        def log() -> list[dict[str, Any]]:
+            return list(frame.evaluate("() => window.__plots.log"))
+
+        wait_for(lambda: len(log()) >= 6, 30.0, "six plot messages")
+        messages = log()
+        assert messages[0]["type"] == "window" and len(messages[0]["t"]) > 10
+        assert all(m["type"] == "append" for m in messages[1:])
+        times = [t for m in messages for t in m["t"]]
+        assert all(b > a for a, b in itertools.pairwise(times)), "no row twice, in time order"
+        assert max(len(m["t"]) for m in messages[1:]) <= 10, "new rows only"
+        assert max(m["chars"] for m in messages[1:]) < 600, "an append is a few hundred bytes"
+        api.post("/api/run/pause").raise_for_status()
+        time.sleep(1.5)  # a message under way may still arrive
+        before = frame.evaluate("() => window.__plots.messages")
+        time.sleep(3.0)
+        assert frame.evaluate("() => window.__plots.messages") == before, "nothing while paused"
+        api.post("/api/run/resume").raise_for_status()
+        wait_for(
+            lambda: frame.evaluate("() => window.__plots.messages") > before,
+            10.0,
+            "plot rows again after resuming",
+        )
+        assert frame.evaluate("() => window.__plots.repeats + window.__plots.backwards") == 0
+    finally:
+        api.post("/api/run/resume")
+        api.put("/api/run/speed", json={"speed": 1.0})
+
+
+def test_plots_socket_refuses_other_origins(server: RunningServer) -> None:
+    from websockets.exceptions import InvalidStatus
+    from websockets.sync.client import connect
+
+    url = server.base_url.replace("http", "ws", 1) + "/api/plots"
+    with pytest.raises(InvalidStatus, match="403"):
+        with connect(url, origin="http://evil.example"):  # type: ignore[arg-type]
+            pass
+    with connect(url) as ws:  # a script (no Origin) may read
+        assert json.loads(ws.recv(timeout=10))["type"] == "window"
+    page = httpx.get(server.base_url + "/plots", headers={"Host": "evil.example"})
+    assert page.status_code == 400, "Host header checked"
