@@ -510,7 +510,8 @@ def log_site(row: np.ndarray, x: np.ndarray, env_k: np.ndarray, P: plant.PlantAr
     row[L_WIRE_LEN] = env_k[plant.E_LREST]
     R_t = Rzyx(x[3], x[4], x[5])
     p_att = x[0:3] + R_t @ P.tree_r_att
-    f = plant.wire_force_n(p_att, env_k, P.tree_W0)
+    v_att = plant.attachment_velocity_n(x, R_t, P.tree_r_att)
+    f = plant.wire_force_damped_n(p_att, v_att, env_k, P.tree_W0)
     row[L_TENSION] = np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
 
 

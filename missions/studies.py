@@ -10,7 +10,7 @@ import numpy as np
 
 from control.config import ControlSettings
 from control.simulation import Simulation
-from missions import runner, schema
+from missions import runner, schema, seaway
 from sim import environment as envmod
 from sim import params
 from sim.gnc import ssa
@@ -279,4 +279,4 @@ def table_4_2(seed: int | None = None) -> list[Row]:
     return rows
 
 
-STUDIES = {"table-4.1": table_4_1, "table-4.2": table_4_2}
+STUDIES = {"table-4.1": table_4_1, "table-4.2": table_4_2, "landing-limit": seaway.landing_limit}
