@@ -605,7 +605,8 @@ def study(
         list[str] | None,
         typer.Option(
             help="table-4.1: how the sea is modelled (repeat for several; default all): "
-            "'drag', 'drag, W0 195 kN', 'drag + vessel', 'morison', 'morison + vessel'"
+            "'drag', 'drag, W0 195 kN', 'drag + vessel', 'morison', 'morison + vessel', "
+            "'morison + vessel, elastic wire' (not in the default)"
         ),
     ] = None,
     json_out: Annotated[bool, typer.Option("--json")] = False,

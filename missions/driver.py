@@ -153,6 +153,7 @@ class MissionDriver:
                         "event": e.kind,
                         "tension_newton": e.tension_newton,
                         "duration_s": e.duration_s,
+                        "static_newton": watch.static_newton,
                     },
                 }
             )

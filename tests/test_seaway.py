@@ -112,7 +112,7 @@ def test_mission_option_wire_elastic_is_parsed_and_refused_when_unknown():
         schema.parse_mission(m)
 
 
-def test_docking_mission_from_a_heaving_vessel_logs_wire_events():
+def test_docking_mission_from_a_heaving_vessel_logs_wire_events(tmp_path):
     """The library's docking mission with the elastic wire and the vessel moving in Hs 6 m,
     Tp 10 s without heave compensation: the landing's slack and snap are events of kind
     ``wire`` in the mission's log, and the contact is faster than in calm water."""
@@ -127,3 +127,8 @@ def test_docking_mission_from_a_heaving_vessel_logs_wire_events():
     assert "slack" in kinds and "snap" in kinds
     (landing,) = r.landings
     assert landing.contact_speed_mps > 0.1
+    from app.plots import mission_figures
+
+    paths = mission_figures(r, tmp_path)
+    wire_png = [p for p in paths if p.name.endswith("-wire.png")]
+    assert wire_png and wire_png[0].stat().st_size > 10_000
