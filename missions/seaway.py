@@ -28,6 +28,7 @@ longer within the limits (``rov-console study landing-limit``).
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -146,7 +147,8 @@ class SeawayLanding:
     snap_peak_newton: float
     """Largest simulated snap load (0: no snap) [N]."""
     snap_estimate_newton: float
-    """F_snap = v_snap sqrt(K M) at the largest snap speed (0: no snap) [N]."""
+    """F_snap = v_snap sqrt(K M) at the largest snap speed (0: no snap) [N]: the snap's
+    dynamic part, to set beside the simulated peak less the static tension."""
     contact_speed_mps: float
     """The tree's vertical speed when its bottom reached the post tops (nan: no contact)."""
     max_contact_speed_mps: float
@@ -172,7 +174,8 @@ class SeawayLanding:
         verdict = "within limits" if self.within_limits else "NOT within limits"
         snap = (
             f"{self.snap_events} snap loads, peak {self.snap_peak_newton / 1e3:.0f} kN "
-            f"(estimate {self.snap_estimate_newton / 1e3:.0f} kN)"
+            f"(static + {(self.snap_peak_newton - self.static_newton) / 1e3:.0f} kN; "
+            f"estimate + {self.snap_estimate_newton / 1e3:.0f} kN)"
             if self.snap_events
             else "no snap loads"
         )
@@ -357,7 +360,7 @@ def tension_figure(landing: SeawayLanding, path) -> object:
             ax.plot(e.t_s, e.tension_newton / 1e3, "v", color="tab:purple")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("tension [kN]")
-    ax.set_title(landing.words(), fontsize=7)
+    ax.set_title("\n".join(textwrap.wrap(landing.words(), 120)), fontsize=8)
     ax.legend(fontsize=7, loc="upper right")
     fig.tight_layout()
     fig.savefig(path, dpi=110)

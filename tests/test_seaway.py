@@ -2,8 +2,6 @@
 criterion (tension below 10 % of the static tension), from a moving vessel, with the elastic
 wire. Each landing: 100 m of water, the tree lowered 5 m onto the docking frame at 0.05 m/s."""
 
-import math
-
 import numpy as np
 import pytest
 
@@ -66,9 +64,11 @@ def test_swell_without_heave_compensation_goes_slack_and_snaps():
     assert on.slack_events < off.slack_events
     assert on.max_tension_newton < off.max_tension_newton
     assert on.contact_speed_mps < off.contact_speed_mps
-    # the snap estimate is of the same order as the simulated dynamic part of the peak
-    assert off.snap_estimate_newton > 0.0
-    assert math.isfinite(off.snap_estimate_newton)
+    # the energy-balance estimate F = v_snap sqrt(K M) against the simulated peak less the
+    # static tension: 390 against 385 kN; within a factor 1.5 (the estimate takes the largest
+    # snap speed and no damping, the peak comes from the simulation)
+    ratio = off.snap_estimate_newton / (off.snap_peak_newton - off.static_newton)
+    assert 1 / 1.5 < ratio < 1.5
 
 
 def test_tension_figure_is_drawn(tmp_path):
