@@ -48,12 +48,16 @@ class MissionDriver:
         """Steps of the present request not yet run."""
         self._request_parts: list[LogRows] = []
         self.wire_watch = (
-            seaway.WireWatch(float(sim.plant_ps.tree.submerged_weight_newton))
+            seaway.WireWatch(
+                float(sim.plant_ps.tree.submerged_weight_newton),
+                from_s=seaway.VESSEL_RUN_IN_S if sim.vessel_motion is not None else 0.0,
+            )
             if sim.wire_model == "elastic"
             else None
         )
         """Slack wire and snap loads (missions.seaway), with the elastic wire: each one is an
-        event of kind ``wire``."""
+        event of kind ``wire`` (with the vessel moving, from ``VESSEL_RUN_IN_S`` on: the
+        start of its motion is a step of the crane tip)."""
 
     # ------------------------------------------------------------------ state
     @property
