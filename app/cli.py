@@ -590,7 +590,13 @@ def report(
 
 @app.command()
 def study(
-    name: Annotated[str, typer.Argument(help="table-4.1 (waves) or table-4.2 (robustness)")],
+    name: Annotated[
+        str,
+        typer.Argument(
+            help="table-4.1 (waves), table-4.2 (robustness) or landing-limit (the largest "
+            "sea state a landing from the moving vessel stays within the limits)"
+        ),
+    ],
     duration: Annotated[
         float, typer.Option(help="table-4.1: seconds per run", min=130.0, max=36000.0)
     ] = 600.0,
@@ -599,10 +605,27 @@ def study(
         list[str] | None,
         typer.Option(
             help="table-4.1: how the sea is modelled (repeat for several; default all): "
-            "'drag', 'drag, W0 195 kN', 'drag + vessel', 'morison', 'morison + vessel'"
+            "'drag', 'drag, W0 195 kN', 'drag + vessel', 'morison', 'morison + vessel', "
+            "'morison + vessel, elastic wire' (not in the default)"
         ),
     ] = None,
     json_out: Annotated[bool, typer.Option("--json")] = False,
+    period: Annotated[
+        float, typer.Option(help="landing-limit: peak period Tp [s]", min=3.0, max=25.0)
+    ] = 10.0,
+    compensation: Annotated[
+        bool, typer.Option(help="landing-limit: the crane's heave compensation (80 %)")
+    ] = True,
+    hs_step: Annotated[
+        float, typer.Option(help="landing-limit: Hs step [m]", min=0.1, max=12.0)
+    ] = 0.5,
+    hs_max: Annotated[
+        float, typer.Option(help="landing-limit: largest Hs tried [m]", min=0.1, max=20.0)
+    ] = 12.0,
+    plot: Annotated[
+        Path | None,
+        typer.Option(help="landing-limit: PNG of the wire tension of the last landing run"),
+    ] = None,
 ) -> None:
     """Rerun one of the thesis's studies and print our numbers beside the thesis's.
 
@@ -614,6 +637,9 @@ def study(
 
     if name not in studies.STUDIES:
         raise typer.BadParameter(f"study must be one of {', '.join(studies.STUDIES)}, got {name!r}")
+    if name == "landing-limit":
+        _landing_limit(period, compensation, hs_step, hs_max, seed, plot, json_out)
+        return
     if name == "table-4.1":
         try:
             variants = (
@@ -665,6 +691,57 @@ def study(
             cells = [f"{by_key[(case, c)].ours[k]:.4f}" for c in columns]
             table.add_row(case, f"{first.thesis[k]:.4f}", *cells)
         console.print(table)
+
+
+def _landing_limit(
+    period: float,
+    compensation: bool,
+    hs_step: float,
+    hs_max: float,
+    seed: int,
+    plot: Path | None,
+    json_out: bool,
+) -> None:
+    """Step Hs up (head sea, elastic wire, tree alone on the wire, full scale, 100 m of
+    water) until a landing goes slack or touches down faster than the frame allows."""
+    from missions import seaway
+
+    if hs_step > hs_max:
+        raise typer.BadParameter(f"--hs-step must be at most --hs-max ({hs_max}), got {hs_step}")
+    hs, landings = seaway.landing_limit(period, compensation, hs_step, hs_max, seed=seed)
+    if plot is not None:
+        seaway.tension_figure(landings[-1], plot)
+    if json_out:
+        typer.echo(
+            json.dumps(
+                {
+                    "last_hs_within_limits_m": hs,
+                    "landings": [
+                        {
+                            "hs_m": x.significant_height_m,
+                            "within_limits": x.within_limits,
+                            "slack_events": x.slack_events,
+                            "snap_events": x.snap_events,
+                            "snap_peak_newton": x.snap_peak_newton,
+                            "snap_estimate_newton": x.snap_estimate_newton,
+                            "contact_speed_mps": x.contact_speed_mps,
+                            "min_tension_newton": x.min_tension_newton,
+                            "max_tension_newton": x.max_tension_newton,
+                        }
+                        for x in landings
+                    ],
+                },
+                indent=2,
+            )
+        )
+        return
+    for x in landings:
+        typer.echo(x.words())
+    comp = "on" if compensation else "off"
+    typer.echo(
+        f"last Hs within the limits at Tp {period:g} s, heave compensation {comp}: {hs:g} m"
+        + (f" (the largest tried, {hs_max:g} m)" if landings[-1].within_limits else "")
+    )
 
 
 @app.command()

@@ -149,12 +149,38 @@ def forces_figure(rows: LogRows, legs, path: Path, title: str) -> Path:
     return path
 
 
+def wire_figure(rows: LogRows, events: list[dict], path: Path, title: str) -> Path:
+    """The wire's tension at the tree with the slack limit (10 % of the static tension) and
+    the mission's ``wire`` events (missions.seaway): slack spans shaded, snap peaks marked."""
+    wire_events = [e for e in events if e.get("kind") == "wire"]
+    static = float(wire_events[0]["data"]["static_newton"])
+    fig, ax = plt.subplots(figsize=(9, 4))
+    ax.plot(rows.t_s, rows["wire_tension"] / 1e3, lw=0.8, label="wire tension at the tree")
+    ax.axhline(static / 1e3, color="0.5", ls="--", lw=0.8, label="static (W0)")
+    ax.axhline(0.1 * static / 1e3, color="tab:red", ls=":", label="slack limit (10 % of static)")
+    for e in wire_events:
+        d = e["data"]
+        if d["event"] == "slack":
+            ax.axvspan(e["t_s"], e["t_s"] + d["duration_s"], color="tab:red", alpha=0.2, lw=0)
+        else:
+            ax.plot(e["t_s"], d["tension_newton"] / 1e3, "v", color="tab:purple")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("tension [kN]")
+    ax.set_title(title)
+    ax.legend(fontsize=7, loc="upper right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def mission_figures(result, out_dir: Path, crane_tip_n=None, docking=None) -> list[Path]:
-    """All three figures of a mission result into ``out_dir``."""
+    """All three figures of a mission result into ``out_dir``, and the wire's tension when the
+    mission logged slack wire or snap loads (``wire`` events, elastic wire)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     data = result.log
     name = result.name
-    return [
+    figures = [
         pose_figure(data, result.legs, out_dir / f"{name}-pose.png", f"{name}: pose"),
         track_figure(
             data, out_dir / f"{name}-track.png", f"{name}: north-east track", crane_tip_n, docking
@@ -163,3 +189,8 @@ def mission_figures(result, out_dir: Path, crane_tip_n=None, docking=None) -> li
             data, result.legs, out_dir / f"{name}-forces.png", f"{name}: forces and thrusters"
         ),
     ]
+    if any(e.get("kind") == "wire" for e in result.events):
+        figures.append(
+            wire_figure(data, result.events, out_dir / f"{name}-wire.png", f"{name}: lift wire")
+        )
+    return figures

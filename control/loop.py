@@ -548,7 +548,8 @@ def log_site(row: np.ndarray, x: np.ndarray, env_k: np.ndarray, P: plant.PlantAr
     p_att = _matvec(R_t, P.tree_r_att)
     for i in range(3):
         p_att[i] += x[i]
-    f = plant.wire_force_n(p_att, env_k, P.tree_W0)
+    v_att = plant.attachment_velocity_n(x, R_t, P.tree_r_att)
+    f = plant.wire_force_damped_n(p_att, v_att, env_k, P.tree_W0)
     row[L_TENSION] = np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
 
 

@@ -63,6 +63,16 @@ WIRE_LENGTH_RANGE_M = (1.0, 5000.0)
 WINCH_RATE_MAX_MPS = 2.0
 VESSEL_SPEED_MAX_MPS = 5.0
 HEAVE_FORCE_MAX_NEWTON = 1.0e5
+WIRE_MODELS = ("quasi-static", "elastic")
+"""The lift wire in the plant. ``quasi-static``: the elastic pendulum of ``sim.plant`` (the
+spring k_z of eq. 2.25 on the tree's own inertia, no damping). ``elastic``: the same spring
+with the wire's first axial mode: a third of the wire's mass lumped at the tree (vertically)
+and a dashpot beside the spring (``wire_damping_ratio``), so the lift wire's resonance
+T0 = 2 pi sqrt((M + A33 + m_wire L / 3) / (EA / L)) and slack and snap are simulated."""
+WIRE_DAMPING_RATIO = 0.02
+"""Damping ratio of the elastic wire's dashpot against its axial mode [-]: an assumed value
+for the internal (strand friction) damping of a steel wire rope, small beside the tree's
+hydrodynamic heave damping; a parameter (``wire_damping_ratio``), not a measured figure."""
 GRIP_REACH_M = 0.3
 """Farthest the ROV's origin may be from its mount on the tree for the gripper to close [m]:
 the reach of a work-class manipulator's jaw around the tree's grab bar is a few decimetres, and
@@ -148,7 +158,17 @@ class Simulation:
         plant_ps: ParameterSet | None = None,
         start_gripping: bool = True,
         vessel: vesselmod.VesselMotion | None = None,
+        wire: str = "quasi-static",
+        wire_damping_ratio: float = WIRE_DAMPING_RATIO,
     ) -> None:
+        if wire not in WIRE_MODELS:
+            raise ValueError(f"wire must be one of {', '.join(WIRE_MODELS)}, got {wire!r}")
+        if not (math.isfinite(wire_damping_ratio) and 0.0 <= wire_damping_ratio <= 1.0):
+            raise ValueError(f"wire_damping_ratio must lie in [0, 1], got {wire_damping_ratio!r}")
+        self.wire_model = wire
+        """``quasi-static`` or ``elastic`` (see ``WIRE_MODELS``)."""
+        self.wire_damping_ratio = float(wire_damping_ratio)
+        self._pivot_velocity_n = np.zeros(3)
         if not (DT_RANGE_S[0] <= dt_s <= DT_RANGE_S[1]):
             raise ValueError(
                 f"dt_s must be in [{DT_RANGE_S[0]:g}, {DT_RANGE_S[1]:g}] s, got {dt_s}"
@@ -661,7 +681,29 @@ class Simulation:
         if self.faults:
             self._faults_in_chunk(env, noise)
         self._vessel_in_chunk(env, n)
+        if self.wire_model == "elastic":
+            self._elastic_wire_in_chunk(env)
         return env, noise
+
+    def _elastic_wire_in_chunk(self, env: FloatArray) -> None:
+        """The elastic wire's entries: the lumped wire mass m_wire L / 3, the dashpot
+        c = 2 zeta sqrt(k_z (M + A33 + m_wire L / 3)), and the velocity of the wire's top (the
+        crane tip's motion and the winch's pay-out) from the chunk's own rows (second-order
+        differences; a one-step chunk keeps the last velocity)."""
+        ps = self.plant_ps
+        m_wire = ps.wire.mass_per_length_kg_m * self.wire_length_m / 3.0
+        m_heave = ps.tree.M_rb[2, 2] + ps.tree.M_a[2, 2] + m_wire
+        k_z = env[:, plant.E_KZ]
+        env[:, plant.E_WMASS] = m_wire
+        env[:, plant.E_WDAMP] = 2.0 * self.wire_damping_ratio * np.sqrt(k_z * m_heave)
+        top = env[:, plant.E_CT : plant.E_CT + 3].copy()
+        top[:, 2] += env[:, plant.E_LREST]
+        if len(env) >= 2:
+            vel = np.gradient(top, self.dt_s, axis=0)
+            self._pivot_velocity_n = vel[-1].copy()
+        else:
+            vel = self._pivot_velocity_n[None, :]
+        env[:, plant.E_VPIV : plant.E_VPIV + 3] = vel
 
     def _vessel_in_chunk(self, env: FloatArray, n: int) -> None:
         """Add the vessel's wave-frequency motion to the crane tip (sim.vessel); the crane

@@ -15,7 +15,7 @@ import numpy as np
 
 from control.columns import LogRows
 from control.simulation import Simulation, SimulationDiverged
-from missions import schema
+from missions import schema, seaway
 from missions.legs import LEG_EXECUTORS, MissionContext
 from missions.scoring import LegSpan, MissionResult, score
 from missions.setup import charted_frame
@@ -47,6 +47,17 @@ class MissionDriver:
         self._pending = 0
         """Steps of the present request not yet run."""
         self._request_parts: list[LogRows] = []
+        self.wire_watch = (
+            seaway.WireWatch(
+                float(sim.plant_ps.tree.submerged_weight_newton),
+                from_s=seaway.VESSEL_RUN_IN_S if sim.vessel_motion is not None else 0.0,
+            )
+            if sim.wire_model == "elastic"
+            else None
+        )
+        """Slack wire and snap loads (missions.seaway), with the elastic wire: each one is an
+        event of kind ``wire`` (with the vessel moving, from ``VESSEL_RUN_IN_S`` on: the
+        start of its motion is a step of the crane tip)."""
 
     # ------------------------------------------------------------------ state
     @property
@@ -133,6 +144,24 @@ class MissionDriver:
             return True
         return False
 
+    def _watch_wire(self, rows: LogRows) -> None:
+        watch = self.wire_watch
+        assert watch is not None
+        for e in watch.feed(rows.t_s, rows["wire_tension"]):
+            self.ctx.events.append(
+                {
+                    "t_s": round(e.t_s, 3),
+                    "kind": "wire",
+                    "text": e.text(watch.static_newton),
+                    "data": {
+                        "event": e.kind,
+                        "tension_newton": e.tension_newton,
+                        "duration_s": e.duration_s,
+                        "static_newton": watch.static_newton,
+                    },
+                }
+            )
+
     def _finish_request(self) -> None:
         """Hand the rows of the request just run to the executor."""
         data = LogRows.join(self._request_parts, self.sim.n_thrusters)
@@ -171,6 +200,8 @@ class MissionDriver:
                 self.ctx.events.append(
                     {"t_s": round(t_s, 3), "kind": "fault", "text": text, "data": {}}
                 )
+            if self.wire_watch is not None:
+                self._watch_wire(rows)
             self._pending -= k
             if self._pending == 0:
                 self._finish_request()

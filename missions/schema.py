@@ -159,6 +159,12 @@ class Setup(_Model):
     current: CurrentSetup = CurrentSetup(speed_mps=0.0, direction_deg=0.0)
     waves: WaveSetup | None = None
     vessel: VesselSetup | None = None
+    wire: Literal["quasi-static", "elastic"] = Field(
+        default="quasi-static",
+        description="lift wire in the plant: quasi-static (spring on the tree's inertia) or "
+        "elastic (with the wire's first axial mode: a third of its mass at the tree and "
+        "axial damping; resonance, slack and snap loads)",
+    )
     feedback: Feedback = "perfect"
     allocation: Allocation = "priority"
     reference: Reference = "third"
@@ -474,7 +480,9 @@ def _where(data: dict, loc: tuple) -> str:
     """Human-readable location: legs[3] (rotate).angle_deg."""
     parts: list[str] = []
     node: object = data
+    after_index = False
     for p in loc:
+        was_index, after_index = after_index, isinstance(p, int)
         if isinstance(p, int):
             kind = (
                 node[p].get("type")
@@ -484,8 +492,8 @@ def _where(data: dict, loc: tuple) -> str:
             parts[-1] = f"{parts[-1]}[{p + 1}]" + (f" ({kind})" if kind else "")
             node = node[p] if isinstance(node, list) and p < len(node) else None
         else:
-            if str(p) in LEG_TYPES:
-                continue  # discriminator tag, already shown
+            if was_index and str(p) in LEG_TYPES:
+                continue  # a leg's discriminator tag, already shown (not setup.wire, .vessel)
             parts.append(str(p))
             node = node.get(p) if isinstance(node, dict) else None
     return ".".join(parts)

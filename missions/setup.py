@@ -90,6 +90,7 @@ def build_simulation(
         plant_ps=plant_ps,
         start_gripping=s.start_gripping,
         vessel=vessel,
+        wire=s.wire,
     )
     chart = charted_frame(mission)
     if s.docking_frame is not None and chart is not None:

@@ -54,7 +54,10 @@ E_GRIP = 17  # 1 while the ROV grips the tree (coupling spring engaged), 0 when 
 E_FRAME = 18  # 18:20 docking frame centre, NED north/east [m]
 E_FRAME_PSI = 20  # docking frame heading [rad]
 E_LAND = 21  # depth of the frame's landing surface and the seabed around it [m]; 0: no bottom
-N_ENV = 22
+E_WMASS = 22  # wire mass lumped at the tree, m_wire L / 3 [kg]; 0: the quasi-static wire
+E_WDAMP = 23  # axial damping of the wire, a dashpot beside its spring [N s/m]; 0: none
+E_VPIV = 24  # 24:27 velocity of the wire's top (crane tip plus pay-out), NED [m/s]
+N_ENV = 27
 
 
 class PlantArrays(NamedTuple):
@@ -253,6 +256,64 @@ def wire_force_n(p_att_n: np.ndarray, env: np.ndarray, W0: float) -> np.ndarray:
         f[1] = -tension * dy / d
         f[2] = -tension * dz / d
     return f
+
+
+@njit(**JIT)
+def wire_force_damped_n(
+    p_att_n: np.ndarray, v_att_n: np.ndarray, env: np.ndarray, W0: float
+) -> np.ndarray:
+    """``wire_force_n`` with the wire's axial damping (``E_WDAMP``): the tension is
+    k_z (d - rest) + c d_dot along the wire, d_dot the stretch rate of the attachment point
+    against the wire's top (``E_VPIV``); never negative, zero when slack. With c = 0 it is
+    ``wire_force_n`` exactly."""
+    pivot, rest = wire_pivot(env, W0)
+    dx = p_att_n[0] - pivot[0]
+    dy = p_att_n[1] - pivot[1]
+    dz = p_att_n[2] - pivot[2]
+    d = np.sqrt(dx * dx + dy * dy + dz * dz)
+    f = np.zeros(3)
+    if d > rest and d > 0.0:
+        rate = (
+            dx * (v_att_n[0] - env[E_VPIV])
+            + dy * (v_att_n[1] - env[E_VPIV + 1])
+            + dz * (v_att_n[2] - env[E_VPIV + 2])
+        ) / d
+        tension = env[E_KZ] * (d - rest) + env[E_WDAMP] * rate
+        if tension > 0.0:
+            f[0] = -tension * dx / d
+            f[1] = -tension * dy / d
+            f[2] = -tension * dz / d
+    return f
+
+
+@njit(**JIT)
+def attachment_velocity_n(x: np.ndarray, R_t: np.ndarray, r_att: np.ndarray) -> np.ndarray:
+    """Velocity of the wire's attachment point on the tree, NED [m/s]."""
+    return mv(R_t, x[6:9] + cross(x[9:12], r_att))
+
+
+@njit(**JIT)
+def tree_acceleration(
+    x: np.ndarray, tau: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarray
+) -> np.ndarray:
+    """nu_dot of the tree for the wrench ``tau`` (tree axes). With the elastic wire, the wire's
+    mass lumped at the tree (``E_WMASS``, m_wire L / 3: the first axial mode's share, as in
+    T0) moves with the tree's centre along the vertical only (the wire's axial direction);
+    its inertia m_w a_down is added to the tree's, (M + m_w u u^T) nu_dot = tau - u m_w
+    (e_down . R (omega x v)), u = [R^T e_down, 0], solved with Sherman-Morrison on M^-1."""
+    nu_dot = mv(P.tree_M_inv, tau)
+    m_w = env[E_WMASS]
+    if m_w <= 0.0:
+        return nu_dot
+    u = np.zeros(6)
+    u[0:3] = R_t[2, :]
+    cor = cross(x[9:12], x[6:9])
+    a_rot = R_t[2, 0] * cor[0] + R_t[2, 1] * cor[1] + R_t[2, 2] * cor[2]
+    rhs6 = tau - m_w * a_rot * u
+    base = mv(P.tree_M_inv, rhs6)
+    minv_u = mv(P.tree_M_inv, u)
+    denom = 1.0 + m_w * np.dot(u, minv_u)
+    return base - minv_u * (m_w * np.dot(u, base) / denom)
 
 
 @njit(**JIT)
@@ -521,7 +582,8 @@ def tree_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarray)
     f_n[2] += P.tree_W0
     tau[0:3] += mtv(R_t, f_n)
     p_att_n = x[0:3] + mv(R_t, P.tree_r_att)
-    f_wire_b = mtv(R_t, wire_force_n(p_att_n, env, P.tree_W0))
+    v_att_n = attachment_velocity_n(x, R_t, P.tree_r_att)
+    f_wire_b = mtv(R_t, wire_force_damped_n(p_att_n, v_att_n, env, P.tree_W0))
     tau[0:3] += f_wire_b
     tau[3:6] += cross(P.tree_r_att, f_wire_b)
     if env[E_LAND] > 0.0:
@@ -559,7 +621,7 @@ def rhs(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays) -> np
         xdot[12:18] = _kinematics(x[12:18], x[18:24], R_r)
         xdot[18:24] = mv(P.rov_M_inv, tau_r)
     xdot[0:6] = _kinematics(x[0:6], x[6:12], R_t)
-    xdot[6:12] = mv(P.tree_M_inv, tau_t)
+    xdot[6:12] = tree_acceleration(x, tau_t, env, P, R_t)
     return xdot
 
 
