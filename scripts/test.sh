@@ -24,4 +24,6 @@ echo "test: ruff check, ruff format --check, mypy" >&2
 .venv/bin/ruff check "${code[@]}"
 .venv/bin/ruff format --check "${code[@]}"
 .venv/bin/mypy
-exec .venv/bin/python -m pytest "$@"
+# two workers (this is a 2-core machine); a test module stays on one worker, because the
+# browser modules share one server and one Chromium per module. TEST_WORKERS=0 runs serially.
+exec .venv/bin/python -m pytest -n "${TEST_WORKERS:-2}" --dist loadfile "$@"

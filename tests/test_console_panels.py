@@ -102,9 +102,10 @@ def test_typed_gains_outside_their_band_are_refused_in_words(
     before = api.get("/api/gains").json()
     box = field(page, "kp [surge, sway, yaw]")
     box.fill(typed)
-    time.sleep(0.2)  # viser sends an input's value at most every 50 ms; a person is slower
+    time.sleep(0.5)  # viser sends an input's value at most every 50 ms; a person is slower
     click(page, "Apply gains")
-    page.get_by_text(words, exact=False).first.wait_for(timeout=5000)
+    # the refusal comes back over the page's WebSocket: seconds on a loaded machine
+    page.get_by_text(words, exact=False).first.wait_for(timeout=15_000)
     assert api.get("/api/gains").json() == before, "a refused change changes nothing"
     assert box.input_value() == typed, "the typed values stay, to be corrected"
 

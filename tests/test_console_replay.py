@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import io
 import re
+import tempfile
 import time
+from pathlib import Path
 
 import httpx
 import numpy as np
@@ -101,11 +103,22 @@ def test_replay_is_per_browser_while_the_live_run_goes_on(
         api.put("/api/run/speed", json={"speed": 1.0}).raise_for_status()
         for pg in (page, other):
             click(pg, "Top-down")
-        time.sleep(2.0)
         # the same paused live scene in both (a few pixels differ: measured 0.1-1.04, with
-        # labels and the last track redraw)
+        # labels and the last track redraw); under load a page takes a few seconds to draw
+        # the last update and finish the camera's move
+        try:
+            wait_for(
+                lambda: _scene_difference(page, other) < 2.0,
+                20.0,
+                "both pages to show the same paused live scene",
+            )
+        except AssertionError as err:
+            # keep both pictures for whoever reads the failure
+            where = Path(tempfile.mkdtemp(prefix="replay-live-"))
+            (where / "page-a.png").write_bytes(page.screenshot())
+            (where / "page-b.png").write_bytes(other.screenshot())
+            raise AssertionError(f"{err}; both pages' pictures in {where}") from None
         live_difference = _scene_difference(page, other)
-        assert live_difference < 2.0, "both pages show the same live scene"
 
         # page A opens the first recording and scrubs to near its end
         _open(page, first)
