@@ -179,3 +179,16 @@ def test_pilot_demand_outside_full_stick_is_refused_by_name():
     assert sim.pilot_holds == (True, True)
     sim.set_pilot_demand(-0.5, 0.25, 1.0, -1.0)
     np.testing.assert_allclose(sim.pilot_demand, [-0.5, 0.25, 1.0, -1.0])
+
+
+@pytest.mark.parametrize(
+    "psi_deg, shown",
+    [(-0.001, 0.0), (359.96, 0.0), (-0.06, 359.9), (90.04, 90.0), (-90.0, 270.0), (720.3, 0.3)],
+)
+def test_pilot_page_heading_reads_as_a_compass(psi_deg, shown):
+    """Defect: a heading a hair west of north read "360.0 deg" on the pilot page."""
+    from app.console.pilot import compass_heading_deg
+
+    heading = compass_heading_deg(math.radians(psi_deg))
+    assert heading == pytest.approx(shown, abs=1e-9)
+    assert 0.0 <= heading < 360.0 and f"{heading:.1f}" != "360.0"

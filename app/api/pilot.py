@@ -24,7 +24,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
-import math
 from pathlib import Path
 from typing import Any
 
@@ -40,6 +39,7 @@ from app.console.pilot import (
     PilotDisconnected,
     PilotHolds,
     PilotTakeOver,
+    compass_heading_deg,
     pilot_name,
 )
 
@@ -80,7 +80,7 @@ def _snapshot_status(console: Console, last: dict[str, Any]) -> dict[str, Any]:
     return {
         **last,
         "mode": snap.mode,
-        "heading_deg": math.degrees(rov[5]) % 360.0,
+        "heading_deg": compass_heading_deg(float(rov[5])),
         "depth_m": rov[2],
         "t_s": snap.t_s,
     }

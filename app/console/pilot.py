@@ -37,6 +37,12 @@ def pilot_name(name: object) -> str:
     return text
 
 
+def compass_heading_deg(psi_rad: float) -> float:
+    """A heading as a compass shows it: in [0, 360) deg at the page's 0.1 deg, so a heading a
+    hair west of north reads 0.0, not 360.0."""
+    return round(math.degrees(psi_rad), 1) % 360.0 + 0.0
+
+
 def pilot_status(sim: Simulation) -> dict[str, object]:
     """What the pilot page shows of the simulation (read on the loop task)."""
     heading, depth = sim.pilot_holds
@@ -45,7 +51,7 @@ def pilot_status(sim: Simulation) -> dict[str, object]:
         "mode": sim.mode,
         "holds": {"heading": heading, "depth": depth},
         "demand": dict(zip(AXES, (float(v) for v in sim.pilot_demand), strict=True)),
-        "heading_deg": math.degrees(rov[5]) % 360.0,
+        "heading_deg": compass_heading_deg(float(rov[5])),
         "depth_m": float(rov[2]),
         "surge_mps": float(sim.plant_state[18]),
         "t_s": sim.t_s,
