@@ -209,3 +209,27 @@ def test_overview_follows_the_tree_and_the_readout_matches_the_state(
     click(page, "Overview")
     wait_for(lambda: page.get_by_text(MOVED).count() == 0, 10.0, "following again")
     api.post("/api/run/resume").raise_for_status()
+
+
+def test_camera_echoes_are_kept_by_time_not_by_count():
+    """Defect: under load (load average 11) the browser's report of a follow-mode camera came
+    back more than 100 poses (2.5 s at 20 frames a second) late and was taken for the user's
+    hand, so the overview stopped following."""
+    from web.geometry import CameraEchoes
+
+    echoes = CameraEchoes(keep_s=10.0)
+    frames = [
+        (0.05 * k, np.array([k * 0.01, 0.0, 390.0]), np.array([0.0, 0.0, 400.0]))
+        for k in range(200)
+    ]
+    for t, pos, look in frames:
+        echoes.sent(pos, look, t)
+    _, pos_late, look_late = frames[199 - 120]  # sent 6 s before the last pose
+    assert echoes.is_echo(pos_late, look_late), "a 6 s late echo is the browser's, not a hand"
+    assert not echoes.is_echo(np.array([5.0, 0.0, 390.0]), np.array([0.0, 0.0, 400.0]))
+    for k in range(20):  # a still scene: the same two poses each frame are kept once
+        echoes.sent(np.array([1.0, 1.0, 390.0]), np.array([0.0, 0.0, 400.0]), 20.0 + 0.05 * k)
+        echoes.sent(np.array([1.0, 1.0, 390.0]), np.array([0.1, 0.0, 400.0]), 20.0 + 0.05 * k)
+    assert not echoes.is_echo(pos_late, look_late), "poses older than 10 s are dropped"
+    assert echoes.is_echo(np.array([1.0, 1.0, 390.0]), np.array([0.1, 0.0, 400.0]))
+    assert len(echoes._sent) == 2

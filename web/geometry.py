@@ -293,3 +293,48 @@ def funnel_points_b(post_xy_m: FloatArray, tree_height_m: float) -> FloatArray:
     """(k, 3) funnel centres in the tree's axes: under the post positions, at its bottom."""
     xy = np.asarray(post_xy_m, float)
     return np.column_stack([xy, np.full(len(xy), 0.5 * tree_height_m)])
+
+
+CAMERA_ECHO_S = 10.0
+"""How long a camera pose sent to a browser may still come back as that browser's report of
+its camera. A loaded browser reports seconds late (measured over 2.5 s at load 11 on the
+2-core test machine, where the follow-mode camera had been taken for a hand move)."""
+
+
+class CameraEchoes:
+    """The camera poses sent to one browser lately, to tell its echoes of them from a camera
+    the user moved. Poses are kept by the time they were sent, not by count, so a browser
+    that lags behind a fast-moving follow camera still finds its report among them."""
+
+    def __init__(self, keep_s: float = CAMERA_ECHO_S) -> None:
+        self.keep_s = keep_s
+        self._sent: list[tuple[float, np.ndarray, np.ndarray]] = []
+
+    def __bool__(self) -> bool:
+        return bool(self._sent)
+
+    def sent(self, position_n: np.ndarray, look_at_n: np.ndarray, now_s: float) -> None:
+        """Note a pose sent at ``now_s`` [s, monotonic clock]; drops those older than
+        ``keep_s``. A pose equal to one of the last two sent is kept once (a still scene
+        sends the same two poses each frame)."""
+        position_n, look_at_n = np.array(position_n, float), np.array(look_at_n, float)
+        for i in range(len(self._sent) - 1, max(len(self._sent) - 3, -1), -1):
+            _, p, q = self._sent[i]
+            if np.array_equal(p, position_n) and np.array_equal(q, look_at_n):
+                del self._sent[i]  # sent again: kept once, as of now
+                break
+        self._sent.append((now_s, position_n, look_at_n))
+        cutoff = now_s - self.keep_s
+        first = next((i for i, entry in enumerate(self._sent) if entry[0] >= cutoff), 0)
+        del self._sent[:first]
+
+    def is_echo(self, position_n: np.ndarray, look_at_n: np.ndarray) -> bool:
+        """Whether a reported camera is one of the poses sent (to 1 mm per metre of
+        distance from the origin, the browser's float32 round trip)."""
+        if not self._sent:
+            return False
+        pos, look = np.asarray(position_n, float), np.asarray(look_at_n, float)
+        scale = 1e-3 * (1.0 + float(np.linalg.norm(self._sent[-1][1])))
+        ours_pos = any(np.linalg.norm(pos - p) < scale for _, p, _ in self._sent)
+        ours_look = any(np.linalg.norm(look - q) < scale for _, _, q in self._sent)
+        return ours_pos and ours_look

@@ -124,7 +124,7 @@ class ClientPanel:
             self.camera_buttons = gui.add_button_group("Camera", CAMERAS)
             self.camera_buttons.on_click(self._on_camera)
             self.camera_md = gui.add_markdown("")
-        self._camera_sent: list[tuple[np.ndarray, np.ndarray]] = []
+        self._camera_sent = geo.CameraEchoes()
         self._camera_settle = 0.0
         self.client.camera.on_update(self._on_camera_moved)
         with gui.add_folder("Access", expand_by_default=True):
@@ -463,11 +463,7 @@ class ClientPanel:
             return
         if time.monotonic() < self._camera_settle:
             return  # reports of the camera the browser had before
-        pos, look = np.asarray(camera.position), np.asarray(camera.look_at)
-        scale = 1e-3 * (1.0 + float(np.linalg.norm(self._camera_sent[-1][0])))
-        ours_pos = any(np.linalg.norm(pos - p) < scale for p, _ in self._camera_sent)
-        ours_look = any(np.linalg.norm(look - q) < scale for _, q in self._camera_sent)
-        if not (ours_pos and ours_look):
+        if not self._camera_sent.is_echo(np.asarray(camera.position), np.asarray(camera.look_at)):
             self._camera_pending = False
             self.camera_md.content = "camera moved by hand: press Overview to follow again"
 
@@ -623,17 +619,13 @@ class ClientPanel:
                 cam.fov = float(fov)
         except AssertionError:
             return  # the browser has not reported its camera yet: try again next frame
-        # the last 100 distinct poses sent (5 s of a moving scene at 20 frames a second), to
-        # tell the browser's echoes of them from a camera the user moved
-        sent = self._camera_sent
-        if not sent:
-            self._camera_settle = time.monotonic() + CAMERA_SETTLE_S
-        if not sent or np.any(sent[-1][0] != pose.position_n) or np.any(sent[-1][1] != between):
-            self._camera_sent = [
-                *sent[-98:],
-                (pose.position_n, between),
-                (pose.position_n, pose.look_at_n),
-            ]
+        # the poses sent lately, to tell the browser's echoes of them from a camera the user
+        # moved (the in-between pose and the pose itself)
+        now = time.monotonic()
+        if not self._camera_sent:
+            self._camera_settle = now + CAMERA_SETTLE_S
+        self._camera_sent.sent(pose.position_n, between, now)
+        self._camera_sent.sent(pose.position_n, pose.look_at_n, now)
         self._camera_pending = self.camera_mode in FOLLOWING
 
     def update(self, snap: Snapshot) -> None:
