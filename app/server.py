@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import socket
+import sys
 import threading
 import time
 from collections.abc import AsyncIterator, Iterator
@@ -42,6 +43,14 @@ from app.api.schemas import ErrorOut
 from app.api.state import StateJsonCache
 from app.console import Console, ConsoleSettings
 
+GIL_SWITCH_INTERVAL_S = 0.001
+"""How long a Python thread may hold the GIL before another runnable one gets it (5 ms by
+default): the loop's tick waits at most about this long for the server's and the 3D view's
+threads."""
+
+LOOP_JOIN_TIMEOUT_S = 10.0
+"""How long shutdown waits for the loop's thread to finish its tick and close the session."""
+
 ROUTERS = (
     health.router,
     state.router,
@@ -65,7 +74,15 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        task = asyncio.create_task(console.loop.run(), name="console-loop")
+        # the loop on its own thread and event loop: HTTP handlers and telemetry sends on the
+        # server's event loop do not delay its ticks; a shorter GIL switch interval (5 ms by
+        # default) bounds how long another thread can keep it from waking up
+        switch_interval = sys.getswitchinterval()
+        sys.setswitchinterval(GIL_SWITCH_INTERVAL_S)
+        loop_thread = threading.Thread(
+            target=asyncio.run, args=(console.loop.run(),), name="console-loop", daemon=True
+        )
+        loop_thread.start()
         view = None
         try:
             if settings.view:
@@ -77,8 +94,8 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
             yield
         finally:
             console.loop.stop()
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
+            await asyncio.to_thread(loop_thread.join, LOOP_JOIN_TIMEOUT_S)
+            sys.setswitchinterval(switch_interval)
             if view is not None:
                 await asyncio.to_thread(view.stop)
 

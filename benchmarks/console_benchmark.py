@@ -11,9 +11,15 @@ WebSocket, and measures over a window:
   a page script cannot count it) and telemetry states per second (the /api/telemetry
   stream, asked for at 20 Hz).
 
+With ``--telemetry-only`` the clients are plain WebSocket clients of ``/api/telemetry`` (threads
+of this process, no browser): the issue's "five telemetry clients" without five software-WebGL
+renderers sharing the loop's two cores. ``--speed`` runs the loop faster than real time
+(the issue asks for 50x without overruns).
+
 Not a unit test. Run from the repository root:
 
     .venv/bin/python benchmarks/console_benchmark.py [--clients 5] [--seconds 30] [--json]
+    .venv/bin/python benchmarks/console_benchmark.py --telemetry-only [--speed 50]
 """
 
 from __future__ import annotations
@@ -84,6 +90,79 @@ def renice_browsers(profile_dir: str, niceness: int) -> int:
             except OSError:
                 pass
     return count
+
+
+def _loop_figures(srv, wall0: float, tick0: int, t_sim0: float) -> dict:
+    """The loop's rate, jitter and overruns since ``tick0`` (read at the end of a window)."""
+    loop = srv.console.loop
+    ticks, t_sim = loop.ticks - tick0, loop.snapshot.t_s - t_sim0
+    wall = time.perf_counter() - wall0
+    lateness_ms = loop.lateness_s()[-ticks:] * 1e3
+    state = httpx.get(f"{srv.base_url}/api/state").json()
+    return {
+        "window_s": round(wall, 2),
+        "loop_ticks_per_s": round(ticks / wall, 2),
+        "simulated_s_per_wall_s": round(t_sim / wall, 4),
+        "jitter_median_ms": round(float(np.median(lateness_ms)), 3),
+        "jitter_p99_ms": round(float(np.percentile(lateness_ms, 99)), 3),
+        "jitter_max_ms": round(float(np.max(lateness_ms)), 3),
+        "overruns": state["loop"]["overruns"],
+        "mission_state": state["mission"]["state"],
+        "t_s": round(state["t_s"], 2),
+    }
+
+
+def run_telemetry(clients: int, seconds: float, mission: str, speed: float) -> dict:
+    """``clients`` plain WebSocket clients of the telemetry stream (threads), no browser."""
+    import threading
+
+    from websockets.sync.client import connect
+
+    settings = ConsoleSettings(
+        port=0,
+        viser_port=0,
+        mission=mission,
+        speed=speed,
+        recordings_dir=Path(tempfile.mkdtemp(prefix="bench-rec-")),
+    )
+    with serve_in_thread(settings) as srv:
+        url = srv.base_url.replace("http", "ws") + f"/api/telemetry?rate_hz={TELEMETRY_HZ}"
+        counts = [0] * clients
+        stop = threading.Event()
+
+        def listen(i: int) -> None:
+            with connect(url, max_size=None) as ws:
+                while not stop.is_set():
+                    try:
+                        ws.recv(timeout=1.0)
+                    except TimeoutError:
+                        continue
+                    counts[i] += 1
+
+        threads = [threading.Thread(target=listen, args=(i,), daemon=True) for i in range(clients)]
+        for thread in threads:
+            thread.start()
+        time.sleep(3.0)  # connected and streaming
+        loop = srv.console.loop
+        before = list(counts)
+        tick0, t_sim0, wall0 = loop.ticks, loop.snapshot.t_s, time.perf_counter()
+        time.sleep(seconds)
+        after = list(counts)
+        figures = _loop_figures(srv, wall0, tick0, t_sim0)
+        stop.set()
+        for thread in threads:
+            thread.join(timeout=5.0)
+    return {
+        "clients": clients,
+        "kind": "telemetry WebSocket clients (no browser)",
+        "mission": mission,
+        "speed": speed,
+        **figures,
+        "telemetry_states_per_s_per_client": [
+            round((a - b) / figures["window_s"], 1) for a, b in zip(after, before, strict=True)
+        ],
+        "telemetry_requested_hz": TELEMETRY_HZ,
+    }
 
 
 def run(clients: int, seconds: float, mission: str, browser_nice: int) -> dict:
@@ -177,8 +256,37 @@ def main() -> None:
         default=0,
         help="niceness for the browsers (e.g. 10: as if on other machines)",
     )
+    parser.add_argument(
+        "--telemetry-only",
+        action="store_true",
+        help="plain WebSocket telemetry clients instead of browsers",
+    )
+    parser.add_argument("--speed", type=float, default=1.0, help="loop speed (x real time)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args()
+    if args.telemetry_only:
+        result = run_telemetry(args.clients, args.seconds, args.mission, args.speed)
+        result["load_average"] = [round(v, 2) for v in os.getloadavg()]
+        if args.json:
+            print(json.dumps(result, indent=2))
+            return
+        print(
+            f"{result['clients']} telemetry clients, speed {result['speed']}x, "
+            f"{result['window_s']} s window, mission {result['mission']} "
+            f"({result['mission_state']}), load {result['load_average']}"
+        )
+        print(
+            f"loop: {result['loop_ticks_per_s']} ticks/s, {result['simulated_s_per_wall_s']} "
+            f"simulated s per wall s, overruns {result['overruns']}"
+        )
+        print(
+            f"jitter: median {result['jitter_median_ms']} ms, p99 {result['jitter_p99_ms']} "
+            f"ms, max {result['jitter_max_ms']} ms"
+        )
+        print(f"telemetry states/s per client: {result['telemetry_states_per_s_per_client']}")
+        return
+    if args.speed != 1.0:
+        parser.error("--speed is for --telemetry-only (browsers run at 1x)")
     result = run(args.clients, args.seconds, args.mission, args.browser_nice)
     if args.json:
         print(json.dumps(result, indent=2))

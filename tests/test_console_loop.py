@@ -239,3 +239,43 @@ def test_a_run_started_while_recording_goes_on_in_the_same_file(tmp_path: Path) 
     runs = [e for e in data.events if e.get("kind") == "run"]
     assert len(runs) == 1 and runs[0]["t_s"] == pytest.approx(1.51, abs=1e-9)
     assert "loop-test" in runs[0]["text"]
+
+
+def test_a_handler_that_blocks_the_server_does_not_stop_the_loop(tmp_path: Path) -> None:
+    """Defect (issue 15, console jitter): the loop ran as a task on the HTTP server's event
+    loop, so any handler or telemetry send that held that event loop delayed its ticks. It
+    now has its own thread and event loop: a handler blocking the server for 0.6 s leaves the
+    loop ticking (100 ticks/s; before: none while blocked)."""
+    import threading
+
+    import httpx
+
+    from app.console import ConsoleSettings
+    from app.server import serve_in_thread
+
+    settings = ConsoleSettings(port=0, view=False, recordings_dir=tmp_path)
+    with serve_in_thread(settings) as srv:
+
+        async def hold_the_event_loop() -> dict:
+            time.sleep(0.6)  # a blocking call on the server's event loop
+            return {}
+
+        srv.app.add_api_route("/test/block", hold_the_event_loop)
+        loop = srv.console.loop
+        names = {t.name for t in threading.enumerate()}
+        assert "console-loop" in names and "console-http" in names
+        done = threading.Event()
+
+        def call() -> None:
+            httpx.get(f"{srv.base_url}/test/block", timeout=10.0)
+            done.set()
+
+        caller = threading.Thread(target=call)
+        caller.start()
+        time.sleep(0.15)  # the handler is now holding the server's event loop
+        ticks0 = loop.ticks
+        time.sleep(0.3)
+        ticks = loop.ticks - ticks0
+        assert not done.is_set(), "the handler was still blocking while ticks were counted"
+        caller.join()
+        assert ticks >= 10, f"{ticks} ticks in 0.3 s while the server's event loop was blocked"
