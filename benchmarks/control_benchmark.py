@@ -36,24 +36,34 @@ def thesis_current() -> envmod.CurrentParams:
 
 @njit(cache=True)
 def _time_plant(x, n, env, P, dt, reps):
+    """The RK4 step as the loops call it: into the state, with one work space."""
+    x = x.copy()
+    work = plant.make_work(n.shape[0])
     for _ in range(reps):
-        x = plant.rk4_step(x, n, env, P, dt)
+        plant.rk4_step_into(x, x, n, env, P, dt, work)
     return x
 
 
 @njit(cache=True)
 def _time_rhs(x, n, env, P, reps):
+    """One right-hand side (the thrusters' wrench computed once, as in the RK4 step)."""
+    work = plant.make_work(n.shape[0])
+    thrust_b = np.zeros(6)
+    plant.thruster_wrench_into(thrust_b, n, P, work)
+    xdot = np.zeros(plant.N_STATE)
     s = 0.0
     for _ in range(reps):
-        s += plant.rhs(x, n, env, P)[0]
+        plant.rhs_into(xdot, x, thrust_b, env, P, work)
+        s += xdot[0]
     return s
 
 
 @njit(cache=True)
 def _time_log_row(x, y, env, P, reps):
     row = np.zeros(loop.N_LOG)
+    work = plant.make_work(P.thr_T.shape[1])
     for k in range(reps):
-        loop.write_plant_row(row, k * 0.01, x, y, env, P)
+        loop.write_plant_row(row, k * 0.01, x, y, env, P, work)
     return row
 
 
@@ -71,8 +81,9 @@ def _time_control_step(x, y, xhat, Pc, cs, target, C, Q, reps):
 
 @njit(cache=True)
 def _time_sensors(x, held, noise, fresh, reps):
+    held = held.copy()
     for _ in range(reps):
-        held = sensors.sample(x, held, noise, fresh, sensors.Y_SENSOR)
+        sensors.sample_into(held, x, held, noise, fresh, sensors.Y_SENSOR)
     return held
 
 
