@@ -48,7 +48,7 @@ from control.columns import (
     N_LOG,
 )  # the log row is declared in control.columns
 from sim import plant, sensors, thrusters
-from sim.gnc import JIT, JIT_NOALLOC, Rzyx_into, mv_into
+from sim.gnc import JIT, JIT_NOALLOC, Rzyx_into, mv3_into
 
 EYE3 = np.eye(3)
 # the EKF's measured state rows (constant, so no array is made per correction)
@@ -561,7 +561,7 @@ def log_site(
     cphi, sphi = np.cos(x[3]), np.sin(x[3])
     Rzyx_into(R_t, cphi, sphi, np.cos(x[4]), np.sin(x[4]), np.cos(x[5]), np.sin(x[5]))
     p_att = work.vec[plant.V_A, 0:3]
-    mv_into(p_att, R_t, P.tree_r_att)
+    mv3_into(p_att, R_t, P.tree_r_att)
     for i in range(3):
         p_att[i] += x[i]
     v_att = work.vec[plant.V_B, 0:3]
@@ -629,17 +629,39 @@ def run_open_chunk(
     when the plant diverged."""
     n = env.shape[0]
     log = np.zeros((n, N_LOG))
-    m = n_rps.shape[0]
     x = x.copy()  # advanced in place (see run_chunk)
     held_y = held_y.copy()
-    work = plant.make_work(m)
+    work = plant.make_work(n_rps.shape[0])
+    n_done = _open_steps(k0, x, held_y, n_rps, env, noise, fresh, P, dt, log, work)
+    return x, held_y, log, n_done
+
+
+@njit(**JIT_NOALLOC)
+def _open_steps(
+    k0: int,
+    x: np.ndarray,
+    held_y: np.ndarray,
+    n_rps: np.ndarray,
+    env: np.ndarray,
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    P: plant.PlantArrays,
+    dt: float,
+    log: np.ndarray,
+    work: plant.PlantWork,
+) -> int:
+    """The steps of ``run_open_chunk``, advancing x and held_y in place and writing the log's
+    rows, allocating nothing. Returns the number of steps done (< n when x stopped being
+    finite)."""
+    n = env.shape[0]
+    m = n_rps.shape[0]
     for j in range(n):
         row = log[j]
         plant.rk4_step_into(x, x, n_rps, env[j], P, dt, work)
         if not plant.all_finite(x):
-            return x, held_y, log, j
+            return j
         sensors.sample_into(held_y, x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
         for i in range(m):
             row[L_N + i] = n_rps[i]
         write_plant_row(row, (k0 + j + 1) * dt, x, held_y, env[j], P, work)
-    return x, held_y, log, n
+    return n

@@ -275,6 +275,37 @@ def mv_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
         out[i] = s
 
 
+@njit(inline="always", **JIT_NOALLOC)
+def mv3_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
+    """``mv_into`` for a 3x3 A: the same sums, with loop bounds the compiler sees (and
+    inlined where it is called, so no call per product)."""
+    for i in range(3):
+        s = 0.0
+        for j in range(3):
+            s += A[i, j] * x[j]
+        out[i] = s
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def mv6_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
+    """``mv_into`` for a 6x6 A (see ``mv3_into``)."""
+    for i in range(6):
+        s = 0.0
+        for j in range(6):
+            s += A[i, j] * x[j]
+        out[i] = s
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def mtv3_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
+    """``mtv_into`` for a 3x3 A (see ``mv3_into``)."""
+    for j in range(3):
+        s = 0.0
+        for i in range(3):
+            s += A[i, j] * x[i]
+        out[j] = s
+
+
 @njit(**JIT)
 def mtv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
     """A^T @ x with explicit loops."""

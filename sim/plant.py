@@ -30,8 +30,10 @@ from sim.gnc import (
     gvect_into,
     mm_into,
     mtm_into,
-    mtv_into,
+    mtv3_into,
     mv,
+    mv3_into,
+    mv6_into,
     mv_into,
     rotation_to_vector_into,
 )
@@ -259,12 +261,12 @@ def _relative_velocity_into(nu_r, v_c_b, v_c_dot_b, R_nb, nu, v_c_n, a_c_n):
     """nu_r = nu - nu_c (eq. 2.10) into ``nu_r`` (6,), the current's body components into
     ``v_c_b`` (3,) and their rate d/dt (R^T v_c) = R^T a_c - omega x (R^T v_c) into
     ``v_c_dot_b`` (3,)."""
-    mtv_into(v_c_b, R_nb, v_c_n)
+    mtv3_into(v_c_b, R_nb, v_c_n)
     for i in range(6):
         nu_r[i] = nu[i]
     for i in range(3):
         nu_r[i] -= v_c_b[i]
-    mtv_into(v_c_dot_b, R_nb, a_c_n)
+    mtv3_into(v_c_dot_b, R_nb, a_c_n)
     w = nu[3:6]
     v_c_dot_b[0] -= w[1] * v_c_b[2] - w[2] * v_c_b[1]
     v_c_dot_b[1] -= w[2] * v_c_b[0] - w[0] * v_c_b[2]
@@ -362,7 +364,7 @@ def attachment_velocity_into(
     cross_into(tmp, x[9:12], r_att)
     for i in range(3):
         tmp[i] = x[6 + i] + tmp[i]
-    mv_into(out, R_t, tmp)
+    mv3_into(out, R_t, tmp)
 
 
 @njit(**JIT)
@@ -389,7 +391,7 @@ def tree_acceleration_into(
     wire's axial direction); its inertia m_w a_down is added to the tree's,
     (M + m_w u u^T) nu_dot = tau - u m_w (e_down . R (omega x v)), u = [R^T e_down, 0],
     solved with Sherman-Morrison on M^-1."""
-    mv_into(nu_dot, P.tree_M_inv, tau)
+    mv6_into(nu_dot, P.tree_M_inv, tau)
     m_w = env[E_WMASS]
     if m_w <= 0.0:
         return
@@ -405,9 +407,9 @@ def tree_acceleration_into(
     for i in range(6):
         rhs6[i] = tau[i] - m_w * a_rot * u[i]
     base = vec[V_BASE, 0:6]
-    mv_into(base, P.tree_M_inv, rhs6)
+    mv6_into(base, P.tree_M_inv, rhs6)
     minv_u = vec[V_MINVU, 0:6]
-    mv_into(minv_u, P.tree_M_inv, u)
+    mv6_into(minv_u, P.tree_M_inv, u)
     denom = 1.0 + m_w * np.dot(u, minv_u)
     scale = m_w * np.dot(u, base) / denom
     for i in range(6):
@@ -445,29 +447,29 @@ def coupling_wrench_into(
     mm_into(R_m, R_t, P.mount_R)
     w_t = nu_t[3:6]
     # position error: R_r^T (p_m - p_rov), p_m = p_tree + R_t r_mount
-    mv_into(a, R_t, P.mount_r)
+    mv3_into(a, R_t, P.mount_r)
     for i in range(3):
         a[i] = x[i] + a[i]
     for i in range(3):
         a[i] = a[i] - x[12 + i]
     e_p_b = vec[V_EPB, 0:3]
-    mtv_into(e_p_b, R_r, a)
+    mtv3_into(e_p_b, R_r, a)
     # velocity error: R_r^T R_t (v_t + w_t x r_mount) - v_rov
     cross_into(a, w_t, P.mount_r)
     for i in range(3):
         a[i] = nu_t[i] + a[i]
-    mv_into(b, R_t, a)
+    mv3_into(b, R_t, a)
     e_v_b = vec[V_EVB, 0:3]
-    mtv_into(e_v_b, R_r, b)
+    mtv3_into(e_v_b, R_r, b)
     for i in range(3):
         e_v_b[i] = e_v_b[i] - nu_r[i]
     R_tmp = mat[M_TMP]
     mtm_into(R_tmp, R_r, R_m)
     e_th = vec[V_ETH, 0:3]
     rotation_to_vector_into(e_th, R_tmp)
-    mv_into(a, R_t, w_t)
+    mv3_into(a, R_t, w_t)
     e_w = vec[V_EW, 0:3]
-    mtv_into(e_w, R_r, a)
+    mtv3_into(e_w, R_r, a)
     for i in range(3):
         e_w[i] = e_w[i] - nu_r[3 + i]
     for i in range(3):
@@ -475,11 +477,11 @@ def coupling_wrench_into(
         w_rov[3 + i] = P.coupling_K[3 + i] * e_th[i] + P.coupling_C[3 + i] * e_w[i]
     R_tr = mat[M_RTR]
     mtm_into(R_tr, R_t, R_r)  # ROV axes -> tree axes
-    mv_into(a, R_tr, w_rov[0:3])
+    mv3_into(a, R_tr, w_rov[0:3])
     for i in range(3):
         w_tree[i] = -a[i]
     cross_into(b, P.mount_r, w_tree[0:3])
-    mv_into(a, R_tr, w_rov[3:6])
+    mv3_into(a, R_tr, w_rov[3:6])
     for i in range(3):
         w_tree[3 + i] = b[i] - a[i]
 
@@ -501,8 +503,8 @@ def _kinematics_into(
     out: np.ndarray, nu: np.ndarray, R_nb: np.ndarray, T_theta: np.ndarray
 ) -> None:
     """eta_dot = J_Theta(eta) nu (eq. 2.1) into ``out`` (6,), with R_nb and T_Theta given."""
-    mv_into(out[0:3], R_nb, nu[0:3])
-    mv_into(out[3:6], T_theta, nu[3:6])
+    mv3_into(out[0:3], R_nb, nu[0:3])
+    mv3_into(out[3:6], T_theta, nu[3:6])
 
 
 @njit(**JIT)
@@ -695,20 +697,20 @@ def contact_wrench_into(
     k4, c4 = 0.25 * P.contact_k, 0.25 * P.contact_c
     for j in range(4):
         _corner_body_into(r, P, j)
-        mv_into(tmp, R_t, r)
+        mv3_into(tmp, R_t, r)
         pen = x[2] + tmp[2] - env[E_LAND]
         if pen <= 0.0:
             continue
         cross_into(tmp, w, r)
         for i in range(3):
             tmp[i] = nu[i] + tmp[i]
-        mv_into(v_n, R_t, tmp)
+        mv3_into(v_n, R_t, tmp)
         normal = k4 * pen + c4 * v_n[2]
         if normal <= 0.0:
             continue
         f_n[0], f_n[1] = _friction_xy(v_n[0], v_n[1], normal, P.friction_mu)
         f_n[2] = -normal
-        mtv_into(f_b, R_t, f_n)
+        mtv3_into(f_b, R_t, f_n)
         for i in range(3):
             out[i] += f_b[i]
         cross_into(tmp, r, f_b)
@@ -717,7 +719,7 @@ def contact_wrench_into(
     # posts: their energy depends on north, east, down and heading only (the tree taken level,
     # as in sim.docking), so they push through the centre and turn the tree about the vertical;
     # its generalized force on the heading, as a body moment, is Q_psi * d(psi_dot)/d(omega_b)
-    mv_into(v_n, R_t, nu[0:3])
+    mv3_into(v_n, R_t, nu[0:3])
     cphi, sphi, cth = np.cos(x[3]), np.sin(x[3]), np.cos(x[4])
     psi_dot = (sphi * w[1] + cphi * w[2]) / cth
     c, s = np.cos(x[5]), np.sin(x[5])
@@ -748,7 +750,7 @@ def contact_wrench_into(
         f_n[0] = c * f[0] - s * f[1]
         f_n[1] = s * f[0] + c * f[1]
         f_n[2] = f[2]
-        mtv_into(f_b, R_t, f_n)
+        mtv3_into(f_b, R_t, f_n)
         for k in range(3):
             out[k] += f_b[k]
         m_psi = q[0] * f[1] - q[1] * f[0]
@@ -791,7 +793,7 @@ def _froude_krylov_into(
     taken uniform over the body and acting at the centre of buoyancy, taken at the origin:
     no moment. Zero when the wave load is ``drag`` (the acceleration is zero then). ``tmp``
     (3,) is a work array."""
-    mtv_into(tmp, R_nb, a_c_n)
+    mtv3_into(tmp, R_nb, a_c_n)
     for i in range(3):
         tau[i] += fk_mass * tmp[i]
 
@@ -837,16 +839,16 @@ def tree_wrench_into(
     b[1] = env[E_PUSH + 1]
     b[2] = env[E_PUSH + 2]
     b[2] += P.tree_W0
-    mtv_into(a, R_t, b)
+    mtv3_into(a, R_t, b)
     for i in range(3):
         tau[i] += a[i]
     # the wire at its attachment point
-    mv_into(c, R_t, P.tree_r_att)
+    mv3_into(c, R_t, P.tree_r_att)
     for i in range(3):
         c[i] = x[i] + c[i]
     attachment_velocity_into(d, x, R_t, P.tree_r_att, a)
     wire_force_damped_into(b, c, d, env, P.tree_W0)
-    mtv_into(a, R_t, b)
+    mtv3_into(a, R_t, b)
     for i in range(3):
         tau[i] += a[i]
     cross_into(c, P.tree_r_att, a)
@@ -976,7 +978,7 @@ def rhs_into(
                 tau_t[i] += w_tree[i]
         Tzyx_into(T_theta, cphi_r, sphi_r, cth_r, np.tan(x[16]))
         _kinematics_into(xdot[12:18], x[18:24], R_r, T_theta)
-        mv_into(xdot[18:24], P.rov_M_inv, tau_r)
+        mv6_into(xdot[18:24], P.rov_M_inv, tau_r)
     else:
         for i in range(12, N_STATE):
             xdot[i] = 0.0
