@@ -114,7 +114,8 @@ def predict(
 ) -> tuple[np.ndarray, np.ndarray]:
     """One prediction step (table 3.1): x+ = x + h f(x, u); P+ = Phi P Phi^T + Gamma Q Gamma^T
     with Phi = I + h df/dx (forward-difference Jacobian, step 1e-6 scaled to each state)."""
-    f0 = model_rhs(x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+    f0 = np.empty(9)
+    _model_rhs_into(f0, x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
     phi = np.eye(9)
     xp = x.copy()  # one work copy: each column perturbs one state and puts it back
     fj = np.empty(9)
@@ -128,8 +129,21 @@ def predict(
     x_new = np.empty(9)
     for i in range(9):
         x_new[i] = x[i] + dt * f0[i]
-    P_new = phi @ P @ phi.T + GQG
-    return x_new, 0.5 * (P_new + P_new.T)
+    # phi P phi^T by the same two BLAS products as ``phi @ P @ phi.T``, into preallocated
+    # arrays; + GQG and the symmetrisation 0.5 (A + A^T) element by element, in place
+    tmp = np.empty((9, 9))
+    np.dot(phi, P, tmp)
+    P_new = np.empty((9, 9))
+    np.dot(tmp, phi.T, P_new)
+    for i in range(9):
+        for j in range(9):
+            P_new[i, j] += GQG[i, j]
+    for i in range(9):
+        for j in range(i):
+            v = 0.5 * (P_new[i, j] + P_new[j, i])
+            P_new[i, j] = v
+            P_new[j, i] = v
+    return x_new, P_new
 
 
 @njit(**JIT)
