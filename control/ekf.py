@@ -26,7 +26,7 @@ N_X = 9
 NORTH, EAST, PSI, SURGE, SWAY, YAW_RATE, B_N, B_E, B_PSI = range(9)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def coriolis3(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
     """C(nu) nu of a 3-DOF (surge, sway, yaw) mass matrix, the skew-symmetric form of m2c."""
     ax = M[0, 0] * nu[0] + M[0, 1] * nu[1] + M[0, 2] * nu[2]
@@ -56,7 +56,7 @@ def model_rhs(
     return xdot
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _model_rhs_into(
     xdot: np.ndarray,
     x: np.ndarray,
@@ -97,7 +97,7 @@ def _model_rhs_into(
         xdot[6 + i] = -x[6 + i] / T_b[i]
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def predict(
     x: np.ndarray,
     P: np.ndarray,
@@ -146,7 +146,7 @@ def predict(
     return x_new, P_new
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def correct(
     x: np.ndarray, P: np.ndarray, z: np.ndarray, rows: np.ndarray, r_var: np.ndarray, angle_row: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

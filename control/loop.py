@@ -158,7 +158,7 @@ class QualityState(NamedTuple):
     counters: np.ndarray  # (5, 4) int
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def allocate(tau6: np.ndarray, C: ControlArrays) -> np.ndarray:
     """Thruster forces for an ROV wrench (pinv or priority, see control.allocation)."""
     if C.alloc_kind == ALLOC_PRIORITY:
@@ -176,13 +176,13 @@ def allocate(tau6: np.ndarray, C: ControlArrays) -> np.ndarray:
     return f
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def speeds_from_forces(f: np.ndarray, C: ControlArrays) -> np.ndarray:
     """Propeller speeds for thruster forces: the inverse thruster model (sim.thrusters)."""
     return thrusters.speed_from_thrust(f, C.k_pos, C.k_neg, C.n_max)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def tree_measurements(y: np.ndarray, psi_hat: float, C: ControlArrays):
     """Move the ROV's measurements to the tree's origin (eq. 3.4-3.6), with the configured
     mounting vector r and relative heading. Returns (north_east (2), psi, u_v (2), r)."""
@@ -229,7 +229,7 @@ def _rov_pose(x: np.ndarray, y: np.ndarray, use_truth: bool):
     return eta4, deta4
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _observe(
     t: float,
     y: np.ndarray,
@@ -351,7 +351,7 @@ def manual_step(x: np.ndarray, y: np.ndarray, cs: np.ndarray, C: ControlArrays, 
     return tau
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def control_step(
     t: float,
     x: np.ndarray,
@@ -481,7 +481,7 @@ def control_step(
     return tau6, xhat, Pc, cs
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def finish_step(
     x: np.ndarray,
     f: np.ndarray,

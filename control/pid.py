@@ -27,13 +27,13 @@ from control.ekf import coriolis3
 from sim.gnc import JIT, ssa
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def rot2(psi: float) -> tuple[float, float]:
     """cos and sin of a heading."""
     return np.cos(psi), np.sin(psi)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def ned_to_body(vec_n: np.ndarray, psi: float) -> np.ndarray:
     """[X_n, Y_n, N] -> [X_b, Y_b, N]: rotate the horizontal part by R(psi)^T."""
     c, s = rot2(psi)
@@ -44,7 +44,7 @@ def ned_to_body(vec_n: np.ndarray, psi: float) -> np.ndarray:
     return out
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def body_to_ned(vec_b: np.ndarray, psi: float) -> np.ndarray:
     """[X_b, Y_b, N] -> [X_n, Y_n, N]: rotate the horizontal part by R(psi)."""
     c, s = rot2(psi)
@@ -55,7 +55,7 @@ def body_to_ned(vec_b: np.ndarray, psi: float) -> np.ndarray:
     return out
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def pose_error(eta: np.ndarray, eta_d: np.ndarray) -> np.ndarray:
     """e = eta - eta_d with the heading difference wrapped into [-pi, pi)."""
     e = eta - eta_d
@@ -63,7 +63,7 @@ def pose_error(eta: np.ndarray, eta_d: np.ndarray) -> np.ndarray:
     return e
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def feedforward(
     psi: float,
     eta_d: np.ndarray,
@@ -89,7 +89,7 @@ def feedforward(
     return tau + ned_to_body(spring_n, psi)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def tree_pid(
     eta: np.ndarray,
     deta: np.ndarray,

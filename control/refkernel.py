@@ -44,7 +44,7 @@ def pack_third_order(p: reference.ThirdOrderParams) -> np.ndarray:
     return np.vstack([p.k_pos, p.k_vel, p.k_acc, p.max_speed, p.max_accel])
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def first_order_step(
     state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
 ) -> np.ndarray:
@@ -58,7 +58,7 @@ def first_order_step(
     return out
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def third_order_step(
     state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
 ) -> np.ndarray:
@@ -83,7 +83,7 @@ def third_order_step(
     return out
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def reference_step(
     kind: int, state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
 ) -> np.ndarray:
