@@ -34,27 +34,58 @@ def thesis_current() -> envmod.CurrentParams:
     )
 
 
+# The plant's pieces are timed from loops compiled without numba's runtime, as the chunk
+# kernels call them (a loop with the runtime would add the reference counting of every array
+# in PlantArrays to each call, which the chunks do not pay).
+_NO_NRT = {"cache": True, "error_model": "numpy", "_nrt": False}
+
+
+@njit(**_NO_NRT)
+def _plant_steps(x, n, env, P, dt, work, reps):
+    for _ in range(reps):
+        plant.rk4_step_into(x, x, n, env, P, dt, work)
+
+
 @njit(cache=True)
 def _time_plant(x, n, env, P, dt, reps):
-    for _ in range(reps):
-        x = plant.rk4_step(x, n, env, P, dt)
+    """The RK4 step as the loops call it: into the state, with one work space."""
+    x = x.copy()
+    _plant_steps(x, n, env, P, dt, plant.make_work(n.shape[0]), reps)
     return x
 
 
-@njit(cache=True)
-def _time_rhs(x, n, env, P, reps):
+@njit(**_NO_NRT)
+def _rhs_calls(xdot, x, thrust_b, env, P, work, reps):
     s = 0.0
     for _ in range(reps):
-        s += plant.rhs(x, n, env, P)[0]
+        plant.rhs_into(xdot, x, thrust_b, env, P, work)
+        s += xdot[0]
     return s
 
 
 @njit(cache=True)
-def _time_log_row(x, y, env, P, reps):
-    row = np.zeros(loop.N_LOG)
-    for k in range(reps):
-        loop.write_plant_row(row, k * 0.01, x, y, env, P)
-    return row
+def _time_rhs(x, n, env, P, reps):
+    """One right-hand side (the thrusters' wrench computed once, as in the RK4 step)."""
+    work = plant.make_work(n.shape[0])
+    thrust_b = np.zeros(6)
+    plant.thruster_wrench_into(thrust_b, n, P, work)
+    return _rhs_calls(np.zeros(plant.N_STATE), x, thrust_b, env, P, work, reps)
+
+
+@njit(cache=True)
+def _time_open_step(x, y, n, env, P, reps):
+    """The plant-alone step as the open-loop chunk kernel runs it (RK4, sensors, log row), in
+    chunks of 100 steps as ``Simulation`` runs it, the environment row held."""
+    chunk = min(reps, 100)
+    env_rows = np.empty((chunk, env.shape[0]))
+    for k in range(chunk):
+        env_rows[k] = env
+    noise = np.zeros((chunk, y.shape[0]))
+    fresh = np.ones((chunk, 5), dtype=np.bool_)
+    done = 0
+    for _ in range(reps // chunk):
+        done += loop.run_open_chunk(0, x, y, n, env_rows, noise, fresh, P, 0.01)[3]
+    return done
 
 
 @njit(cache=True)
@@ -71,8 +102,9 @@ def _time_control_step(x, y, xhat, Pc, cs, target, C, Q, reps):
 
 @njit(cache=True)
 def _time_sensors(x, held, noise, fresh, reps):
+    held = held.copy()
     for _ in range(reps):
-        held = sensors.sample(x, held, noise, fresh, sensors.Y_SENSOR)
+        sensors.sample_into(held, x, held, noise, fresh, sensors.Y_SENSOR)
     return held
 
 
@@ -189,7 +221,6 @@ def main() -> None:
     cost = {
         "plant RK4 step (4 rhs)": _per_call(_time_plant, x, n, env, sim.arrays, 0.01),
         "plant right-hand side": _per_call(_time_rhs, x, n, env, sim.arrays),
-        "log row (plant columns)": _per_call(_time_log_row, x, sim.held_y, env, sim.arrays),
         "sensor sampling": _per_call(
             _time_sensors, x, sim.held_y, np.zeros(11), np.ones(5, dtype=np.bool_)
         ),
@@ -212,7 +243,7 @@ def main() -> None:
     }
     print(f"cost per call, measured alone, best of 5 (us; {load_text()}):")
     for name, us in cost.items():
-        print(f"  {name:26s} {us:7.2f}")
+        print(f"  {name:38s} {us:7.2f}")
 
 
 if __name__ == "__main__":

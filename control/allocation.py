@@ -368,7 +368,7 @@ def _priority_plan(config: ThrusterConfig, priority: tuple[int, ...]) -> _Priori
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _dot(a: FloatArray, b: FloatArray) -> float:
     """a @ b for short vectors (a plain loop compiles faster than a BLAS call)."""
     total = 0.0
@@ -377,7 +377,7 @@ def _dot(a: FloatArray, b: FloatArray) -> float:
     return total
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _step_to_limit(
     f: FloatArray, delta: FloatArray, f_lo: FloatArray, f_hi: FloatArray
 ) -> tuple[float, int]:
@@ -398,7 +398,7 @@ def _step_to_limit(
     return alpha, blocking
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _serve_stage(
     k: int,
     A: FloatArray,
@@ -423,7 +423,7 @@ def _serve_stage(
     return f
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _serve_remaining(
     k: int,
     A: FloatArray,
@@ -442,11 +442,22 @@ def _serve_remaining(
     f_new = f.copy()
     for i in range(f.size):
         f_new[i] += _dot(R[k, i], residual)
-    inside = np.all(f_new >= f_lo - tol) and np.all(f_new <= f_hi + tol)
-    return inside, np.minimum(np.maximum(f_new, f_lo), f_hi)
+    # np.all(f_new >= f_lo - tol) and np.all(f_new <= f_hi + tol), then the clip, element by
+    # element (the same comparisons and numpy's scalar minimum and maximum; no temporaries)
+    inside = True
+    for i in range(f.size):
+        if not f_new[i] >= f_lo[i] - tol:
+            inside = False
+    if inside:
+        for i in range(f.size):
+            if not f_new[i] <= f_hi[i] + tol:
+                inside = False
+    for i in range(f.size):
+        f_new[i] = np.minimum(np.maximum(f_new[i], f_lo[i]), f_hi[i])
+    return np.bool_(inside), f_new
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _priority_forces(
     A: FloatArray,
     D: FloatArray,

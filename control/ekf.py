@@ -26,7 +26,7 @@ N_X = 9
 NORTH, EAST, PSI, SURGE, SWAY, YAW_RATE, B_N, B_E, B_PSI = range(9)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def coriolis3(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
     """C(nu) nu of a 3-DOF (surge, sway, yaw) mass matrix, the skew-symmetric form of m2c."""
     ax = M[0, 0] * nu[0] + M[0, 1] * nu[1] + M[0, 2] * nu[2]
@@ -56,7 +56,7 @@ def model_rhs(
     return xdot
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _model_rhs_into(
     xdot: np.ndarray,
     x: np.ndarray,
@@ -97,7 +97,7 @@ def _model_rhs_into(
         xdot[6 + i] = -x[6 + i] / T_b[i]
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def predict(
     x: np.ndarray,
     P: np.ndarray,
@@ -114,7 +114,8 @@ def predict(
 ) -> tuple[np.ndarray, np.ndarray]:
     """One prediction step (table 3.1): x+ = x + h f(x, u); P+ = Phi P Phi^T + Gamma Q Gamma^T
     with Phi = I + h df/dx (forward-difference Jacobian, step 1e-6 scaled to each state)."""
-    f0 = model_rhs(x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+    f0 = np.empty(9)
+    _model_rhs_into(f0, x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
     phi = np.eye(9)
     xp = x.copy()  # one work copy: each column perturbs one state and puts it back
     fj = np.empty(9)
@@ -128,11 +129,24 @@ def predict(
     x_new = np.empty(9)
     for i in range(9):
         x_new[i] = x[i] + dt * f0[i]
-    P_new = phi @ P @ phi.T + GQG
-    return x_new, 0.5 * (P_new + P_new.T)
+    # phi P phi^T by the same two BLAS products as ``phi @ P @ phi.T``, into preallocated
+    # arrays; + GQG and the symmetrisation 0.5 (A + A^T) element by element, in place
+    tmp = np.empty((9, 9))
+    np.dot(phi, P, tmp)
+    P_new = np.empty((9, 9))
+    np.dot(tmp, phi.T, P_new)
+    for i in range(9):
+        for j in range(9):
+            P_new[i, j] += GQG[i, j]
+    for i in range(9):
+        for j in range(i):
+            v = 0.5 * (P_new[i, j] + P_new[j, i])
+            P_new[i, j] = v
+            P_new[j, i] = v
+    return x_new, P_new
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def correct(
     x: np.ndarray, P: np.ndarray, z: np.ndarray, rows: np.ndarray, r_var: np.ndarray, angle_row: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -140,24 +154,66 @@ def correct(
 
     ``angle_row`` is the index within ``rows`` whose innovation is an angle (wrapped with ssa),
     or -1. Returns (x, P, normalised innovation squared per row) -- the last is what the
-    operator's "observer innovation" alarm watches."""
+    operator's "observer innovation" alarm watches.
+
+    Table 3.1 written for H = rows of the identity, with m = len(rows) <= 2 (the loop's
+    sensors): S = P[rows, rows] + R, K = P[:, rows] S^-1 (S^-1 in closed form), and the
+    Joseph form (I - K H) P (I - K H)^T + K R K^T as rank-m updates. The same algebra as the
+    dense products, in a different summation order (the last bits differ)."""
     m = rows.shape[0]
-    H = np.zeros((m, 9))
+    if m > 2:
+        raise ValueError("correct: at most 2 measured rows")
     innov = np.empty(m)
     for i in range(m):
-        H[i, rows[i]] = 1.0
         innov[i] = z[i] - x[rows[i]]
     if angle_row >= 0:
         innov[angle_row] = ssa(innov[angle_row])
-    S = H @ P @ H.T
-    for i in range(m):
-        S[i, i] += r_var[i]
-    K = P @ H.T @ np.linalg.inv(S)
-    x_new = x + K @ innov
-    IKH = np.eye(9) - K @ H
-    Rm = np.diag(r_var)
-    P_new = IKH @ P @ IKH.T + K @ Rm @ K.T
+    # innovation covariance and its inverse
+    s00 = P[rows[0], rows[0]] + r_var[0]
+    if m == 1:
+        i00, i01, i10, i11 = 1.0 / s00, 0.0, 0.0, 0.0
+        s11 = 1.0
+    else:
+        s01 = P[rows[0], rows[1]]
+        s10 = P[rows[1], rows[0]]
+        s11 = P[rows[1], rows[1]] + r_var[1]
+        det = s00 * s11 - s01 * s10
+        i00, i01, i10, i11 = s11 / det, -s01 / det, -s10 / det, s00 / det
+    # gain K (9, m), as two columns
+    k0 = np.empty(N_X)
+    k1 = np.zeros(N_X)
+    for i in range(N_X):
+        if m == 1:
+            k0[i] = P[i, rows[0]] * i00
+        else:
+            k0[i] = P[i, rows[0]] * i00 + P[i, rows[1]] * i10
+            k1[i] = P[i, rows[0]] * i01 + P[i, rows[1]] * i11
+    x_new = np.empty(N_X)
+    e1 = innov[1] if m == 2 else 0.0
+    for i in range(N_X):
+        x_new[i] = x[i] + (k0[i] * innov[0] + k1[i] * e1)
+    # Joseph form: A = (I - K H) P, then A (I - K H)^T + K R K^T
+    r1 = r_var[1] if m == 2 else 0.0
+    c1 = rows[1] if m == 2 else rows[0]
+    A = np.empty((N_X, N_X))
+    for i in range(N_X):
+        for j in range(N_X):
+            A[i, j] = P[i, j] - (k0[i] * P[rows[0], j] + k1[i] * P[c1, j])
+    P_new = np.empty((N_X, N_X))
+    for i in range(N_X):
+        for j in range(N_X):
+            P_new[i, j] = (
+                A[i, j]
+                - (A[i, rows[0]] * k0[j] + A[i, c1] * k1[j])
+                + (k0[i] * r_var[0] * k0[j] + k1[i] * r1 * k1[j])
+            )
+    for i in range(N_X):
+        for j in range(i):
+            v = 0.5 * (P_new[i, j] + P_new[j, i])
+            P_new[i, j] = v
+            P_new[j, i] = v
     nis = np.empty(m)
-    for i in range(m):
-        nis[i] = innov[i] * innov[i] / S[i, i]
-    return x_new, 0.5 * (P_new + P_new.T), nis
+    nis[0] = innov[0] * innov[0] / s00
+    if m == 2:
+        nis[1] = innov[1] * innov[1] / s11
+    return x_new, P_new, nis

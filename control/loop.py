@@ -48,7 +48,7 @@ from control.columns import (
     N_LOG,
 )  # the log row is declared in control.columns
 from sim import plant, sensors, thrusters
-from sim.gnc import JIT, Rzyx
+from sim.gnc import JIT, JIT_NOALLOC, Rzyx_into, mv3_into
 
 EYE3 = np.eye(3)
 # the EKF's measured state rows (constant, so no array is made per correction)
@@ -158,7 +158,7 @@ class QualityState(NamedTuple):
     counters: np.ndarray  # (5, 4) int
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def allocate(tau6: np.ndarray, C: ControlArrays) -> np.ndarray:
     """Thruster forces for an ROV wrench (pinv or priority, see control.allocation)."""
     if C.alloc_kind == ALLOC_PRIORITY:
@@ -176,13 +176,13 @@ def allocate(tau6: np.ndarray, C: ControlArrays) -> np.ndarray:
     return f
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def speeds_from_forces(f: np.ndarray, C: ControlArrays) -> np.ndarray:
     """Propeller speeds for thruster forces: the inverse thruster model (sim.thrusters)."""
     return thrusters.speed_from_thrust(f, C.k_pos, C.k_neg, C.n_max)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def tree_measurements(y: np.ndarray, psi_hat: float, C: ControlArrays):
     """Move the ROV's measurements to the tree's origin (eq. 3.4-3.6), with the configured
     mounting vector r and relative heading. Returns (north_east (2), psi, u_v (2), r)."""
@@ -229,7 +229,7 @@ def _rov_pose(x: np.ndarray, y: np.ndarray, use_truth: bool):
     return eta4, deta4
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _observe(
     t: float,
     y: np.ndarray,
@@ -351,7 +351,7 @@ def manual_step(x: np.ndarray, y: np.ndarray, cs: np.ndarray, C: ControlArrays, 
     return tau
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def control_step(
     t: float,
     x: np.ndarray,
@@ -481,7 +481,7 @@ def control_step(
     return tau6, xhat, Pc, cs
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def finish_step(
     x: np.ndarray,
     f: np.ndarray,
@@ -494,10 +494,12 @@ def finish_step(
     t_next: float,
     held_y: np.ndarray,
     log_row: np.ndarray,
+    work: plant.PlantWork,
 ):
     """Thrusters, plant step and observer prediction, given the allocated forces f, and the
-    row's plant columns. Returns (x_next, xhat, Pc). The one step body after allocation: the
-    compiled chunk and the Python chunk (QP allocation) both end every step here."""
+    row's plant columns. Advances the plant state ``x`` in place (through ``work``, no
+    allocation) and returns (xhat, Pc). The one step body after allocation: the compiled
+    chunk and the Python chunk (QP allocation) both end every step here."""
     n = speeds_from_forces(f, C)
     ach = _matvec(C.T6, f)
     m = f.shape[0]
@@ -507,7 +509,7 @@ def finish_step(
         log_row[L_N + i] = n[i]
         log_row[L_UTIL + i] = min(abs(f[i]) / lim, 1.0)
     log_row[L_TAU_ACH : L_TAU_ACH + 6] = ach
-    x_next = plant.rk4_step(x, n, env_k, P, dt)
+    plant.rk4_step_into(x, x, n, env_k, P, dt, work)
     if C.feedback_ekf:
         # the observer's input: the achieved wrench moved to the tree (eq. 3.6)
         ach3 = np.empty(3)
@@ -520,36 +522,52 @@ def finish_step(
         xhat, Pc = ekf.predict(
             xhat, Pc, tau_tree, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, C.T_b, C.GQG
         )
-    write_plant_row(log_row, t_next, x_next, held_y, env_k, P)
-    return x_next, xhat, Pc
+    write_plant_row(log_row, t_next, x, held_y, env_k, P, work)
+    return xhat, Pc
 
 
-@njit(**JIT)
+@njit(**JIT_NOALLOC)
 def write_plant_row(
-    row: np.ndarray, t: float, x: np.ndarray, y: np.ndarray, env_k: np.ndarray, P: plant.PlantArrays
+    row: np.ndarray,
+    t: float,
+    x: np.ndarray,
+    y: np.ndarray,
+    env_k: np.ndarray,
+    P: plant.PlantArrays,
+    work: plant.PlantWork,
 ) -> None:
-    """Time, plant state, held sensor values and the site into a log row."""
+    """Time, plant state, held sensor values and the site into a log row (``work``: the
+    plant's work space, used between steps). Allocates nothing."""
     row[L_T] = t
-    row[L_TREE : L_TREE + 6] = x[0:6]
-    row[L_TREE_NU : L_TREE_NU + 6] = x[6:12]
-    row[L_ROV : L_ROV + 6] = x[12:18]
-    row[L_ROV_NU : L_ROV_NU + 6] = x[18:24]
-    row[L_Y : L_Y + 11] = y
-    log_site(row, x, env_k, P)
+    for i in range(6):
+        row[L_TREE + i] = x[i]
+        row[L_TREE_NU + i] = x[6 + i]
+        row[L_ROV + i] = x[12 + i]
+        row[L_ROV_NU + i] = x[18 + i]
+    for i in range(11):
+        row[L_Y + i] = y[i]
+    log_site(row, x, env_k, P, work)
 
 
-@njit(**JIT)
-def log_site(row: np.ndarray, x: np.ndarray, env_k: np.ndarray, P: plant.PlantArrays) -> None:
+@njit(inline="always", **JIT_NOALLOC)
+def log_site(
+    row: np.ndarray, x: np.ndarray, env_k: np.ndarray, P: plant.PlantArrays, work: plant.PlantWork
+) -> None:
     """The vessel's crane tip, the wire's payout and its tension at the tree, into a log row."""
     row[L_CRANE] = env_k[plant.E_CT]
     row[L_CRANE + 1] = env_k[plant.E_CT + 1]
     row[L_WIRE_LEN] = env_k[plant.E_LREST]
-    R_t = Rzyx(x[3], x[4], x[5])
-    p_att = _matvec(R_t, P.tree_r_att)
+    R_t = work.mat[plant.M_RT]
+    cphi, sphi = np.cos(x[3]), np.sin(x[3])
+    Rzyx_into(R_t, cphi, sphi, np.cos(x[4]), np.sin(x[4]), np.cos(x[5]), np.sin(x[5]))
+    p_att = work.vec[plant.V_A, 0:3]
+    mv3_into(p_att, R_t, P.tree_r_att)
     for i in range(3):
         p_att[i] += x[i]
-    v_att = plant.attachment_velocity_n(x, R_t, P.tree_r_att)
-    f = plant.wire_force_damped_n(p_att, v_att, env_k, P.tree_W0)
+    v_att = work.vec[plant.V_B, 0:3]
+    plant.attachment_velocity_into(v_att, x, R_t, P.tree_r_att, work.vec[plant.V_C, 0:3])
+    f = work.vec[plant.V_D, 0:3]
+    plant.wire_force_damped_into(f, p_att, v_att, env_k, P.tree_W0)
     row[L_TENSION] = np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
 
 
@@ -574,17 +592,22 @@ def run_chunk(
     (x, held_y, xhat, Pc, cs, log (n, N_LOG), n_done); n_done < n when the plant diverged."""
     n = env.shape[0]
     log = np.zeros((n, N_LOG))
+    # the state and the held sensor values are advanced in place: copies, so the caller's
+    # arrays are left as they were
+    x = x.copy()
+    held_y = held_y.copy()
+    work = plant.make_work(P.thr_T.shape[1])
     for j in range(n):
         k = k0 + j
         t = k * dt
         row = log[j]
-        held_y = sensors.sample(x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
+        sensors.sample_into(held_y, x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
         tau6, xhat, Pc, cs = control_step(
             t, x, held_y, fresh[j], xhat, Pc, cs, target, C, Q, dt, row
         )
         f = allocate(tau6, C)
-        x, xhat, Pc = finish_step(x, f, env[j], xhat, Pc, C, P, dt, t + dt, held_y, row)
-        if not np.all(np.isfinite(x)):
+        xhat, Pc = finish_step(x, f, env[j], xhat, Pc, C, P, dt, t + dt, held_y, row, work)
+        if not plant.all_finite(x):
             return x, held_y, xhat, Pc, cs, log, j
     return x, held_y, xhat, Pc, cs, log, n
 
@@ -606,14 +629,39 @@ def run_open_chunk(
     when the plant diverged."""
     n = env.shape[0]
     log = np.zeros((n, N_LOG))
+    x = x.copy()  # advanced in place (see run_chunk)
+    held_y = held_y.copy()
+    work = plant.make_work(n_rps.shape[0])
+    n_done = _open_steps(k0, x, held_y, n_rps, env, noise, fresh, P, dt, log, work)
+    return x, held_y, log, n_done
+
+
+@njit(**JIT_NOALLOC)
+def _open_steps(
+    k0: int,
+    x: np.ndarray,
+    held_y: np.ndarray,
+    n_rps: np.ndarray,
+    env: np.ndarray,
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    P: plant.PlantArrays,
+    dt: float,
+    log: np.ndarray,
+    work: plant.PlantWork,
+) -> int:
+    """The steps of ``run_open_chunk``, advancing x and held_y in place and writing the log's
+    rows, allocating nothing. Returns the number of steps done (< n when x stopped being
+    finite)."""
+    n = env.shape[0]
     m = n_rps.shape[0]
     for j in range(n):
         row = log[j]
-        x = plant.rk4_step(x, n_rps, env[j], P, dt)
-        if not np.all(np.isfinite(x)):
-            return x, held_y, log, j
-        held_y = sensors.sample(x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
+        plant.rk4_step_into(x, x, n_rps, env[j], P, dt, work)
+        if not plant.all_finite(x):
+            return j
+        sensors.sample_into(held_y, x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
         for i in range(m):
             row[L_N + i] = n_rps[i]
-        write_plant_row(row, (k0 + j + 1) * dt, x, held_y, env[j], P)
-    return x, held_y, log, n
+        write_plant_row(row, (k0 + j + 1) * dt, x, held_y, env[j], P, work)
+    return n

@@ -23,17 +23,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from control.ekf import coriolis3
 from sim.gnc import JIT, ssa
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def rot2(psi: float) -> tuple[float, float]:
     """cos and sin of a heading."""
     return np.cos(psi), np.sin(psi)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def ned_to_body(vec_n: np.ndarray, psi: float) -> np.ndarray:
     """[X_n, Y_n, N] -> [X_b, Y_b, N]: rotate the horizontal part by R(psi)^T."""
     c, s = rot2(psi)
@@ -44,7 +43,7 @@ def ned_to_body(vec_n: np.ndarray, psi: float) -> np.ndarray:
     return out
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def body_to_ned(vec_b: np.ndarray, psi: float) -> np.ndarray:
     """[X_b, Y_b, N] -> [X_n, Y_n, N]: rotate the horizontal part by R(psi)."""
     c, s = rot2(psi)
@@ -55,7 +54,7 @@ def body_to_ned(vec_b: np.ndarray, psi: float) -> np.ndarray:
     return out
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def pose_error(eta: np.ndarray, eta_d: np.ndarray) -> np.ndarray:
     """e = eta - eta_d with the heading difference wrapped into [-pi, pi)."""
     e = eta - eta_d
@@ -63,7 +62,7 @@ def pose_error(eta: np.ndarray, eta_d: np.ndarray) -> np.ndarray:
     return e
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def feedforward(
     psi: float,
     eta_d: np.ndarray,
@@ -75,21 +74,42 @@ def feedforward(
     k_h: float,
     p_eq: np.ndarray,
 ) -> np.ndarray:
-    """Control plant model driven by the reference, tree axes [N, N, N m]."""
-    nu_d = ned_to_body(deta_d, eta_d[2])
+    """Control plant model driven by the reference, tree axes [N, N, N m].
+
+    Written with scalars (the operations of ``ned_to_body``, ``coriolis3`` and the vector
+    sums, in their order); ``M @ acc`` stays the product the vector form used."""
+    cd, sd = rot2(eta_d[2])
+    nu0 = cd * deta_d[0] + sd * deta_d[1]
+    nu1 = -sd * deta_d[0] + cd * deta_d[1]
+    nu2 = deta_d[2]
     r_d = deta_d[2]
     # d/dt (R^T v_d) = R^T a_d - r_d R^T S v_d  with S = [[0, -1], [1, 0]]
-    sv = np.array([-deta_d[1], deta_d[0], 0.0])
-    acc = ned_to_body(ddeta_d, eta_d[2]) - r_d * ned_to_body(sv, eta_d[2])
+    sv0, sv1 = -deta_d[1], deta_d[0]
+    acc = np.empty(3)
+    acc[0] = (cd * ddeta_d[0] + sd * ddeta_d[1]) - r_d * (cd * sv0 + sd * sv1)
+    acc[1] = (-sd * ddeta_d[0] + cd * ddeta_d[1]) - r_d * (-sd * sv0 + cd * sv1)
     acc[2] = ddeta_d[2]
-    tau = M @ acc + coriolis3(M, nu_d)
-    for i in range(3):
-        tau[i] += (D_l[i] + D_nl[i] * abs(nu_d[i])) * nu_d[i]
-    spring_n = np.array([k_h * (eta_d[0] - p_eq[0]), k_h * (eta_d[1] - p_eq[1]), 0.0])
-    return tau + ned_to_body(spring_n, psi)
+    tau = M @ acc
+    # + C(nu_d) nu_d as in coriolis3, then damping
+    ax = M[0, 0] * nu0 + M[0, 1] * nu1 + M[0, 2] * nu2
+    ay = M[1, 0] * nu0 + M[1, 1] * nu1 + M[1, 2] * nu2
+    tau[0] = tau[0] + -ay * nu2
+    tau[1] = tau[1] + ax * nu2
+    tau[2] = tau[2] + (ay * nu0 - ax * nu1)
+    tau[0] += (D_l[0] + D_nl[0] * abs(nu0)) * nu0
+    tau[1] += (D_l[1] + D_nl[1] * abs(nu1)) * nu1
+    tau[2] += (D_l[2] + D_nl[2] * abs(nu2)) * nu2
+    # + the wire spring at the reference position, in the tree's axes
+    c, s = rot2(psi)
+    sp0 = k_h * (eta_d[0] - p_eq[0])
+    sp1 = k_h * (eta_d[1] - p_eq[1])
+    tau[0] = tau[0] + (c * sp0 + s * sp1)
+    tau[1] = tau[1] + (-s * sp0 + c * sp1)
+    tau[2] = tau[2] + 0.0
+    return tau
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def tree_pid(
     eta: np.ndarray,
     deta: np.ndarray,
@@ -118,24 +138,47 @@ def tree_pid(
     ROV and back (eq. 3.7 restricted to surge, sway, yaw). Returns (tau_tree (3), i_n_next (3),
     terms (4, 3): P, I, D and feedforward parts in tree axes, e (3), de (3))."""
     psi = eta[2]
-    e = pose_error(eta, eta_d)
-    de = deta - deta_d if use_ff else deta.copy()
-    p_n = -Kp * e
-    d_n = -Kd * de
+    c, s = rot2(psi)
+    e = np.empty(3)
+    de = np.empty(3)
+    for k in range(3):
+        e[k] = eta[k] - eta_d[k]
+        de[k] = deta[k] - deta_d[k] if use_ff else deta[k]
+    e[2] = ssa(e[2])
     # anti-windup (eq. 3.19): clamp the integral part in the ROV frame
-    i_rov = A @ ned_to_body(i_n, psi)
-    clipped = np.minimum(np.maximum(i_rov, -i_limit_rov), i_limit_rov)
+    i_b = np.empty(3)
+    i_b[0] = c * i_n[0] + s * i_n[1]
+    i_b[1] = -s * i_n[0] + c * i_n[1]
+    i_b[2] = i_n[2]
+    i_rov = A @ i_b
+    clipped = np.empty(3)
+    changed = False
+    for k in range(3):
+        clipped[k] = np.minimum(np.maximum(i_rov[k], -i_limit_rov[k]), i_limit_rov[k])
+        changed = changed or clipped[k] != i_rov[k]
     i_use = i_n.copy()
-    if np.any(clipped != i_rov):
+    if changed:
         i_use = body_to_ned(A_inv @ clipped, psi)
+    # P, I and D parts moved to the tree's axes (ned_to_body), with p_n = -K_p e, d_n = -K_d de
+    p0, p1, p2 = -Kp[0] * e[0], -Kp[1] * e[1], -Kp[2] * e[2]
+    d0, d1, d2 = -Kd[0] * de[0], -Kd[1] * de[1], -Kd[2] * de[2]
     terms = np.zeros((4, 3))
-    terms[0] = ned_to_body(p_n, psi)
-    terms[1] = ned_to_body(i_use, psi)
-    terms[2] = ned_to_body(d_n, psi)
+    terms[0, 0] = c * p0 + s * p1
+    terms[0, 1] = -s * p0 + c * p1
+    terms[0, 2] = p2
+    terms[1, 0] = c * i_use[0] + s * i_use[1]
+    terms[1, 1] = -s * i_use[0] + c * i_use[1]
+    terms[1, 2] = i_use[2]
+    terms[2, 0] = c * d0 + s * d1
+    terms[2, 1] = -s * d0 + c * d1
+    terms[2, 2] = d2
     if use_ff:
         terms[3] = feedforward(psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq)
-    tau = terms[0] + terms[1] + terms[2] + terms[3]
-    i_next = i_use - Ki * e * dt
+    tau = np.empty(3)
+    i_next = np.empty(3)
+    for k in range(3):
+        tau[k] = terms[0, k] + terms[1, k] + terms[2, k] + terms[3, k]
+        i_next[k] = i_use[k] - Ki[k] * e[k] * dt
     return tau, i_next, terms, e, de
 
 

@@ -64,7 +64,7 @@ def quality_config(noise_std: NDArray[np.float64], dt: float) -> QualityConfig:
     return QualityConfig(lo, hi, wild, max_rate, frozen, variance)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def check_sample(
     k: int,
     y: np.ndarray,

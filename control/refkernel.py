@@ -27,8 +27,6 @@ from control import reference
 from sim.gnc import JIT
 
 _first_kernel = njit(**JIT)(reference.first_order_kernel)
-_third_kernel = njit(**JIT)(reference.third_order_kernel)
-_ZERO3 = np.zeros(3)
 
 
 def pack_first_order(p: reference.FirstOrderParams) -> np.ndarray:
@@ -44,7 +42,7 @@ def pack_third_order(p: reference.ThirdOrderParams) -> np.ndarray:
     return np.vstack([p.k_pos, p.k_vel, p.k_acc, p.max_speed, p.max_accel])
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def first_order_step(
     state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
 ) -> np.ndarray:
@@ -58,32 +56,71 @@ def first_order_step(
     return out
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
+def _third_order_axis(
+    e: float,
+    v: float,
+    a: float,
+    v_ff: float,
+    k_pos: float,
+    k_vel: float,
+    k_acc: float,
+    max_speed: float,
+    max_accel: float,
+    dt: float,
+) -> tuple[float, float, float]:
+    """``reference.third_order_kernel`` for one axis, on scalars: the same operations in the
+    same order (numpy's minimum, maximum, copysign and expm1 on scalars are the kernels its
+    array form applies element by element), so the same bits, without its ~30 temporary
+    3-vectors. Returns (delta_pos, vel+, acc+)."""
+    abs_error = np.abs(e)
+    pull = np.minimum(
+        k_pos * abs_error, np.sqrt((2.0 * reference.BRAKING_FRACTION) * max_accel * abs_error)
+    )
+    speed_cmd = np.minimum(np.maximum(v_ff + np.copysign(pull, e), -max_speed), max_speed)
+    settled_speed = v + a / k_acc
+    accel_cmd = k_vel * (speed_cmd - v)
+    accel_cmd = np.minimum(
+        np.maximum(accel_cmd, (-max_speed - settled_speed) / dt), (max_speed - settled_speed) / dt
+    )
+    accel_cmd = np.minimum(np.maximum(accel_cmd, -max_accel), max_accel)
+    decay_m1 = np.expm1(k_acc * -dt)
+    decay = decay_m1 + 1.0
+    phi = -decay_m1 / k_acc
+    acc_gap = a - accel_cmd
+    acc_new = accel_cmd + acc_gap * decay
+    vel_new = v + accel_cmd * dt + acc_gap * phi
+    delta_pos = v * dt + 0.5 * accel_cmd * dt * dt + acc_gap * (dt - phi) / k_acc
+    return delta_pos, vel_new, acc_new
+
+
+@njit(inline="always", **JIT)
 def third_order_step(
     state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
 ) -> np.ndarray:
-    """One step of the speed- and acceleration-limited third-order model."""
-    error = target - state[0:3]
-    delta, vel, acc = _third_kernel(
-        error,
-        state[3:6].copy(),
-        state[6:9].copy(),
-        _ZERO3,
-        params[0],
-        params[1],
-        params[2],
-        params[3],
-        params[4],
-        dt,
-    )
+    """One step of the speed- and acceleration-limited third-order model (per axis, see
+    ``_third_order_axis``)."""
     out = np.empty(9)
-    out[0:3] = state[0:3] + delta
-    out[3:6] = vel
-    out[6:9] = acc
+    for i in range(3):
+        delta, vel, acc = _third_order_axis(
+            target[i] - state[i],
+            state[3 + i],
+            state[6 + i],
+            0.0,
+            params[0, i],
+            params[1, i],
+            params[2, i],
+            params[3, i],
+            params[4, i],
+            dt,
+        )
+        out[i] = state[i] + delta
+        out[3 + i] = vel
+        out[6 + i] = acc
     return out
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def reference_step(
     kind: int, state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
 ) -> np.ndarray:

@@ -423,7 +423,15 @@ class Simulation:
         env[plant.E_LREST] = self.wire_length_m + site.self_weight_stretch(
             self.plant_ps, self.wire_length_m
         )
-        loop.write_plant_row(row, self.t_s, self.x, self.held_y, env, self.arrays)
+        loop.write_plant_row(
+            row,
+            self.t_s,
+            self.x,
+            self.held_y,
+            env,
+            self.arrays,
+            plant.make_work(self.arrays.thr_T.shape[1]),
+        )
         rows = LogRows(row[None, :])
         rows["eta_ref_n"][0] = self.target
         rows["eta_hat_n"][0] = self.eta_estimate
@@ -910,9 +918,10 @@ class Simulation:
 
     def _chunk_qp(self, env: FloatArray, noise: sensors.NoiseChunk):
         """The compiled step body with the QP allocation (not compiled) in the middle."""
-        x, held, xhat, pc, cs = self.x, self.held_y, self.xhat, self.P_cov, self.cs
+        x, held, xhat, pc, cs = self.x.copy(), self.held_y, self.xhat, self.P_cov, self.cs
         n = env.shape[0]
         log = np.zeros((n, N_LOG))
+        work = plant.make_work(self.arrays.thr_T.shape[1])  # x is advanced in place
         for j in range(n):
             k = self.step_index + j
             held = sensors.sample(x, held, noise.noise[j], noise.fresh[j], sensors.Y_SENSOR)
@@ -931,7 +940,7 @@ class Simulation:
                 log[j],
             )
             f = np.asarray(alloc.allocate_qp(self.thruster_config, tau6).force_newton)
-            x, xhat, pc = loop.finish_step(
+            xhat, pc = loop.finish_step(
                 x,
                 f,
                 env[j],
@@ -943,6 +952,7 @@ class Simulation:
                 (k + 1) * self.dt_s,
                 held,
                 log[j],
+                work,
             )
             if not np.all(np.isfinite(x)):
                 return x, held, xhat, pc, cs, log, j

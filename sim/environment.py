@@ -215,6 +215,9 @@ def _fold_into_band(
     width = hi - lo
     if width <= 0.0:
         return np.full_like(x, lo), np.ones_like(x)
+    if x.min() >= lo and x.max() <= hi:
+        # every value inside (a walk between its bounds, the usual case): nothing to fold
+        return x, np.ones_like(x)
     m = np.mod(x - lo, 2.0 * width)
     mirrored = m > width
     folded = np.clip(lo + np.where(mirrored, 2.0 * width - m, m), lo, hi)

@@ -10,7 +10,7 @@ Angles are radians, ``eta = [x, y, z, phi, theta, psi]`` (NED) and ``nu = [u, v,
 from __future__ import annotations
 
 import math
-from typing import Literal, TypedDict
+from typing import Any, Literal, TypedDict
 
 import numpy as np
 from numba import njit
@@ -26,6 +26,12 @@ class _JitOptions(TypedDict):
 
 
 JIT: _JitOptions = {"cache": True, "error_model": "numpy"}
+
+
+JIT_NOALLOC: dict[str, Any] = {"cache": True, "error_model": "numpy", "_nrt": False}
+"""Options of the kernels that must not allocate (the ``*_into`` functions of the plant's
+step): compiled without numba's runtime, so an array made inside one, or anything else that
+needs the runtime, is a compile error, and array views cost no reference counting."""
 
 # Named indices into eta / nu (SNAME 1950, thesis table 2.1).
 X, Y, Z, PHI, THETA, PSI = 0, 1, 2, 3, 4, 5
@@ -64,13 +70,19 @@ def Smtrx(a: np.ndarray) -> np.ndarray:
     return out
 
 
+@njit(**JIT_NOALLOC)
+def cross_into(out: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
+    """out = a x b for 3-vectors (out must not alias a or b)."""
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
 @njit(**JIT)
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a x b for 3-vectors, without allocating a matrix."""
     out = np.empty(3)
-    out[0] = a[1] * b[2] - a[2] * b[1]
-    out[1] = a[2] * b[0] - a[0] * b[2]
-    out[2] = a[0] * b[1] - a[1] * b[0]
+    cross_into(out, a, b)
     return out
 
 
@@ -78,10 +90,17 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def Rzyx(phi: float, theta: float, psi: float) -> np.ndarray:
     """R_nb: rotation BODY -> NED, zyx Euler angles (Fossen 2011 eq. 2.18; thesis eq. 2.3 is
     misprinted). Orthonormal with det 1; R_nb^T = R_bn."""
-    cphi, sphi = np.cos(phi), np.sin(phi)
-    cth, sth = np.cos(theta), np.sin(theta)
-    cpsi, spsi = np.cos(psi), np.sin(psi)
     out = np.empty((3, 3))
+    Rzyx_into(out, np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta), np.cos(psi), np.sin(psi))
+    return out
+
+
+@njit(**JIT_NOALLOC)
+def Rzyx_into(
+    out: np.ndarray, cphi: float, sphi: float, cth: float, sth: float, cpsi: float, spsi: float
+) -> None:
+    """``Rzyx`` into ``out`` (3x3) from the cosines and sines of phi, theta and psi, so a
+    caller that needs them again (``Tzyx_into``, ``gvect_into``) computes them once."""
     out[0, 0] = cpsi * cth
     out[0, 1] = -spsi * cphi + cpsi * sth * sphi
     out[0, 2] = spsi * sphi + cpsi * cphi * sth
@@ -91,7 +110,6 @@ def Rzyx(phi: float, theta: float, psi: float) -> np.ndarray:
     out[2, 0] = -sth
     out[2, 1] = cth * sphi
     out[2, 2] = cth * cphi
-    return out
 
 
 @njit(**JIT)
@@ -99,9 +117,14 @@ def Tzyx(phi: float, theta: float) -> np.ndarray:
     """T_Theta: body angular rates -> Euler angle rates (thesis eq. 2.4).
 
     Singular at theta = +-90 deg."""
-    cphi, sphi = np.cos(phi), np.sin(phi)
-    cth, tth = np.cos(theta), np.tan(theta)
     out = np.empty((3, 3))
+    Tzyx_into(out, np.cos(phi), np.sin(phi), np.cos(theta), np.tan(theta))
+    return out
+
+
+@njit(**JIT_NOALLOC)
+def Tzyx_into(out: np.ndarray, cphi: float, sphi: float, cth: float, tth: float) -> None:
+    """``Tzyx`` into ``out`` (3x3) from cos phi, sin phi, cos theta and tan theta."""
     out[0, 0] = 1.0
     out[0, 1] = sphi * tth
     out[0, 2] = cphi * tth
@@ -111,7 +134,6 @@ def Tzyx(phi: float, theta: float) -> np.ndarray:
     out[2, 0] = 0.0
     out[2, 1] = sphi / cth
     out[2, 2] = cphi / cth
-    return out
 
 
 @njit(**JIT)
@@ -147,24 +169,31 @@ def m2c(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
 def coriolis_force(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
     """C(nu) nu for the parametrisation of m2c, computed without building C (cheaper).
     M must be symmetric (every mass matrix of the plant is, checked on load)."""
-    a = np.zeros(3)
-    b = np.zeros(3)
-    for i in range(3):
-        sa = 0.0
-        sb = 0.0
-        for j in range(6):
-            sa += M[i, j] * nu[j]
-            sb += M[3 + i, j] * nu[j]
-        a[i] = sa
-        b[i] = sb
     out = np.empty(6)
-    out[0] = -(a[1] * nu[5] - a[2] * nu[4])
-    out[1] = -(a[2] * nu[3] - a[0] * nu[5])
-    out[2] = -(a[0] * nu[4] - a[1] * nu[3])
-    out[3] = -(a[1] * nu[2] - a[2] * nu[1]) - (b[1] * nu[5] - b[2] * nu[4])
-    out[4] = -(a[2] * nu[0] - a[0] * nu[2]) - (b[2] * nu[3] - b[0] * nu[5])
-    out[5] = -(a[0] * nu[1] - a[1] * nu[0]) - (b[0] * nu[4] - b[1] * nu[3])
+    coriolis_force_into(out, M, nu)
     return out
+
+
+@njit(**JIT_NOALLOC)
+def _row_dot(M: np.ndarray, i: int, nu: np.ndarray) -> float:
+    """sum_j M[i, j] nu[j], summed from 0.0 in the order of j."""
+    s = 0.0
+    for j in range(nu.shape[0]):
+        s += M[i, j] * nu[j]
+    return s
+
+
+@njit(**JIT_NOALLOC)
+def coriolis_force_into(out: np.ndarray, M: np.ndarray, nu: np.ndarray) -> None:
+    """``coriolis_force`` into ``out`` (6,), with the momenta a, b as scalars (no array)."""
+    a0, a1, a2 = _row_dot(M, 0, nu), _row_dot(M, 1, nu), _row_dot(M, 2, nu)
+    b0, b1, b2 = _row_dot(M, 3, nu), _row_dot(M, 4, nu), _row_dot(M, 5, nu)
+    out[0] = -(a1 * nu[5] - a2 * nu[4])
+    out[1] = -(a2 * nu[3] - a0 * nu[5])
+    out[2] = -(a0 * nu[4] - a1 * nu[3])
+    out[3] = -(a1 * nu[2] - a2 * nu[1]) - (b1 * nu[5] - b2 * nu[4])
+    out[4] = -(a2 * nu[0] - a0 * nu[2]) - (b2 * nu[3] - b0 * nu[5])
+    out[5] = -(a0 * nu[1] - a1 * nu[0]) - (b0 * nu[4] - b1 * nu[3])
 
 
 @njit(**JIT)
@@ -173,26 +202,46 @@ def gvect(
 ) -> np.ndarray:
     """Restoring vector g(eta) of weight W at r_bg and buoyancy B at r_bb, both in body axes
     (Fossen 2011 eq. 4.6, the 6-row form; thesis eq. 2.9 is printed with 7 rows)."""
-    sth, cth = np.sin(theta), np.cos(theta)
-    sphi, cphi = np.sin(phi), np.cos(phi)
     g = np.empty(6)
+    gvect_into(g, W, B, np.sin(theta), np.cos(theta), np.sin(phi), np.cos(phi), r_bg, r_bb)
+    return g
+
+
+@njit(**JIT_NOALLOC)
+def gvect_into(
+    g: np.ndarray,
+    W: float,
+    B: float,
+    sth: float,
+    cth: float,
+    sphi: float,
+    cphi: float,
+    r_bg: np.ndarray,
+    r_bb: np.ndarray,
+) -> None:
+    """``gvect`` into ``g`` (6,) from the sines and cosines of theta and phi."""
     g[0] = (W - B) * sth
     g[1] = -(W - B) * cth * sphi
     g[2] = -(W - B) * cth * cphi
     g[3] = -(r_bg[1] * W - r_bb[1] * B) * cth * cphi + (r_bg[2] * W - r_bb[2] * B) * cth * sphi
     g[4] = (r_bg[2] * W - r_bb[2] * B) * sth + (r_bg[0] * W - r_bb[0] * B) * cth * cphi
     g[5] = -(r_bg[0] * W - r_bb[0] * B) * cth * sphi - (r_bg[1] * W - r_bb[1] * B) * sth
-    return g
 
 
 @njit(**JIT)
 def rotation_to_vector(Rm: np.ndarray) -> np.ndarray:
     """Small-angle rotation vector of a rotation matrix: vee((R - R^T)/2) = sin(angle) * axis."""
     out = np.empty(3)
+    rotation_to_vector_into(out, Rm)
+    return out
+
+
+@njit(**JIT_NOALLOC)
+def rotation_to_vector_into(out: np.ndarray, Rm: np.ndarray) -> None:
+    """``rotation_to_vector`` into ``out`` (3,)."""
     out[0] = 0.5 * (Rm[2, 1] - Rm[1, 2])
     out[1] = 0.5 * (Rm[0, 2] - Rm[2, 0])
     out[2] = 0.5 * (Rm[1, 0] - Rm[0, 1])
-    return out
 
 
 @njit(**JIT)
@@ -209,53 +258,109 @@ def euler_from_rotation(Rm: np.ndarray) -> np.ndarray:
 def mv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
     """A @ x with explicit loops: for the small matrices of the plant this is several times
     faster in compiled code than a BLAS call."""
+    out = np.zeros(A.shape[0])
+    mv_into(out, A, x)
+    return out
+
+
+@njit(**JIT_NOALLOC)
+def mv_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
+    """out = A @ x, each element summed from 0.0 in the order of the columns (out must not
+    alias x)."""
     n, m = A.shape
-    out = np.zeros(n)
     for i in range(n):
         s = 0.0
         for j in range(m):
             s += A[i, j] * x[j]
         out[i] = s
-    return out
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def mv3_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
+    """``mv_into`` for a 3x3 A: the same sums, with loop bounds the compiler sees (and
+    inlined where it is called, so no call per product)."""
+    for i in range(3):
+        s = 0.0
+        for j in range(3):
+            s += A[i, j] * x[j]
+        out[i] = s
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def mv6_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
+    """``mv_into`` for a 6x6 A (see ``mv3_into``)."""
+    for i in range(6):
+        s = 0.0
+        for j in range(6):
+            s += A[i, j] * x[j]
+        out[i] = s
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def mtv3_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
+    """``mtv_into`` for a 3x3 A (see ``mv3_into``)."""
+    for j in range(3):
+        s = 0.0
+        for i in range(3):
+            s += A[i, j] * x[i]
+        out[j] = s
 
 
 @njit(**JIT)
 def mtv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
     """A^T @ x with explicit loops."""
+    out = np.zeros(A.shape[1])
+    mtv_into(out, A, x)
+    return out
+
+
+@njit(**JIT_NOALLOC)
+def mtv_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
+    """out = A^T @ x, summed like ``mv_into`` (out must not alias x)."""
     n, m = A.shape
-    out = np.zeros(m)
     for j in range(m):
         s = 0.0
         for i in range(n):
             s += A[i, j] * x[i]
         out[j] = s
-    return out
 
 
 @njit(**JIT)
 def mtm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """A^T @ B for 3x3 matrices with explicit loops."""
     out = np.zeros((3, 3))
+    mtm_into(out, A, B)
+    return out
+
+
+@njit(**JIT_NOALLOC)
+def mtm_into(out: np.ndarray, A: np.ndarray, B: np.ndarray) -> None:
+    """out = A^T @ B for 3x3 matrices (out must not alias A or B)."""
     for i in range(3):
         for j in range(3):
             s = 0.0
             for k in range(3):
                 s += A[k, i] * B[k, j]
             out[i, j] = s
-    return out
 
 
 @njit(**JIT)
 def mm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """A @ B for 3x3 matrices with explicit loops."""
     out = np.zeros((3, 3))
+    mm_into(out, A, B)
+    return out
+
+
+@njit(**JIT_NOALLOC)
+def mm_into(out: np.ndarray, A: np.ndarray, B: np.ndarray) -> None:
+    """out = A @ B for 3x3 matrices (out must not alias A or B)."""
     for i in range(3):
         for j in range(3):
             s = 0.0
             for k in range(3):
                 s += A[i, k] * B[k, j]
             out[i, j] = s
-    return out
 
 
 def quaternion_wxyz_from_rpy_radians(phi: float, theta: float, psi: float) -> np.ndarray:

@@ -20,19 +20,26 @@ from numba import njit
 
 from sim.gnc import (
     JIT,
+    JIT_NOALLOC,
     Rzyx,
+    Rzyx_into,
     Tzyx,
-    coriolis_force,
-    cross,
-    gvect,
-    mm,
-    mtm,
-    mtv,
+    Tzyx_into,
+    coriolis_force_into,
+    cross_into,
+    gvect_into,
+    mm_into,
+    mtm_into,
+    mtv3_into,
     mv,
-    rotation_to_vector,
+    mv3_into,
+    mv6_into,
+    mv_into,
+    rotation_to_vector_into,
 )
 from sim.params import ParameterSet
-from sim.thrusters import thrust_from_speed
+from sim.thrusters import thrust_from_speed as thrust_from_speed  # re-exported (tests)
+from sim.thrusters import thrust_from_speed_into
 
 # State layout.
 ETA_T = slice(0, 6)
@@ -193,33 +200,85 @@ def _contact_params(ps: ParameterSet) -> dict:
     )
 
 
+# --- work space of the allocation-free step ---
+# ``PlantWork.vec`` rows (each at least N_STATE wide; a function uses the leading elements)
+V_XS, V_K1, V_K2, V_K3, V_K4 = 0, 1, 2, 3, 4  # RK4 stage state and slopes
+V_F = 5  # thrust of each thruster [N], held over the step
+V_THR = 6  # thr_T @ f, the thrusters' wrench on the ROV, held over the step
+V_TAU_T, V_TAU_R = 7, 8  # wrenches on the tree and on the ROV
+V_NU_REL, V_VCB, V_VCDB, V_CRB, V_CA = 9, 10, 11, 12, 13  # hydrodynamics
+V_A, V_B, V_C, V_D = 14, 15, 16, 17  # scratch 3-vectors of one function at a time
+V_G = 18  # restoring wrench of the ROV
+V_WROV, V_WTREE = 19, 20  # gripper spring wrenches
+V_EPB, V_EVB, V_ETH, V_EW = 21, 22, 23, 24  # gripper spring errors
+V_U, V_RHS6, V_BASE, V_MINVU = 25, 26, 27, 28  # the wire's mass (Sherman-Morrison)
+V_CONTACT = 29  # contact wrench
+V_CR, V_CT, V_CVN, V_CFN, V_CFB, V_CQ, V_CG, V_CQD, V_CF = 30, 31, 32, 33, 34, 35, 36, 37, 38
+N_VEC = 39
+# ``PlantWork.mat`` 3x3 slots
+M_RT, M_RR, M_T, M_RM, M_RTR, M_TMP = 0, 1, 2, 3, 4, 5
+N_MAT = 6
+
+
+class PlantWork(NamedTuple):
+    """Work arrays of ``rk4_step_into`` and ``rhs_into``: made once (``make_work``) and reused
+    for every step, so a step allocates nothing."""
+
+    vec: np.ndarray  # (N_VEC, max(N_STATE, thrusters)) rows of vectors
+    mat: np.ndarray  # (N_MAT, 3, 3) rotation and product matrices
+
+
 @njit(**JIT)
-def _hydro(M_rb, M_a, D_l, D_nl, nu, nu_r, nu_c_dot_lin):
+def make_work(n_thrusters: int) -> PlantWork:
+    """A fresh work space for a plant with ``n_thrusters`` thrusters."""
+    return PlantWork(np.zeros((N_VEC, max(N_STATE, n_thrusters))), np.zeros((N_MAT, 3, 3)))
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _hydro_into(tau, M_rb, M_a, D_l, D_nl, nu, nu_r, nu_c_dot_lin, c_rb, c_a):
     """Rigid-body Coriolis, added-mass Coriolis, damping and the added-mass part of the water's
-    acceleration, as forces on the right-hand side (eq. 2.11-2.12)."""
-    c_rb = coriolis_force(M_rb, nu)
-    c_a = coriolis_force(M_a, nu_r)
-    tau = np.empty(6)
+    acceleration, as forces on the right-hand side (eq. 2.11-2.12), into ``tau`` (6,);
+    ``c_rb``, ``c_a`` (6,) are work arrays."""
+    coriolis_force_into(c_rb, M_rb, nu)
+    coriolis_force_into(c_a, M_a, nu_r)
     for i in range(6):
         tau[i] = -c_rb[i] - c_a[i]
         tau[i] -= (D_l[i] + D_nl[i] * abs(nu_r[i])) * nu_r[i]
         for j in range(3):
             tau[i] += M_a[i, j] * nu_c_dot_lin[j]
+
+
+@njit(**JIT)
+def _hydro(M_rb, M_a, D_l, D_nl, nu, nu_r, nu_c_dot_lin):
+    """``_hydro_into`` into a new array."""
+    tau = np.empty(6)
+    _hydro_into(tau, M_rb, M_a, D_l, D_nl, nu, nu_r, nu_c_dot_lin, np.empty(6), np.empty(6))
     return tau
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _relative_velocity_into(nu_r, v_c_b, v_c_dot_b, R_nb, nu, v_c_n, a_c_n):
+    """nu_r = nu - nu_c (eq. 2.10) into ``nu_r`` (6,), the current's body components into
+    ``v_c_b`` (3,) and their rate d/dt (R^T v_c) = R^T a_c - omega x (R^T v_c) into
+    ``v_c_dot_b`` (3,)."""
+    mtv3_into(v_c_b, R_nb, v_c_n)
+    for i in range(6):
+        nu_r[i] = nu[i]
+    for i in range(3):
+        nu_r[i] -= v_c_b[i]
+    mtv3_into(v_c_dot_b, R_nb, a_c_n)
+    w = nu[3:6]
+    v_c_dot_b[0] -= w[1] * v_c_b[2] - w[2] * v_c_b[1]
+    v_c_dot_b[1] -= w[2] * v_c_b[0] - w[0] * v_c_b[2]
+    v_c_dot_b[2] -= w[0] * v_c_b[1] - w[1] * v_c_b[0]
 
 
 @njit(**JIT)
 def _relative_velocity(R_nb, nu, v_c_n, a_c_n):
     """nu_r = nu - nu_c (eq. 2.10) and d/dt of the current's body components."""
-    v_c_b = mtv(R_nb, v_c_n)
-    nu_r = nu.copy()
-    nu_r[0:3] -= v_c_b
-    # d/dt (R^T v_c) = R^T a_c - omega x (R^T v_c)
-    v_c_dot_b = mtv(R_nb, a_c_n)
-    w = nu[3:6]
-    v_c_dot_b[0] -= w[1] * v_c_b[2] - w[2] * v_c_b[1]
-    v_c_dot_b[1] -= w[2] * v_c_b[0] - w[0] * v_c_b[2]
-    v_c_dot_b[2] -= w[0] * v_c_b[1] - w[1] * v_c_b[0]
+    nu_r = np.empty(6)
+    v_c_dot_b = np.empty(3)
+    _relative_velocity_into(nu_r, np.empty(3), v_c_dot_b, R_nb, nu, v_c_n, a_c_n)
     return nu_r, v_c_dot_b
 
 
@@ -258,20 +317,19 @@ def wire_force_n(p_att_n: np.ndarray, env: np.ndarray, W0: float) -> np.ndarray:
     return f
 
 
-@njit(**JIT)
-def wire_force_damped_n(
-    p_att_n: np.ndarray, v_att_n: np.ndarray, env: np.ndarray, W0: float
-) -> np.ndarray:
-    """``wire_force_n`` with the wire's axial damping (``E_WDAMP``): the tension is
-    k_z (d - rest) + c d_dot along the wire, d_dot the stretch rate of the attachment point
-    against the wire's top (``E_VPIV``); never negative, zero when slack. With c = 0 it is
-    ``wire_force_n`` exactly."""
-    pivot, rest = wire_pivot(env, W0)
-    dx = p_att_n[0] - pivot[0]
-    dy = p_att_n[1] - pivot[1]
-    dz = p_att_n[2] - pivot[2]
+@njit(inline="always", **JIT_NOALLOC)
+def wire_force_damped_into(
+    f: np.ndarray, p_att_n: np.ndarray, v_att_n: np.ndarray, env: np.ndarray, W0: float
+) -> None:
+    """``wire_force_damped_n`` into ``f`` (3,), allocating nothing (the pivot as scalars)."""
+    rest = W0 / env[E_KH] - W0 / env[E_KZ]
+    dx = p_att_n[0] - (env[E_CT] + env[E_OFF])
+    dy = p_att_n[1] - (env[E_CT + 1] + env[E_OFF + 1])
+    dz = p_att_n[2] - (env[E_CT + 2] + env[E_LREST] - rest)
     d = np.sqrt(dx * dx + dy * dy + dz * dz)
-    f = np.zeros(3)
+    f[0] = 0.0
+    f[1] = 0.0
+    f[2] = 0.0
     if d > rest and d > 0.0:
         rate = (
             dx * (v_att_n[0] - env[E_VPIV])
@@ -283,73 +341,177 @@ def wire_force_damped_n(
             f[0] = -tension * dx / d
             f[1] = -tension * dy / d
             f[2] = -tension * dz / d
+
+
+@njit(**JIT)
+def wire_force_damped_n(
+    p_att_n: np.ndarray, v_att_n: np.ndarray, env: np.ndarray, W0: float
+) -> np.ndarray:
+    """``wire_force_n`` with the wire's axial damping (``E_WDAMP``): the tension is
+    k_z (d - rest) + c d_dot along the wire, d_dot the stretch rate of the attachment point
+    against the wire's top (``E_VPIV``); never negative, zero when slack. With c = 0 it is
+    ``wire_force_n`` exactly."""
+    f = np.empty(3)
+    wire_force_damped_into(f, p_att_n, v_att_n, env, W0)
     return f
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def attachment_velocity_into(
+    out: np.ndarray, x: np.ndarray, R_t: np.ndarray, r_att: np.ndarray, tmp: np.ndarray
+) -> None:
+    """``attachment_velocity_n`` into ``out`` (3,); ``tmp`` (3,) is a work array."""
+    cross_into(tmp, x[9:12], r_att)
+    for i in range(3):
+        tmp[i] = x[6 + i] + tmp[i]
+    mv3_into(out, R_t, tmp)
 
 
 @njit(**JIT)
 def attachment_velocity_n(x: np.ndarray, R_t: np.ndarray, r_att: np.ndarray) -> np.ndarray:
     """Velocity of the wire's attachment point on the tree, NED [m/s]."""
-    return mv(R_t, x[6:9] + cross(x[9:12], r_att))
+    out = np.empty(3)
+    attachment_velocity_into(out, x, R_t, r_att, np.empty(3))
+    return out
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def tree_acceleration_into(
+    nu_dot: np.ndarray,
+    x: np.ndarray,
+    tau: np.ndarray,
+    env: np.ndarray,
+    P: PlantArrays,
+    R_t: np.ndarray,
+    work: PlantWork,
+) -> None:
+    """nu_dot of the tree for the wrench ``tau`` (tree axes), into ``nu_dot`` (6,). With the
+    elastic wire, the wire's mass lumped at the tree (``E_WMASS``, m_wire L / 3: the first
+    axial mode's share, as in T0) moves with the tree's centre along the vertical only (the
+    wire's axial direction); its inertia m_w a_down is added to the tree's,
+    (M + m_w u u^T) nu_dot = tau - u m_w (e_down . R (omega x v)), u = [R^T e_down, 0],
+    solved with Sherman-Morrison on M^-1."""
+    mv6_into(nu_dot, P.tree_M_inv, tau)
+    m_w = env[E_WMASS]
+    if m_w <= 0.0:
+        return
+    vec = work.vec
+    u = vec[V_U, 0:6]
+    for i in range(3):
+        u[i] = R_t[2, i]
+        u[3 + i] = 0.0
+    cor = vec[V_A, 0:3]
+    cross_into(cor, x[9:12], x[6:9])
+    a_rot = R_t[2, 0] * cor[0] + R_t[2, 1] * cor[1] + R_t[2, 2] * cor[2]
+    rhs6 = vec[V_RHS6, 0:6]
+    for i in range(6):
+        rhs6[i] = tau[i] - m_w * a_rot * u[i]
+    base = vec[V_BASE, 0:6]
+    mv6_into(base, P.tree_M_inv, rhs6)
+    minv_u = vec[V_MINVU, 0:6]
+    mv6_into(minv_u, P.tree_M_inv, u)
+    denom = 1.0 + m_w * np.dot(u, minv_u)
+    scale = m_w * np.dot(u, base) / denom
+    for i in range(6):
+        nu_dot[i] = base[i] - minv_u[i] * scale
 
 
 @njit(**JIT)
 def tree_acceleration(
     x: np.ndarray, tau: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarray
 ) -> np.ndarray:
-    """nu_dot of the tree for the wrench ``tau`` (tree axes). With the elastic wire, the wire's
-    mass lumped at the tree (``E_WMASS``, m_wire L / 3: the first axial mode's share, as in
-    T0) moves with the tree's centre along the vertical only (the wire's axial direction);
-    its inertia m_w a_down is added to the tree's, (M + m_w u u^T) nu_dot = tau - u m_w
-    (e_down . R (omega x v)), u = [R^T e_down, 0], solved with Sherman-Morrison on M^-1."""
-    nu_dot = mv(P.tree_M_inv, tau)
-    m_w = env[E_WMASS]
-    if m_w <= 0.0:
-        return nu_dot
-    u = np.zeros(6)
-    u[0:3] = R_t[2, :]
-    cor = cross(x[9:12], x[6:9])
-    a_rot = R_t[2, 0] * cor[0] + R_t[2, 1] * cor[1] + R_t[2, 2] * cor[2]
-    rhs6 = tau - m_w * a_rot * u
-    base = mv(P.tree_M_inv, rhs6)
-    minv_u = mv(P.tree_M_inv, u)
-    denom = 1.0 + m_w * np.dot(u, minv_u)
-    return base - minv_u * (m_w * np.dot(u, base) / denom)
+    """``tree_acceleration_into`` into a new array."""
+    nu_dot = np.empty(6)
+    tree_acceleration_into(nu_dot, x, tau, env, P, R_t, make_work(P.thr_T.shape[1]))
+    return nu_dot
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def coupling_wrench_into(
+    w_rov: np.ndarray,
+    w_tree: np.ndarray,
+    x: np.ndarray,
+    P: PlantArrays,
+    R_t: np.ndarray,
+    R_r: np.ndarray,
+    work: PlantWork,
+) -> None:
+    """Gripper spring (eq. 2.45-2.47): wrench on the ROV in ROV axes into ``w_rov`` (6,) and
+    the equal and opposite wrench on the tree in tree axes (the force applied at the mounting
+    point) into ``w_tree`` (6,). R_t, R_r are the tree's and the ROV's R_nb."""
+    vec, mat = work.vec, work.mat
+    nu_t, nu_r = x[6:12], x[18:24]
+    a = vec[V_A, 0:3]
+    b = vec[V_B, 0:3]
+    R_m = mat[M_RM]
+    mm_into(R_m, R_t, P.mount_R)
+    w_t = nu_t[3:6]
+    # position error: R_r^T (p_m - p_rov), p_m = p_tree + R_t r_mount
+    mv3_into(a, R_t, P.mount_r)
+    for i in range(3):
+        a[i] = x[i] + a[i]
+    for i in range(3):
+        a[i] = a[i] - x[12 + i]
+    e_p_b = vec[V_EPB, 0:3]
+    mtv3_into(e_p_b, R_r, a)
+    # velocity error: R_r^T R_t (v_t + w_t x r_mount) - v_rov
+    cross_into(a, w_t, P.mount_r)
+    for i in range(3):
+        a[i] = nu_t[i] + a[i]
+    mv3_into(b, R_t, a)
+    e_v_b = vec[V_EVB, 0:3]
+    mtv3_into(e_v_b, R_r, b)
+    for i in range(3):
+        e_v_b[i] = e_v_b[i] - nu_r[i]
+    R_tmp = mat[M_TMP]
+    mtm_into(R_tmp, R_r, R_m)
+    e_th = vec[V_ETH, 0:3]
+    rotation_to_vector_into(e_th, R_tmp)
+    mv3_into(a, R_t, w_t)
+    e_w = vec[V_EW, 0:3]
+    mtv3_into(e_w, R_r, a)
+    for i in range(3):
+        e_w[i] = e_w[i] - nu_r[3 + i]
+    for i in range(3):
+        w_rov[i] = P.coupling_K[i] * e_p_b[i] + P.coupling_C[i] * e_v_b[i]
+        w_rov[3 + i] = P.coupling_K[3 + i] * e_th[i] + P.coupling_C[3 + i] * e_w[i]
+    R_tr = mat[M_RTR]
+    mtm_into(R_tr, R_t, R_r)  # ROV axes -> tree axes
+    mv3_into(a, R_tr, w_rov[0:3])
+    for i in range(3):
+        w_tree[i] = -a[i]
+    cross_into(b, P.mount_r, w_tree[0:3])
+    mv3_into(a, R_tr, w_rov[3:6])
+    for i in range(3):
+        w_tree[3 + i] = b[i] - a[i]
 
 
 @njit(**JIT)
 def coupling_wrench(
     x: np.ndarray, P: PlantArrays, R_t: np.ndarray, R_r: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Gripper spring (eq. 2.45-2.47): wrench on the ROV in ROV axes and the equal and opposite
-    wrench on the tree in tree axes (the force applied at the mounting point). R_t, R_r are the
-    tree's and the ROV's R_nb."""
-    nu_t, nu_r = x[6:12], x[18:24]
-    R_m = mm(R_t, P.mount_R)
-    w_t = nu_t[3:6]
-    p_m = x[0:3] + mv(R_t, P.mount_r)
-    e_p_b = mtv(R_r, p_m - x[12:15])
-    v_m_n = mv(R_t, nu_t[0:3] + cross(w_t, P.mount_r))
-    e_v_b = mtv(R_r, v_m_n) - nu_r[0:3]
-    e_th = rotation_to_vector(mtm(R_r, R_m))
-    e_w = mtv(R_r, mv(R_t, w_t)) - nu_r[3:6]
+    """``coupling_wrench_into`` into new arrays: (wrench on the ROV, ROV axes; wrench on the
+    tree, tree axes)."""
     w_rov = np.empty(6)
-    for i in range(3):
-        w_rov[i] = P.coupling_K[i] * e_p_b[i] + P.coupling_C[i] * e_v_b[i]
-        w_rov[3 + i] = P.coupling_K[3 + i] * e_th[i] + P.coupling_C[3 + i] * e_w[i]
-    R_tr = mtm(R_t, R_r)  # ROV axes -> tree axes
-    f_tree_b = -mv(R_tr, w_rov[0:3])
     w_tree = np.empty(6)
-    w_tree[0:3] = f_tree_b
-    w_tree[3:6] = cross(P.mount_r, f_tree_b) - mv(R_tr, w_rov[3:6])
+    coupling_wrench_into(w_rov, w_tree, x, P, R_t, R_r, make_work(P.thr_T.shape[1]))
     return w_rov, w_tree
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _kinematics_into(
+    out: np.ndarray, nu: np.ndarray, R_nb: np.ndarray, T_theta: np.ndarray
+) -> None:
+    """eta_dot = J_Theta(eta) nu (eq. 2.1) into ``out`` (6,), with R_nb and T_Theta given."""
+    mv3_into(out[0:3], R_nb, nu[0:3])
+    mv3_into(out[3:6], T_theta, nu[3:6])
 
 
 @njit(**JIT)
 def _kinematics(eta: np.ndarray, nu: np.ndarray, R_nb: np.ndarray) -> np.ndarray:
     """eta_dot = J_Theta(eta) nu (eq. 2.1)."""
     out = np.empty(6)
-    out[0:3] = mv(R_nb, nu[0:3])
-    out[3:6] = mv(Tzyx(eta[3], eta[4]), nu[3:6])
+    _kinematics_into(out, nu, R_nb, Tzyx(eta[3], eta[4]))
     return out
 
 
@@ -360,9 +522,10 @@ FRICTION_SLIP_MPS = 0.005
 POST_FREE, POST_WALL, POST_PLATE, POST_SIDE = 0, 1, 2, 3
 
 
-@njit(**JIT)
-def post_penetration(q: np.ndarray, P: PlantArrays) -> tuple[int, float, np.ndarray]:
-    """How far one post's top is into the tree: (kind, penetration [m], gradient).
+@njit(inline="always", **JIT_NOALLOC)
+def post_penetration_into(grad: np.ndarray, q: np.ndarray, P: PlantArrays) -> tuple[int, float]:
+    """How far one post's top is into the tree: (kind, penetration [m]), the gradient into
+    ``grad`` (3,).
 
     ``q`` is the post's top from the tree's centre, in level axes turned to the tree's heading
     (x fore, y starboard, z down); the tree is taken level (roll and pitch are fractions of a
@@ -380,10 +543,12 @@ def post_penetration(q: np.ndarray, P: PlantArrays) -> tuple[int, float, np.ndar
 
     The gradient is d(penetration)/dq: the force of the post on the tree is ``N * gradient``
     (level axes turned to the tree's heading) at the post's top, ``N`` the normal force."""
-    grad = np.zeros(3)
+    grad[0] = 0.0
+    grad[1] = 0.0
+    grad[2] = 0.0
     e = P.tree_half_height - q[2]
     if e <= 0.0:
-        return POST_FREE, 0.0, grad
+        return POST_FREE, 0.0
     # nearest funnel
     best, dx, dy = 1e300, 0.0, 0.0
     for j in range(P.dock_xy.shape[0]):
@@ -407,7 +572,7 @@ def post_penetration(q: np.ndarray, P: PlantArrays) -> tuple[int, float, np.ndar
         # under the mouth: free in the funnel, or against its wall, or against the plate if
         # the post's top reaches past the lip
         if p_wall <= 0.0:
-            return POST_FREE, 0.0, grad
+            return POST_FREE, 0.0
         p, kind = p_wall, POST_WALL
         if rho + rp > P.dock_mouth_radius and e < p:
             p, kind = e, POST_PLATE
@@ -417,7 +582,7 @@ def post_penetration(q: np.ndarray, P: PlantArrays) -> tuple[int, float, np.ndar
         if p_wall < p:
             p, kind = p_wall, POST_WALL
     else:
-        return POST_FREE, 0.0, grad
+        return POST_FREE, 0.0
     # or out through the nearest side, if that is nearer (a post beside a tree that came down
     # next to it); taken under the mouth too, so nothing jumps where the mouth meets a side
     side_x = half_l - abs(q[0])
@@ -435,47 +600,81 @@ def post_penetration(q: np.ndarray, P: PlantArrays) -> tuple[int, float, np.ndar
         grad[0] = -1.0 if q[0] > 0.0 else 1.0
     else:
         grad[1] = -1.0 if q[1] > 0.0 else 1.0
-    return kind, p, grad
+    return kind, p
 
 
 @njit(**JIT)
-def _post_top(x: np.ndarray, env: np.ndarray, P: PlantArrays, i: int) -> np.ndarray:
-    """Post i's top from the tree's centre: north and east turned into the tree's heading
-    (x fore, y starboard, level), and down."""
+def post_penetration(q: np.ndarray, P: PlantArrays) -> tuple[int, float, np.ndarray]:
+    """``post_penetration_into`` with the gradient in a new array: (kind, penetration [m],
+    gradient)."""
+    grad = np.empty(3)
+    kind, p = post_penetration_into(grad, q, P)
+    return kind, p, grad
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _post_top_into(q: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, i: int) -> None:
+    """Post i's top from the tree's centre into ``q`` (3,): north and east turned into the
+    tree's heading (x fore, y starboard, level), and down."""
     cf, sf = np.cos(env[E_FRAME_PSI]), np.sin(env[E_FRAME_PSI])
     dn = env[E_FRAME] + cf * P.dock_xy[i, 0] - sf * P.dock_xy[i, 1] - x[0]
     de = env[E_FRAME + 1] + sf * P.dock_xy[i, 0] + cf * P.dock_xy[i, 1] - x[1]
     c, s = np.cos(x[5]), np.sin(x[5])
-    q = np.empty(3)
     q[0] = c * dn + s * de
     q[1] = -s * dn + c * de
     q[2] = env[E_LAND] - P.dock_post_height - x[2]
+
+
+@njit(**JIT)
+def _post_top(x: np.ndarray, env: np.ndarray, P: PlantArrays, i: int) -> np.ndarray:
+    """``_post_top_into`` into a new array."""
+    q = np.empty(3)
+    _post_top_into(q, x, env, P, i)
     return q
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _corner_body_into(c: np.ndarray, P: PlantArrays, j: int) -> None:
+    """Corner j of the tree's bottom, tree body axes [m], into ``c`` (3,)."""
+    c[0] = 0.5 * P.tree_footprint[0] * (1.0 if j % 2 == 0 else -1.0)
+    c[1] = 0.5 * P.tree_footprint[1] * (1.0 if j < 2 else -1.0)
+    c[2] = P.tree_half_height
 
 
 @njit(**JIT)
 def _corner_body(P: PlantArrays, j: int) -> np.ndarray:
     c = np.empty(3)
-    c[0] = 0.5 * P.tree_footprint[0] * (1.0 if j % 2 == 0 else -1.0)
-    c[1] = 0.5 * P.tree_footprint[1] * (1.0 if j < 2 else -1.0)
-    c[2] = P.tree_half_height
+    _corner_body_into(c, P, j)
     return c
+
+
+@njit(**JIT_NOALLOC)
+def _friction_xy(vx: float, vy: float, normal: float, mu: float) -> tuple[float, float]:
+    """Smooth Coulomb friction against the sliding velocity (vx, vy): never adds energy."""
+    speed = np.sqrt(vx * vx + vy * vy)
+    if speed < 1e-12:
+        return 0.0, 0.0
+    scale = mu * normal * np.tanh(speed / FRICTION_SLIP_MPS) / speed
+    return -scale * vx, -scale * vy
 
 
 @njit(**JIT)
 def _friction(v: np.ndarray, normal: float, mu: float) -> tuple[float, float]:
     """Smooth Coulomb friction against the sliding velocity (v[0], v[1]): never adds energy."""
-    speed = np.sqrt(v[0] * v[0] + v[1] * v[1])
-    if speed < 1e-12:
-        return 0.0, 0.0
-    scale = mu * normal * np.tanh(speed / FRICTION_SLIP_MPS) / speed
-    return -scale * v[0], -scale * v[1]
+    return _friction_xy(v[0], v[1], normal, mu)
 
 
-@njit(**JIT)
-def contact_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarray) -> np.ndarray:
+@njit(inline="always", **JIT_NOALLOC)
+def contact_wrench_into(
+    out: np.ndarray,
+    x: np.ndarray,
+    env: np.ndarray,
+    P: PlantArrays,
+    R_t: np.ndarray,
+    work: PlantWork,
+) -> None:
     """Force (0:3) and moment about the centre (3:6) of the frame and the seabed on the tree,
-    tree body axes.
+    tree body axes, into ``out`` (6,).
 
     Seabed and landing surface: a penalty spring with damping under each corner of the tree's
     bottom, with smooth Coulomb friction at the corner's sliding speed. Posts: the penetration
@@ -483,41 +682,57 @@ def contact_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarr
     never pulls), friction where a post's top carries the bottom plate. Springs store what
     they take (``contact_energy``); damping and friction only remove energy (the normal force
     is clipped at zero only while the penetration shrinks, which removes energy too)."""
-    out = np.zeros(6)
+    for i in range(6):
+        out[i] = 0.0
     if env[E_LAND] <= 0.0:
-        return out
+        return
+    vec = work.vec
+    r = vec[V_CR, 0:3]
+    tmp = vec[V_CT, 0:3]
+    v_n = vec[V_CVN, 0:3]
+    f_n = vec[V_CFN, 0:3]
+    f_b = vec[V_CFB, 0:3]
     nu = x[6:12]
     w = nu[3:6]
     k4, c4 = 0.25 * P.contact_k, 0.25 * P.contact_c
     for j in range(4):
-        r = _corner_body(P, j)
-        pen = x[2] + mv(R_t, r)[2] - env[E_LAND]
+        _corner_body_into(r, P, j)
+        mv3_into(tmp, R_t, r)
+        pen = x[2] + tmp[2] - env[E_LAND]
         if pen <= 0.0:
             continue
-        v_n = mv(R_t, nu[0:3] + cross(w, r))
+        cross_into(tmp, w, r)
+        for i in range(3):
+            tmp[i] = nu[i] + tmp[i]
+        mv3_into(v_n, R_t, tmp)
         normal = k4 * pen + c4 * v_n[2]
         if normal <= 0.0:
             continue
-        f_n = np.empty(3)
-        f_n[0], f_n[1] = _friction(v_n, normal, P.friction_mu)
+        f_n[0], f_n[1] = _friction_xy(v_n[0], v_n[1], normal, P.friction_mu)
         f_n[2] = -normal
-        f_b = mtv(R_t, f_n)
-        out[0:3] += f_b
-        out[3:6] += cross(r, f_b)
+        mtv3_into(f_b, R_t, f_n)
+        for i in range(3):
+            out[i] += f_b[i]
+        cross_into(tmp, r, f_b)
+        for i in range(3):
+            out[3 + i] += tmp[i]
     # posts: their energy depends on north, east, down and heading only (the tree taken level,
     # as in sim.docking), so they push through the centre and turn the tree about the vertical;
     # its generalized force on the heading, as a body moment, is Q_psi * d(psi_dot)/d(omega_b)
-    v_n = mv(R_t, nu[0:3])
+    mv3_into(v_n, R_t, nu[0:3])
     cphi, sphi, cth = np.cos(x[3]), np.sin(x[3]), np.cos(x[4])
     psi_dot = (sphi * w[1] + cphi * w[2]) / cth
     c, s = np.cos(x[5]), np.sin(x[5])
+    q = vec[V_CQ, 0:3]
+    grad = vec[V_CG, 0:3]
+    q_dot = vec[V_CQD, 0:3]
+    f = vec[V_CF, 0:3]
     for i in range(P.dock_xy.shape[0]):
-        q = _post_top(x, env, P, i)
-        kind, pen, grad = post_penetration(q, P)
+        _post_top_into(q, x, env, P, i)
+        kind, pen = post_penetration_into(grad, q, P)
         if kind == POST_FREE or pen <= 0.0:
             continue
         # the post's top as the tree sees it move; the tree slides over it at minus this
-        q_dot = np.empty(3)
         q_dot[0] = -(c * v_n[0] + s * v_n[1]) + psi_dot * q[1]
         q_dot[1] = -(-s * v_n[0] + c * v_n[1]) - psi_dot * q[0]
         q_dot[2] = -v_n[2]
@@ -525,20 +740,29 @@ def contact_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarr
         normal = P.post_k * pen + P.post_c * pen_rate
         if normal <= 0.0:
             continue
-        f = normal * grad
+        for k in range(3):
+            f[k] = normal * grad[k]
         if kind == POST_PLATE:
             # the bottom plate slides over the post's top: friction in the plate's plane
-            fx, fy = _friction(-q_dot, normal, P.friction_mu)
+            fx, fy = _friction_xy(-q_dot[0], -q_dot[1], normal, P.friction_mu)
             f[0] += fx
             f[1] += fy
-        f_n = np.empty(3)
         f_n[0] = c * f[0] - s * f[1]
         f_n[1] = s * f[0] + c * f[1]
         f_n[2] = f[2]
-        out[0:3] += mtv(R_t, f_n)
+        mtv3_into(f_b, R_t, f_n)
+        for k in range(3):
+            out[k] += f_b[k]
         m_psi = q[0] * f[1] - q[1] * f[0]
         out[4] += m_psi * sphi / cth
         out[5] += m_psi * cphi / cth
+
+
+@njit(**JIT)
+def contact_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarray) -> np.ndarray:
+    """``contact_wrench_into`` into a new array."""
+    out = np.empty(6)
+    contact_wrench_into(out, x, env, P, R_t, make_work(P.thr_T.shape[1]))
     return out
 
 
@@ -560,35 +784,146 @@ def contact_energy(x: np.ndarray, env: np.ndarray, P: PlantArrays) -> float:
     return energy
 
 
-@njit(**JIT)
-def _froude_krylov(tau: np.ndarray, fk_mass: float, R_nb: np.ndarray, a_c_n: np.ndarray) -> None:
+@njit(inline="always", **JIT_NOALLOC)
+def _froude_krylov_into(
+    tau: np.ndarray, fk_mass: float, R_nb: np.ndarray, a_c_n: np.ndarray, tmp: np.ndarray
+) -> None:
     """Add the Froude-Krylov force rho V a (the undisturbed wave's pressure gradient over the
     body, Morison's equation) to ``tau``'s force, body axes. The water's acceleration is
     taken uniform over the body and acting at the centre of buoyancy, taken at the origin:
-    no moment. Zero when the wave load is ``drag`` (the acceleration is zero then)."""
-    f_b = mtv(R_nb, a_c_n)
+    no moment. Zero when the wave load is ``drag`` (the acceleration is zero then). ``tmp``
+    (3,) is a work array."""
+    mtv3_into(tmp, R_nb, a_c_n)
     for i in range(3):
-        tau[i] += fk_mass * f_b[i]
+        tau[i] += fk_mass * tmp[i]
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def tree_wrench_into(
+    tau: np.ndarray,
+    x: np.ndarray,
+    env: np.ndarray,
+    P: PlantArrays,
+    R_t: np.ndarray,
+    work: PlantWork,
+) -> None:
+    """Net weight, wire, push and hydrodynamic forces on the tree, tree axes (eq. 2.44), into
+    ``tau`` (6,)."""
+    vec = work.vec
+    nu = x[6:12]
+    nu_rel = vec[V_NU_REL, 0:6]
+    v_c_b = vec[V_VCB, 0:3]
+    v_c_dot_b = vec[V_VCDB, 0:3]
+    _relative_velocity_into(
+        nu_rel, v_c_b, v_c_dot_b, R_t, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3]
+    )
+    _hydro_into(
+        tau,
+        P.tree_M_rb,
+        P.tree_M_a,
+        P.tree_D_l,
+        P.tree_D_nl,
+        nu,
+        nu_rel,
+        v_c_dot_b,
+        vec[V_CRB, 0:6],
+        vec[V_CA, 0:6],
+    )
+    a = vec[V_A, 0:3]
+    b = vec[V_B, 0:3]
+    c = vec[V_C, 0:3]
+    d = vec[V_D, 0:3]
+    _froude_krylov_into(tau, P.tree_fk_mass, R_t, env[E_AC : E_AC + 3], a)
+    # push and net weight, NED
+    b[0] = env[E_PUSH]
+    b[1] = env[E_PUSH + 1]
+    b[2] = env[E_PUSH + 2]
+    b[2] += P.tree_W0
+    mtv3_into(a, R_t, b)
+    for i in range(3):
+        tau[i] += a[i]
+    # the wire at its attachment point
+    mv3_into(c, R_t, P.tree_r_att)
+    for i in range(3):
+        c[i] = x[i] + c[i]
+    attachment_velocity_into(d, x, R_t, P.tree_r_att, a)
+    wire_force_damped_into(b, c, d, env, P.tree_W0)
+    mtv3_into(a, R_t, b)
+    for i in range(3):
+        tau[i] += a[i]
+    cross_into(c, P.tree_r_att, a)
+    for i in range(3):
+        tau[3 + i] += c[i]
+    if env[E_LAND] > 0.0:
+        cw = vec[V_CONTACT, 0:6]
+        contact_wrench_into(cw, x, env, P, R_t, work)
+        for i in range(6):
+            tau[i] += cw[i]
 
 
 @njit(**JIT)
 def tree_wrench(x: np.ndarray, env: np.ndarray, P: PlantArrays, R_t: np.ndarray) -> np.ndarray:
-    """Net weight, wire, push and hydrodynamic forces on the tree, tree axes (eq. 2.44)."""
-    nu = x[6:12]
-    nu_rel, v_c_dot_b = _relative_velocity(R_t, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3])
-    tau = _hydro(P.tree_M_rb, P.tree_M_a, P.tree_D_l, P.tree_D_nl, nu, nu_rel, v_c_dot_b)
-    _froude_krylov(tau, P.tree_fk_mass, R_t, env[E_AC : E_AC + 3])
-    f_n = env[E_PUSH : E_PUSH + 3].copy()
-    f_n[2] += P.tree_W0
-    tau[0:3] += mtv(R_t, f_n)
-    p_att_n = x[0:3] + mv(R_t, P.tree_r_att)
-    v_att_n = attachment_velocity_n(x, R_t, P.tree_r_att)
-    f_wire_b = mtv(R_t, wire_force_damped_n(p_att_n, v_att_n, env, P.tree_W0))
-    tau[0:3] += f_wire_b
-    tau[3:6] += cross(P.tree_r_att, f_wire_b)
-    if env[E_LAND] > 0.0:
-        tau += contact_wrench(x, env, P, R_t)
+    """``tree_wrench_into`` into a new array."""
+    tau = np.empty(6)
+    tree_wrench_into(tau, x, env, P, R_t, make_work(P.thr_T.shape[1]))
     return tau
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def rov_wrench_into(
+    tau: np.ndarray,
+    x: np.ndarray,
+    thrust_b: np.ndarray,
+    env: np.ndarray,
+    P: PlantArrays,
+    R_r: np.ndarray,
+    sth: float,
+    cth: float,
+    sphi: float,
+    cphi: float,
+    work: PlantWork,
+) -> None:
+    """Restoring, thruster and hydrodynamic forces on the ROV, ROV axes (eq. 2.14), into
+    ``tau`` (6,). ``thrust_b`` is the thrusters' wrench thr_T @ f; sth ... cphi are the sines
+    and cosines of the ROV's pitch and roll."""
+    vec = work.vec
+    nu = x[18:24]
+    nu_rel = vec[V_NU_REL, 0:6]
+    v_c_b = vec[V_VCB, 0:3]
+    v_c_dot_b = vec[V_VCDB, 0:3]
+    _relative_velocity_into(
+        nu_rel, v_c_b, v_c_dot_b, R_r, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3]
+    )
+    _hydro_into(
+        tau,
+        P.rov_M_rb,
+        P.rov_M_a,
+        P.rov_D_l,
+        P.rov_D_nl,
+        nu,
+        nu_rel,
+        v_c_dot_b,
+        vec[V_CRB, 0:6],
+        vec[V_CA, 0:6],
+    )
+    _froude_krylov_into(tau, P.rov_fk_mass, R_r, env[E_AC : E_AC + 3], vec[V_A, 0:3])
+    g = vec[V_G, 0:6]
+    gvect_into(g, P.rov_W, P.rov_B, sth, cth, sphi, cphi, P.rov_r_cg, P.rov_r_cb)
+    for i in range(6):
+        tau[i] -= g[i]
+    for i in range(6):
+        tau[i] += thrust_b[i]
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def thruster_wrench_into(
+    out: np.ndarray, n_rps: np.ndarray, P: PlantArrays, work: PlantWork
+) -> None:
+    """The thrusters' wrench on the ROV, thr_T @ f(n), into ``out`` (6,): computed once per
+    step, the propeller speeds being held over it."""
+    f = work.vec[V_F, 0 : n_rps.shape[0]]
+    thrust_from_speed_into(f, n_rps, P.thr_k_pos, P.thr_k_neg, P.thr_n_max)
+    mv_into(out, P.thr_T, f)
 
 
 @njit(**JIT)
@@ -596,61 +931,136 @@ def rov_wrench(
     x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays, R_r: np.ndarray
 ) -> np.ndarray:
     """Restoring, thruster and hydrodynamic forces on the ROV, ROV axes (eq. 2.14)."""
-    eta, nu = x[12:18], x[18:24]
-    nu_rel, v_c_dot_b = _relative_velocity(R_r, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3])
-    tau = _hydro(P.rov_M_rb, P.rov_M_a, P.rov_D_l, P.rov_D_nl, nu, nu_rel, v_c_dot_b)
-    _froude_krylov(tau, P.rov_fk_mass, R_r, env[E_AC : E_AC + 3])
-    tau -= gvect(P.rov_W, P.rov_B, eta[4], eta[3], P.rov_r_cg, P.rov_r_cb)
-    tau += mv(P.thr_T, thrust_from_speed(n_rps, P.thr_k_pos, P.thr_k_neg, P.thr_n_max))
+    work = make_work(P.thr_T.shape[1])
+    thrust_b = np.empty(6)
+    thruster_wrench_into(thrust_b, n_rps, P, work)
+    tau = np.empty(6)
+    phi, theta = x[15], x[16]
+    rov_wrench_into(
+        tau, x, thrust_b, env, P, R_r, np.sin(theta), np.cos(theta), np.sin(phi), np.cos(phi), work
+    )
     return tau
+
+
+@njit(**JIT_NOALLOC)
+def rhs_into(
+    xdot: np.ndarray,
+    x: np.ndarray,
+    thrust_b: np.ndarray,
+    env: np.ndarray,
+    P: PlantArrays,
+    work: PlantWork,
+) -> None:
+    """Time derivative of the plant state into ``xdot`` (N_STATE,), allocating nothing.
+    ``thrust_b`` is the thrusters' wrench (``thruster_wrench_into``). The cosines and sines
+    of each body's angles are computed once and shared by R_nb, T_Theta and g(eta)."""
+    vec, mat = work.vec, work.mat
+    cphi, sphi = np.cos(x[3]), np.sin(x[3])
+    cth, sth = np.cos(x[4]), np.sin(x[4])
+    R_t = mat[M_RT]
+    Rzyx_into(R_t, cphi, sphi, cth, sth, np.cos(x[5]), np.sin(x[5]))
+    tau_t = vec[V_TAU_T, 0:6]
+    tree_wrench_into(tau_t, x, env, P, R_t, work)
+    T_theta = mat[M_T]
+    if P.has_rov:
+        cphi_r, sphi_r = np.cos(x[15]), np.sin(x[15])
+        cth_r, sth_r = np.cos(x[16]), np.sin(x[16])
+        R_r = mat[M_RR]
+        Rzyx_into(R_r, cphi_r, sphi_r, cth_r, sth_r, np.cos(x[17]), np.sin(x[17]))
+        tau_r = vec[V_TAU_R, 0:6]
+        rov_wrench_into(tau_r, x, thrust_b, env, P, R_r, sth_r, cth_r, sphi_r, cphi_r, work)
+        if env[E_GRIP] > 0.0:
+            w_rov = vec[V_WROV, 0:6]
+            w_tree = vec[V_WTREE, 0:6]
+            coupling_wrench_into(w_rov, w_tree, x, P, R_t, R_r, work)
+            for i in range(6):
+                tau_r[i] += w_rov[i]
+                tau_t[i] += w_tree[i]
+        Tzyx_into(T_theta, cphi_r, sphi_r, cth_r, np.tan(x[16]))
+        _kinematics_into(xdot[12:18], x[18:24], R_r, T_theta)
+        mv6_into(xdot[18:24], P.rov_M_inv, tau_r)
+    else:
+        for i in range(12, N_STATE):
+            xdot[i] = 0.0
+    Tzyx_into(T_theta, cphi, sphi, cth, np.tan(x[4]))
+    _kinematics_into(xdot[0:6], x[6:12], R_t, T_theta)
+    tree_acceleration_into(xdot[6:12], x, tau_t, env, P, R_t, work)
 
 
 @njit(**JIT)
 def rhs(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays) -> np.ndarray:
-    """Time derivative of the plant state. Does not modify its arguments."""
-    xdot = np.zeros(N_STATE)
-    R_t = Rzyx(x[3], x[4], x[5])
-    tau_t = tree_wrench(x, env, P, R_t)
-    if P.has_rov:
-        R_r = Rzyx(x[15], x[16], x[17])
-        tau_r = rov_wrench(x, n_rps, env, P, R_r)
-        if env[E_GRIP] > 0.0:
-            w_rov, w_tree = coupling_wrench(x, P, R_t, R_r)
-            tau_r += w_rov
-            tau_t += w_tree
-        xdot[12:18] = _kinematics(x[12:18], x[18:24], R_r)
-        xdot[18:24] = mv(P.rov_M_inv, tau_r)
-    xdot[0:6] = _kinematics(x[0:6], x[6:12], R_t)
-    xdot[6:12] = tree_acceleration(x, tau_t, env, P, R_t)
+    """Time derivative of the plant state. Does not modify its arguments. (Allocates its
+    result and a work space: the stepping code calls ``rhs_into``.)"""
+    work = make_work(P.thr_T.shape[1])
+    thrust_b = np.empty(6)
+    thruster_wrench_into(thrust_b, n_rps, P, work)
+    xdot = np.empty(N_STATE)
+    rhs_into(xdot, x, thrust_b, env, P, work)
     return xdot
+
+
+@njit(**JIT_NOALLOC)
+def rk4_step_into(
+    out: np.ndarray,
+    x: np.ndarray,
+    n_rps: np.ndarray,
+    env: np.ndarray,
+    P: PlantArrays,
+    dt: float,
+    work: PlantWork,
+) -> None:
+    """One classical Runge-Kutta step with inputs held over the step, into ``out``
+    (N_STATE,), allocating nothing: the stage state and the slopes live in ``work``, and the
+    thrusters' wrench is computed once for the four stages (the propeller speeds are held).
+    ``out`` may be ``x`` itself (each element of x is read for the last time just before
+    the same element of out is written).
+
+    Each element is computed with the same operations in the same order as the vector form
+    ``x + (dt / 6) * (k1 + 2 k2 + 2 k3 + k4)``."""
+    vec = work.vec
+    n = x.shape[0]
+    thrust_b = vec[V_THR, 0:6]
+    thruster_wrench_into(thrust_b, n_rps, P, work)
+    xs = vec[V_XS, 0:n]
+    k1 = vec[V_K1, 0:n]
+    k2 = vec[V_K2, 0:n]
+    k3 = vec[V_K3, 0:n]
+    k4 = vec[V_K4, 0:n]
+    h2 = 0.5 * dt
+    rhs_into(k1, x, thrust_b, env, P, work)
+    for i in range(n):
+        xs[i] = x[i] + h2 * k1[i]
+    rhs_into(k2, xs, thrust_b, env, P, work)
+    for i in range(n):
+        xs[i] = x[i] + h2 * k2[i]
+    rhs_into(k3, xs, thrust_b, env, P, work)
+    for i in range(n):
+        xs[i] = x[i] + dt * k3[i]
+    rhs_into(k4, xs, thrust_b, env, P, work)
+    h6 = dt / 6.0
+    for i in range(n):
+        out[i] = x[i] + h6 * (((k1[i] + 2.0 * k2[i]) + 2.0 * k3[i]) + k4[i])
 
 
 @njit(**JIT)
 def rk4_step(
     x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays, dt: float
 ) -> np.ndarray:
-    """One classical Runge-Kutta step with inputs held over the step.
+    """``rk4_step_into`` into a new state (with a fresh work space: loops over many steps
+    make one work space and call ``rk4_step_into``)."""
+    out = np.empty(x.shape[0])
+    rk4_step_into(out, x, n_rps, env, P, dt, make_work(n_rps.shape[0]))
+    return out
 
-    The stages share one work array and the sums are explicit loops (no temporary arrays);
-    each element is computed with the same operations in the same order as the vector form
-    ``x + (dt / 6) * (k1 + 2 k2 + 2 k3 + k4)``, so the result is bit for bit the same."""
-    n = x.shape[0]
-    h2 = 0.5 * dt
-    xs = np.empty(n)
-    k1 = rhs(x, n_rps, env, P)
-    for i in range(n):
-        xs[i] = x[i] + h2 * k1[i]
-    k2 = rhs(xs, n_rps, env, P)
-    for i in range(n):
-        xs[i] = x[i] + h2 * k2[i]
-    k3 = rhs(xs, n_rps, env, P)
-    for i in range(n):
-        xs[i] = x[i] + dt * k3[i]
-    k4 = rhs(xs, n_rps, env, P)
-    h6 = dt / 6.0
-    for i in range(n):
-        xs[i] = x[i] + h6 * (((k1[i] + 2.0 * k2[i]) + 2.0 * k3[i]) + k4[i])
-    return xs
+
+@njit(**JIT_NOALLOC)
+def all_finite(x: np.ndarray) -> bool:
+    """True when every element of x is finite (``np.all(np.isfinite(x))`` without its
+    temporary array)."""
+    for i in range(x.shape[0]):
+        if not np.isfinite(x[i]):
+            return False
+    return True
 
 
 @njit(**JIT)
@@ -664,9 +1074,10 @@ def advance(
     n = env_series.shape[0]
     states = np.empty((n, N_STATE))
     x = x0.copy()
+    work = make_work(n_rps.shape[0])
     for k in range(n):
-        x = rk4_step(x, n_rps, env_series[k], P, dt)
-        if not np.all(np.isfinite(x)):
+        rk4_step_into(x, x, n_rps, env_series[k], P, dt, work)
+        if not all_finite(x):
             return states, k
         states[k] = x
     return states, n

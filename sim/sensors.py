@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from sim.gnc import JIT, ssa
+from sim.gnc import JIT, JIT_NOALLOC, ssa
 from sim.params import SensorsSpec
 
 POSITION, DEPTH, COMPASS, DVL, GYRO = 0, 1, 2, 3, 4
@@ -106,13 +106,31 @@ def sample(
     """Zero-order hold: entries whose sensor is fresh take truth + noise, others keep ``held``.
     A NaN noise entry is a frozen sensor: fresh, but repeating its held value (an injected
     fault, control.faults). Heading is wrapped into [-pi, pi) as a compass reports it."""
-    y_true = true_outputs(x)
-    out = held.copy()
+    out = np.empty(11)
+    sample_into(out, x, held, noise, fresh, y_sensor)
+    return out
+
+
+# the plant state's element behind each entry of y (see ``true_outputs``)
+_Y_STATE = np.array([12, 13, 14, 14, 17, 18, 19, 20, 21, 22, 23])
+
+
+@njit(**JIT_NOALLOC)
+def sample_into(
+    out: np.ndarray,
+    x: np.ndarray,
+    held: np.ndarray,
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    y_sensor: np.ndarray,
+) -> None:
+    """``sample`` into ``out`` (11,), allocating nothing; ``out`` may be ``held`` itself."""
     for i in range(11):
         if fresh[y_sensor[i]] and not math.isnan(noise[i]):
-            out[i] = y_true[i] + noise[i]
+            out[i] = x[_Y_STATE[i]] + noise[i]
+        else:
+            out[i] = held[i]
     out[4] = ssa(out[4])
-    return out
 
 
 @njit(**JIT)

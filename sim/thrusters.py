@@ -22,12 +22,12 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from sim.gnc import JIT
+from sim.gnc import JIT, JIT_NOALLOC
 
 FloatArray = NDArray[np.float64]
 
 
-@njit(**JIT)
+@njit(**JIT_NOALLOC)
 def thrust_of_one(n_rps: float, k_pos: float, k_neg: float, n_max: float) -> float:
     """Thrust [N] of one thruster at propeller speed ``n_rps`` [rev/s], saturated at the rated
     speed: ``k_pos n^2`` forwards, ``-k_neg n^2`` backwards (eq. 2.13 with u = n |n|)."""
@@ -50,9 +50,17 @@ def thrust_from_speed(
 ) -> FloatArray:
     """(m,) thrusts [N] from (m,) propeller speeds [rev/s] (``thrust_of_one`` per thruster)."""
     f = np.empty(n_rps.shape[0])
-    for i in range(n_rps.shape[0]):
-        f[i] = thrust_of_one(n_rps[i], k_pos[i], k_neg[i], n_max[i])
+    thrust_from_speed_into(f, n_rps, k_pos, k_neg, n_max)
     return f
+
+
+@njit(**JIT_NOALLOC)
+def thrust_from_speed_into(
+    out: FloatArray, n_rps: FloatArray, k_pos: FloatArray, k_neg: FloatArray, n_max: FloatArray
+) -> None:
+    """``thrust_from_speed`` into ``out`` (m,), allocating nothing."""
+    for i in range(n_rps.shape[0]):
+        out[i] = thrust_of_one(n_rps[i], k_pos[i], k_neg[i], n_max[i])
 
 
 @njit(**JIT)

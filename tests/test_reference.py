@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
@@ -33,8 +34,11 @@ from control.reference import (
     first_order_kernel,
     third_order_kernel,
 )
+from sim.gnc import JIT
 
 ROUNDOFF = 1e-12
+_THIRD_COMPILED = njit(**JIT)(third_order_kernel)
+"""The array form of the third-order kernel, compiled as the loop used to run it."""
 PI = math.pi
 NORTH, EAST, PSI = 0, 1, 2
 """Axes of a reference [north, east, heading]."""
@@ -509,8 +513,36 @@ def test_compiled_kernels_do_the_numpy_arithmetic() -> None:
     )
     pairs = (
         (refkernel._first_kernel, first_order_kernel, first_args),
-        (refkernel._third_kernel, third_order_kernel, third_args),
+        (_THIRD_COMPILED, third_order_kernel, third_args),
     )
     for jitted, plain, args in pairs:
         for a, b in zip(jitted(*args), plain(*args), strict=True):
             np.testing.assert_allclose(a, b, rtol=1e-14, atol=1e-15)
+
+
+def test_the_loops_third_order_step_is_the_array_kernel_to_the_bit() -> None:
+    """refkernel.third_order_step runs the kernel per axis on scalars (no temporary arrays):
+    the same operations in the same order as the compiled array form, so the same bits, over
+    states inside and outside the speed and acceleration limits."""
+    rng = np.random.default_rng(11)
+    params = ThirdOrderParams(**GOOD_THIRD)
+    packed = refkernel.pack_third_order(params)
+    for _ in range(500):
+        state = rng.normal(0.0, 1.0, 9) * np.repeat([3.0, 0.3, 0.05], 3)
+        target = rng.normal(0.0, 3.0, 3)
+        dt = float(rng.choice([0.01, 0.05, 0.2]))
+        got = refkernel.third_order_step(state, target, dt, packed)
+        delta, vel, acc = _THIRD_COMPILED(
+            target - state[0:3],
+            state[3:6].copy(),
+            state[6:9].copy(),
+            np.zeros(3),
+            params.k_pos,
+            params.k_vel,
+            params.k_acc,
+            params.max_speed,
+            params.max_accel,
+            dt,
+        )
+        want = np.concatenate([state[0:3] + delta, vel, acc])
+        assert np.array_equal(got, want), (state, target, dt)

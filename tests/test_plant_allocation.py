@@ -1,0 +1,142 @@
+"""The plant's step allocates nothing (issue 15), and its work space carries no state.
+
+The allocation count is read from numba's runtime statistics, which are only kept when the
+process starts with ``NUMBA_NRT_STATS=1``: each check runs in a fresh interpreter. The
+compiled loop below calls a step 1 and 201 times; the two calls of the loop allocate the same
+number of blocks (its own set-up only) when the step allocates nothing. The same probe on the
+allocating wrapper ``plant.rk4_step`` must see its three arrays per step, so the instrument
+is shown to see allocations."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sim import params, plant
+
+ROOT = Path(__file__).resolve().parent.parent
+
+_PROBE = """
+import json, sys
+import numpy as np
+from numba import njit
+from numba.core.runtime import rtsys
+from sim import params, plant
+from sim.sensors import Y_SENSOR, sample_into
+from control import loop
+
+@njit
+def steps_into(x, n, env, P, work, row, y, noise, fresh, reps):
+    for k in range(reps):
+        plant.rk4_step_into(x, x, n, env, P, 0.01, work)
+        sample_into(y, x, y, noise, fresh, Y_SENSOR)
+        loop.write_plant_row(row, k * 0.01, x, y, env, P, work)
+
+@njit
+def steps_wrapper(x, n, env, P, work, row, y, noise, fresh, reps):
+    for k in range(reps):
+        x = plant.rk4_step(x, n, env, P, 0.01)
+
+P = plant.plant_arrays(params.load(sys.argv[1]))
+m = P.thr_T.shape[1]
+x = np.zeros(plant.N_STATE)
+x[2] = x[14] = 5.0
+env = np.zeros(plant.N_ENV)
+env[plant.E_KH], env[plant.E_KZ], env[plant.E_LREST] = 1e3, 1e5, 4.0
+env[plant.E_GRIP] = 1.0  # gripper spring on
+env[plant.E_LAND] = 5.0 + P.tree_half_height - 0.01  # the tree's bottom in the seabed
+env[plant.E_WMASS], env[plant.E_WDAMP] = 50.0, 1e3  # elastic wire with its mass, damped
+env[plant.E_AC] = 0.1  # wave acceleration (Froude-Krylov)
+n = np.full(m, 3.0)
+work = plant.make_work(m)
+row = np.zeros(loop.N_LOG)
+y = np.zeros(11)
+noise = np.zeros(11)
+fresh = np.ones(5, dtype=np.bool_)
+out = {}
+for name, fn in (("into", steps_into), ("wrapper", steps_wrapper)):
+    fn(x.copy(), n, env, P, work, row, y, noise, fresh, 1)  # compile
+    counts = []
+    for reps in (1, 201):
+        before = rtsys.get_allocation_stats().alloc
+        fn(x.copy(), n, env, P, work, row, y, noise, fresh, reps)
+        counts.append(rtsys.get_allocation_stats().alloc - before)
+    out[name] = (counts[1] - counts[0]) / 200
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.parametrize("scale", ["full-scale", "model-scale"])
+def test_plant_step_sensors_and_log_row_allocate_nothing(scale: str) -> None:
+    env = dict(os.environ, NUMBA_NRT_STATS="1")
+    done = subprocess.run(
+        [sys.executable, "-c", _PROBE, scale],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    per_step = json.loads(done.stdout.strip().splitlines()[-1])
+    # the allocating wrapper: its state, and the work space's two arrays, every step
+    assert per_step["wrapper"] == 3.0
+    assert per_step["into"] == 0.0
+
+
+def _state(rng: np.random.Generator) -> np.ndarray:
+    x = rng.normal(0.0, 0.05, plant.N_STATE)
+    x[2] = x[14] = 5.0
+    return x
+
+
+def _env(P: plant.PlantArrays, contact: bool) -> np.ndarray:
+    env = np.zeros(plant.N_ENV)
+    env[plant.E_VC] = 0.2
+    env[plant.E_KH], env[plant.E_KZ], env[plant.E_LREST] = 1e3, 1e5, 4.0
+    env[plant.E_GRIP] = 1.0
+    if contact:
+        env[plant.E_LAND] = 5.0 + P.tree_half_height - 0.01
+        env[plant.E_WMASS] = 50.0
+    return env
+
+
+@pytest.mark.parametrize("has_rov", [True, False])
+def test_a_used_work_space_gives_the_step_of_a_fresh_one(has_rov: bool) -> None:
+    """Everything a step reads from its work space it wrote in the same step: a work space
+    left over from a different step (contact, gripper, the wire's mass) gives bit for bit the
+    step of a fresh one, and stepping the state in place equals stepping into a new array."""
+    P = plant.plant_arrays(params.load("model-scale"), has_rov=has_rov)
+    m = P.thr_T.shape[1]
+    rng = np.random.default_rng(3)
+    used = plant.make_work(m)
+    x_other = _state(rng)
+    plant.rk4_step_into(
+        np.empty(plant.N_STATE), x_other, np.full(m, 5.0), _env(P, True), P, 0.01, used
+    )
+    used.vec[:] += 123.0  # and anything stale at all
+    used.mat[:] -= 7.0
+    x = _state(rng)
+    n = np.full(m, -2.0)
+    env = _env(P, False)
+    fresh_out = np.empty(plant.N_STATE)
+    plant.rk4_step_into(fresh_out, x, n, env, P, 0.01, plant.make_work(m))
+    used_out = np.empty(plant.N_STATE)
+    plant.rk4_step_into(used_out, x, n, env, P, 0.01, used)
+    assert np.array_equal(used_out, fresh_out)
+    in_place = x.copy()
+    plant.rk4_step_into(in_place, in_place, n, env, P, 0.01, used)
+    assert np.array_equal(in_place, fresh_out)
+    # and the step moved the state (the comparison is not of two unchanged copies)
+    assert not np.array_equal(fresh_out, x)
+    if not has_rov:
+        xdot = np.full(plant.N_STATE, np.nan)
+        plant.rhs_into(xdot, x, np.zeros(6), env, P, used)
+        assert np.all(xdot[12:] == 0.0)
