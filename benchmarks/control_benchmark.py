@@ -8,8 +8,10 @@ dominates."""
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
+import sys
 import time
 
 import numpy as np
@@ -185,6 +187,20 @@ def _per_call(fn, *args, reps: int = 20000, repeats: int = 5) -> float:
     return best / reps * 1e6
 
 
+def figures(steps: int, simulated_s: float, wall_s: float, cost: dict[str, float]) -> dict:
+    """The benchmark's figures as one JSON-ready dict (``--json``)."""
+    return {
+        "steps": steps,
+        "simulated_s": simulated_s,
+        "wall_s": wall_s,
+        "steps_per_s": steps / wall_s,
+        "real_time_factor": simulated_s / wall_s,
+        "us_per_step": wall_s / steps * 1e6,
+        "per_call_us": cost,
+        "load_average": [round(v, 2) for v in os.getloadavg()],
+    }
+
+
 def load_text() -> str:
     """The machine's load average (1, 5, 15 min): timings under load are upper bounds."""
     return "load average {:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
@@ -194,7 +210,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--duration", type=float, default=300.0)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args()
+    out = sys.stderr if args.json else sys.stdout  # --json: only the JSON on stdout
     ps = params.load("model-scale")
     settings = ControlSettings(feedback="ekf", allocation="priority", feedforward=True)
     Simulation(ps, tree_depth_m=400.0, current=thesis_current(), settings=settings).run_for(1.0)
@@ -208,11 +226,13 @@ def main() -> None:
         best = min(best, time.perf_counter() - t0)
     print(
         f"closed loop (model scale, EKF, priority allocation, feedforward): "
-        f"{args.duration:.0f} s simulated in {best:.3f} s"
+        f"{args.duration:.0f} s simulated in {best:.3f} s",
+        file=out,
     )
     print(
         f"  {steps / best:,.0f} steps/s, real-time factor {args.duration / best:,.0f}x, "
-        f"{best / steps * 1e6:.1f} us per step ({load_text()})"
+        f"{best / steps * 1e6:.1f} us per step ({load_text()})",
+        file=out,
     )
     C = sim.C
     env = sim._environment_chunk(1)[0]
@@ -241,6 +261,9 @@ def main() -> None:
             sim.Q,
         ),
     }
+    if args.json:
+        print(json.dumps(figures(steps, args.duration, best, cost), indent=1))
+        return
     print(f"cost per call, measured alone, best of 5 (us; {load_text()}):")
     for name, us in cost.items():
         print(f"  {name:38s} {us:7.2f}")

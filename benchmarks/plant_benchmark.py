@@ -5,7 +5,9 @@ factor, the best of several repeats (the first run also compiles, and is reporte
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import sys
 import time
 
 import numpy as np
@@ -16,6 +18,7 @@ from benchmarks.control_benchmark import (
     _time_plant,
     _time_rhs,
     _time_sensors,
+    figures,
     load_text,
 )
 from control.simulation import Simulation
@@ -27,8 +30,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--duration", type=float, default=600.0, help="simulated seconds")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--params", default="full-scale")
     args = parser.parse_args()
+    out = sys.stderr if args.json else sys.stdout  # --json: only the JSON on stdout
     ps = params.load(args.params)
     d = math.radians(225.0)
     cur = envmod.CurrentParams(
@@ -43,7 +48,10 @@ def main() -> None:
     )
     t0 = time.perf_counter()
     Simulation(ps, tree_depth_m=400.0, current=cur, control=False).run_for(1.0)
-    print(f"first run (includes compilation or cache load): {time.perf_counter() - t0:.1f} s")
+    print(
+        f"first run (includes compilation or cache load): {time.perf_counter() - t0:.1f} s",
+        file=out,
+    )
     best = math.inf
     steps = 0
     for _ in range(args.repeats):
@@ -52,12 +60,13 @@ def main() -> None:
         rows = sim.run_for(args.duration)
         best = min(best, time.perf_counter() - t0)
         steps = len(rows)
-    print(f"{args.params}: {args.duration:.0f} s simulated, {steps} steps at 100 Hz")
+    print(f"{args.params}: {args.duration:.0f} s simulated, {steps} steps at 100 Hz", file=out)
     print(
         f"  wall time {best:.3f} s, {steps / best:,.0f} steps/s, "
-        f"real-time factor {args.duration / best:,.0f}x, {best / steps * 1e6:.1f} us per step"
+        f"real-time factor {args.duration / best:,.0f}x, {best / steps * 1e6:.1f} us per step",
+        file=out,
     )
-    print(f"  ({load_text()})")
+    print(f"  ({load_text()})", file=out)
     env = sim._environment_chunk(1)[0]
     n = np.zeros(ps.rov.thrusters.T.shape[1])
     x = sim.plant_state
@@ -71,6 +80,9 @@ def main() -> None:
             _time_open_step, x, sim.held_y, n, env, sim.arrays
         ),
     }
+    if args.json:
+        print(json.dumps(figures(steps, args.duration, best, cost), indent=1))
+        return
     print(f"cost per call, measured alone, best of 5 (us; {load_text()}):")
     for name, us in cost.items():
         print(f"  {name:38s} {us:7.2f}")

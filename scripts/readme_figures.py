@@ -410,6 +410,86 @@ def render_table_4_2(res: Results) -> str:
     return "\n".join(lines)
 
 
+# ------------------------------------------------------------------------------ speed
+
+SPEED_BEFORE = {
+    "plant_us_per_step": 23.2,
+    "plant_real_time_factor": 432.0,
+    "loop_us_per_step": 36.5,
+    "loop_real_time_factor": 274.0,
+    "jitter_median_ms": 1.01,
+    "jitter_p99_ms": 5.55,
+    "jitter_max_ms": 31.6,
+}
+"""Before the second speed pass (commit 071763d, the same benchmarks, load average 2-4) and,
+for the loop's tick lateness, before the loop had its own thread (the parent of e3ea011,
+``console_benchmark.py --telemetry-only``, load average 4.9). Kept as measured then: the old
+code is not run again here."""
+
+
+def _benchmark_json(*args: str) -> Results:
+    out = subprocess.run(
+        [sys.executable, *args, "--json"], cwd=ROOT, check=True, capture_output=True, text=True
+    ).stdout
+    return json.loads(out[out.index("{") :])
+
+
+def compute_speed() -> Results:
+    console = {
+        f"{speed:g}x": _benchmark_json(
+            "benchmarks/console_benchmark.py",
+            "--telemetry-only",
+            "--seconds",
+            "20",
+            "--speed",
+            str(speed),
+        )
+        for speed in (1.0, 50.0)
+    }
+    return {
+        "plant": _benchmark_json("-m", "benchmarks.plant_benchmark", "--repeats", "5"),
+        "loop": _benchmark_json("-m", "benchmarks.control_benchmark", "--repeats", "5"),
+        "console": console,
+    }
+
+
+def render_speed(res: Results) -> str:
+    b, plant, loop = SPEED_BEFORE, res["plant"], res["loop"]
+
+    def load(r: Results) -> str:
+        return ", ".join(f"{v:.1f}" for v in r["load_average"])
+
+    rows = [
+        "| per 10 ms step | before | now | load average (1, 5, 15 min) |",
+        "|---|---|---|---|",
+        f"| full-scale plant alone (`plant_benchmark`) | {b['plant_us_per_step']:.1f} us, "
+        f"{b['plant_real_time_factor']:,.0f}x | {plant['us_per_step']:.1f} us, "
+        f"{plant['steps_per_s']:,.0f} steps/s, {plant['real_time_factor']:,.0f}x | "
+        f"{load(plant)} |",
+        f"| closed loop, model scale, EKF, priority allocation, feedforward "
+        f"(`control_benchmark`) | {b['loop_us_per_step']:.1f} us, "
+        f"{b['loop_real_time_factor']:,.0f}x | {loop['us_per_step']:.1f} us, "
+        f"{loop['steps_per_s']:,.0f} steps/s, {loop['real_time_factor']:,.0f}x | {load(loop)} |",
+        "",
+        "| per call, measured alone (best of 5) | us |",
+        "|---|---|",
+        *(f"| {name} | {us:.2f} |" for name, us in loop["per_call_us"].items()),
+        "",
+        "| console loop, five telemetry clients | tick lateness median | p99 | max "
+        "| overruns | simulated s per wall s | load average |",
+        "|---|---|---|---|---|---|---|",
+        f"| 1x, before (loop on the server's event loop) | {b['jitter_median_ms']:.2f} ms "
+        f"| {b['jitter_p99_ms']:.2f} ms | {b['jitter_max_ms']:.1f} ms | 0 | 1.0 | 4.9 |",
+    ]
+    for label, c in res["console"].items():
+        rows.append(
+            f"| {label} | {c['jitter_median_ms']:.2f} ms | {c['jitter_p99_ms']:.2f} ms "
+            f"| {c['jitter_max_ms']:.1f} ms | {c['overruns']} "
+            f"| {c['simulated_s_per_wall_s']:.1f} | {c['load_average'][0]:.1f} |"
+        )
+    return "\n".join(rows)
+
+
 # ------------------------------------------------------------------------------ log size
 
 
@@ -445,6 +525,7 @@ BLOCKS: dict[str, tuple[Callable[[], Results], Callable[[Results], str]]] = {
     "table-4.1": (compute_table_4_1, render_table_4_1),
     "table-4.2": (compute_table_4_2, render_table_4_2),
     "log-size": (compute_log_size, render_log_size),
+    "speed": (compute_speed, render_speed),
 }
 
 

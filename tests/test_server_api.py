@@ -477,3 +477,20 @@ def test_nothing_sent_stops_the_loop(client: TestClient) -> None:
     t0 = state(client)["t_s"]
     wait_for(lambda: state(client)["t_s"] > t0 + 0.5, what="the loop to keep running")
     assert client.get("/api/health").json()["loop_running"] is True
+
+
+def test_a_loop_that_does_not_answer_gives_503_in_words(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Defect: TimeoutError is an OSError in Python 3.11, so a command the loop did not apply
+    in time was answered 507 "cannot write: " (seen once under load in the schemathesis run)."""
+    from app.api import deps
+
+    monkeypatch.setattr(deps, "COMMAND_TIMEOUT_S", 0.3)
+    settings = ConsoleSettings(view=False, token=TOKEN, recordings_dir=tmp_path)
+    with TestClient(create_app(settings), base_url="http://127.0.0.1") as c:
+        c.app.state.console.loop.stop()  # type: ignore[attr-defined]
+        wait_for(lambda: not c.app.state.console.loop.running, 5.0, "the loop to stop")  # type: ignore[attr-defined]
+        r = c.put("/api/control/allocation", json={"allocation": "pinv"}, headers=AUTH)
+    assert r.status_code == 503
+    assert "did not answer within 0.3 s" in r.json()["detail"]

@@ -58,10 +58,20 @@ def require_token(
 TokenDep = Annotated[None, Depends(require_token)]
 
 
+COMMAND_TIMEOUT_S = 10.0
+"""How long an API request waits for the loop to apply its command [s]."""
+
+
 async def run_command(console: Console, command: Command) -> object:
     """Queue a command for the loop and wait for it; its failure becomes a 4xx/503."""
     try:
-        return await console.loop.call(command)
+        return await console.loop.call(command, COMMAND_TIMEOUT_S)
+    except TimeoutError:  # before OSError: TimeoutError is one of its subclasses
+        raise HTTPException(
+            status.HTTP_503_SERVICE_UNAVAILABLE,
+            f"the simulation loop did not answer within {COMMAND_TIMEOUT_S:g} s; "
+            "it may be overloaded, and the command may still be applied",
+        ) from None
     except FileNotFoundError as err:
         raise HTTPException(status.HTTP_404_NOT_FOUND, str(err).strip("'\"")) from None
     except ConsoleError as err:
@@ -72,8 +82,4 @@ async def run_command(console: Console, command: Command) -> object:
         raise HTTPException(
             status.HTTP_507_INSUFFICIENT_STORAGE,
             f"cannot write: {err.strerror or err}" + (f" ({err.filename})" if err.filename else ""),
-        ) from None
-    except TimeoutError:
-        raise HTTPException(
-            status.HTTP_503_SERVICE_UNAVAILABLE, "the simulation loop did not answer in time"
         ) from None
