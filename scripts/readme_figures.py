@@ -473,7 +473,7 @@ def render_speed(res: Results) -> str:
         "",
         "| per call, measured alone (best of 5) | us |",
         "|---|---|",
-        *(f"| {name} | {us:.2f} |" for name, us in loop["per_call_us"].items()),
+        *(f"| {name} | {us:.2f} |" for name, us in sorted(loop["per_call_us"].items())),
         "",
         "| console loop, five telemetry clients | tick lateness median | p99 | max "
         "| overruns | simulated s per wall s | load average |",
