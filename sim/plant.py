@@ -57,7 +57,9 @@ E_LAND = 21  # depth of the frame's landing surface and the seabed around it [m]
 E_WMASS = 22  # wire mass lumped at the tree, m_wire L / 3 [kg]; 0: the quasi-static wire
 E_WDAMP = 23  # axial damping of the wire, a dashpot beside its spring [N s/m]; 0: none
 E_VPIV = 24  # 24:27 velocity of the wire's top (crane tip plus pay-out), NED [m/s]
-N_ENV = 27
+E_FWIRE = 27  # 27:30 wire force on the tree's attachment point from outside (MoorDyn), NED [N]
+E_WEXT = 30  # 1: the wire force is E_FWIRE (the plant's own wire is off), 0: the plant's own
+N_ENV = 31
 
 
 class PlantArrays(NamedTuple):
@@ -265,7 +267,10 @@ def wire_force_damped_n(
     """``wire_force_n`` with the wire's axial damping (``E_WDAMP``): the tension is
     k_z (d - rest) + c d_dot along the wire, d_dot the stretch rate of the attachment point
     against the wire's top (``E_VPIV``); never negative, zero when slack. With c = 0 it is
-    ``wire_force_n`` exactly."""
+    ``wire_force_n`` exactly. With ``E_WEXT`` set, the force given from outside
+    (``E_FWIRE``, the coupled MoorDyn wire) instead."""
+    if env[E_WEXT] > 0.0:
+        return env[E_FWIRE : E_FWIRE + 3].copy()
     pivot, rest = wire_pivot(env, W0)
     dx = p_att_n[0] - pivot[0]
     dy = p_att_n[1] - pivot[1]
