@@ -14,8 +14,10 @@ What it is used for (``tests/test_dynamic_wire.py``):
   (the spring-mass estimate with a third of the wire's mass, Rayleigh's; MODEL_NOTES takes it
   from DNV's recommended practice for marine operations, not checked here against the text).
 
-It is not coupled into the compiled plant (``sim.plant``): the simulations keep the
-quasi-static wire. Optional: the module imports ``moordyn`` only when called.
+``CoupledWire`` is the same line with both ends driven from outside (the crane tip and the
+tree's attachment point): ``wire = "moordyn"`` in ``control.simulation``, which steps it
+beside the compiled plant (``sim.plant``) one step at a time and hands its force to the plant
+(``E_FWIRE``, ``E_WEXT``). Optional: the module imports ``moordyn`` only when called.
 """
 
 from __future__ import annotations
