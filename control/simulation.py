@@ -394,7 +394,7 @@ class Simulation:
     def wire_tension_newton(self) -> float:
         """Present wire tension at the tree [N]."""
         if self.mdwire is not None:
-            return float(np.linalg.norm(self.mdwire.force_n))
+            return float(np.linalg.norm(self.mdwire.wire_force_n))
         env = site.wire_environment(
             self.plant_ps,
             self.wire_length_m,
@@ -749,7 +749,7 @@ class Simulation:
         r_att = self.arrays.tree_r_att
         p_att = self.x[0:3] + R_t @ r_att
         v_att = plant.attachment_velocity_n(self.x, R_t, r_att)
-        f_start = wire.force_n.copy()
+        f_start = wire.wire_force_n.copy()
         try:
             wire.set_length(self.wire_length_m)
             f_end = wire.step(self._md_tip_n, tip_v, p_att, v_att, self.dt_s)

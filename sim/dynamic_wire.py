@@ -341,18 +341,17 @@ class CoupledWire:
         if _quiet(moordyn.Init, self.system, x, [0.0] * 6) != 0:
             raise RuntimeError("MoorDyn could not initialise the wire")
         self.t_s = 0.0
-        self.force_n = self.attachment_force_n()
+        self.wire_force_n = self._point_force(2)
         """Wire force on the tree's attachment point at ``t_s``, NED [N]."""
 
-    def attachment_force_n(self) -> np.ndarray:
-        """The wire's force on the tree's attachment point now, NED [N]."""
-        point = self._md.GetPoint(self.system, 2)
+    def _point_force(self, point_id: int) -> np.ndarray:
+        """The wire's force on MoorDyn's point ``point_id`` now, NED [N]."""
+        point = self._md.GetPoint(self.system, point_id)
         return moordyn_to_ned(np.asarray(self._md.GetPointForce(point), dtype=float))
 
     def top_tension_newton(self) -> float:
         """Tension at the crane tip [N]."""
-        point = self._md.GetPoint(self.system, 1)
-        return float(np.linalg.norm(self._md.GetPointForce(point)))
+        return float(np.linalg.norm(self._point_force(1)))
 
     def set_length(self, length_m: float) -> None:
         """Pay out or haul in to the unstretched length ``length_m``; MoorDyn's internal step
@@ -378,7 +377,7 @@ class CoupledWire:
         dt_s: float,
     ) -> np.ndarray:
         """Advance dt_s from the ends' present positions and velocities; returns the force on
-        the attachment point at the end of the step, NED [N] (also kept as ``force_n``)."""
+        the attachment point at the end of the step, NED [N] (also kept as ``wire_force_n``)."""
         x = ned_to_moordyn(tip_n) + ned_to_moordyn(attachment_n)
         v = ned_to_moordyn(tip_velocity_n) + ned_to_moordyn(attachment_velocity_n)
         # MoorDyn prints the time on every step, whatever its verbosity: to /dev/null
@@ -386,8 +385,8 @@ class CoupledWire:
         self.t_s += dt_s
         if not np.all(np.isfinite(f)):
             raise FloatingPointError(f"MoorDyn's wire force is not finite at t = {self.t_s:.2f} s")
-        self.force_n = moordyn_to_ned(f[3:6])
-        return self.force_n
+        self.wire_force_n = moordyn_to_ned(f[3:6])
+        return self.wire_force_n
 
     def close(self) -> None:
         """Free MoorDyn's system (also done when the object is collected)."""
