@@ -606,7 +606,8 @@ def study(
         typer.Option(
             help="table-4.1: how the sea is modelled (repeat for several; default all): "
             "'drag', 'drag, W0 195 kN', 'drag + vessel', 'morison', 'morison + vessel', "
-            "'morison + vessel, elastic wire' (not in the default)"
+            "'morison + vessel, elastic wire', 'morison + vessel, moordyn wire' (these two "
+            "not in the default)"
         ),
     ] = None,
     json_out: Annotated[bool, typer.Option("--json")] = False,

@@ -47,6 +47,7 @@ from control.config import (
 )
 from control.faults import THRUSTER_KINDS, Fault
 from control.startup import StartupReport, check_mount_vector
+from sim import dynamic_wire as dwire
 from sim import environment as envmod
 from sim import plant, sensors, site
 from sim import vessel as vesselmod
@@ -63,16 +64,22 @@ WIRE_LENGTH_RANGE_M = (1.0, 5000.0)
 WINCH_RATE_MAX_MPS = 2.0
 VESSEL_SPEED_MAX_MPS = 5.0
 HEAVE_FORCE_MAX_NEWTON = 1.0e5
-WIRE_MODELS = ("quasi-static", "elastic")
+WIRE_MODELS = ("quasi-static", "elastic", "moordyn")
 """The lift wire in the plant. ``quasi-static``: the elastic pendulum of ``sim.plant`` (the
 spring k_z of eq. 2.25 on the tree's own inertia, no damping). ``elastic``: the same spring
 with the wire's first axial mode: a third of the wire's mass lumped at the tree (vertically)
 and a dashpot beside the spring (``wire_damping_ratio``), so the lift wire's resonance
-T0 = 2 pi sqrt((M + A33 + m_wire L / 3) / (EA / L)) and slack and snap are simulated."""
+T0 = 2 pi sqrt((M + A33 + m_wire L / 3) / (EA / L)) and slack and snap are simulated.
+``moordyn``: a lumped-mass line (MoorDyn, ``sim.dynamic_wire.CoupledWire``) from the crane tip
+to the tree's attachment point, stepped beside the plant one step at a time (all its axial
+modes, its own weight, mass and drag in still water; the current acts on the tree only)."""
 WIRE_DAMPING_RATIO = 0.02
 """Damping ratio of the elastic wire's dashpot against its axial mode [-]: an assumed value
 for the internal (strand friction) damping of a steel wire rope, small beside the tree's
 hydrodynamic heave damping; a parameter (``wire_damping_ratio``), not a measured figure."""
+MOORDYN_WATER_BELOW_M = 1000.0
+"""MoorDyn's seabed this far below the tree's attachment point at the start [m]: the wire
+never reaches it (the plant's own seabed and docking frame carry the tree)."""
 GRIP_REACH_M = 0.3
 """Farthest the ROV's origin may be from its mount on the tree for the gripper to close [m]:
 the reach of a work-class manipulator's jaw around the tree's grab bar is a few decimetres, and
@@ -194,6 +201,10 @@ class Simulation:
             tree_heading_rad,
             has_rov and start_gripping,
         )
+        self.mdwire: dwire.CoupledWire | None = None
+        """The MoorDyn wire (``wire = "moordyn"``), else None."""
+        if wire == "moordyn":
+            self._init_moordyn_wire()
         self.settings = settings or ControlSettings()
         r_cfg = self.settings.r_mount_config_m
         self.sysm = model.system_model(
@@ -276,6 +287,21 @@ class Simulation:
         self.x = initial_state(ps, tree_pos, tree_heading_rad, self.has_rov)
         self.held_y = sensors.true_outputs(self.x)
         self.step_index = 0
+
+    def _init_moordyn_wire(self) -> None:
+        """The MoorDyn line between the crane tip and the tree's attachment point as the
+        plant starts (its initial-condition solver settles the wire's own weight)."""
+        R_t = Rzyx(*self.x[3:6])
+        p_att = self.x[0:3] + R_t @ self.arrays.tree_r_att
+        self.mdwire = dwire.CoupledWire(
+            self.plant_ps,
+            self.wire_length_m,
+            self.crane_tip_n,
+            p_att,
+            float(p_att[2] - self.crane_tip_n[2]) + MOORDYN_WATER_BELOW_M,
+            self.wire_damping_ratio,
+        )
+        self._md_tip_n = self.crane_tip_n.copy()
 
     def _initial_estimate(self) -> tuple[FloatArray, FloatArray]:
         """EKF start: the first measurements moved to the tree origin, at rest, no bias."""
@@ -367,6 +393,8 @@ class Simulation:
 
     def wire_tension_newton(self) -> float:
         """Present wire tension at the tree [N]."""
+        if self.mdwire is not None:
+            return float(np.linalg.norm(self.mdwire.wire_force_n))
         env = site.wire_environment(
             self.plant_ps,
             self.wire_length_m,
@@ -617,6 +645,13 @@ class Simulation:
         """Pay out (or haul in) the wire smoothly to ``length_m`` at ``rate_mps``."""
         length = _in_range("wire length", length_m, *WIRE_LENGTH_RANGE_M, "m")
         rate = _in_range("winch rate", rate_mps, 0.0, WINCH_RATE_MAX_MPS, "m/s", lo_open=True)
+        if self.mdwire is not None:
+            lo, hi = dwire.COUPLED_LENGTH_RANGE_M
+            if not lo <= length <= hi:
+                raise ValueError(
+                    f"wire length must be in [{lo:g}, {hi:g}] m with the moordyn wire, "
+                    f"got {length:g}"
+                )
         self.wire_target_m = length
         self.wire_rate_mps = rate
 
@@ -664,6 +699,8 @@ class Simulation:
         done = 0
         while done < n:
             k = min(self.chunk_steps, int(n) - done, self._steps_to_fault_edge())
+            if self.mdwire is not None:
+                k = 1  # MoorDyn and the plant take turns, one step each
             out[done : done + k] = self._chunk(k)
             done += k
         return LogRows(out, self.n_thrusters, self.Q.counters.copy())
@@ -691,7 +728,44 @@ class Simulation:
         self._vessel_in_chunk(env, n)
         if self.wire_model == "elastic":
             self._elastic_wire_in_chunk(env)
+        if self.mdwire is not None:
+            self._moordyn_wire_in_step(env)
         return env, noise
+
+    def _moordyn_wire_in_step(self, env: FloatArray) -> None:
+        """Step MoorDyn's wire over the coming plant step and give the plant its force.
+
+        MoorDyn starts from the tree's attachment point as it is now (position and velocity
+        from the plant's state) and the crane tip where it was, moves both at constant
+        velocity to the end of the step (the crane tip to this step's row), and returns the
+        force on the attachment point at the end. The plant then holds the mean of the force
+        at the start and the predicted force at the end over its RK4 step (trapezoidal).
+        Explicit: the wire does not see the tree's acceleration within the step, so its
+        force lags the tree by O(dt^2) (the attachment point's path is predicted to first
+        order) and the next step starts MoorDyn from the true position again. Against the
+        shortest period of the coupled system, the wire's axial bounce T0 (0.76 s at 100 m,
+        76 steps of 0.01 s), the error per cycle is of order (2 pi dt / T0)^2 ~ 0.7 %; a
+        plain one-step lag (the force at the step's start held over it) would act as a
+        negative damping ratio of about pi dt / (2 T0) ~ 2 %, the size of the wire's own
+        damping, which is why the trapezoid is used. Checked in
+        ``tests/test_moordyn_wire.py``: the bounce's period is T0 within 5 %."""
+        wire = self.mdwire
+        assert wire is not None and env.shape[0] == 1
+        tip_n = env[0, plant.E_CT : plant.E_CT + 3].copy()
+        tip_v = (tip_n - self._md_tip_n) / self.dt_s
+        R_t = Rzyx(*self.x[3:6])
+        r_att = self.arrays.tree_r_att
+        p_att = self.x[0:3] + R_t @ r_att
+        v_att = plant.attachment_velocity_n(self.x, R_t, r_att)
+        f_start = wire.wire_force_n.copy()
+        try:
+            wire.set_length(self.wire_length_m)
+            f_end = wire.step(self._md_tip_n, tip_v, p_att, v_att, self.dt_s)
+        except (FloatingPointError, RuntimeError) as e:
+            raise SimulationDiverged(f"MoorDyn wire failed at t = {self.t_s:.2f} s: {e}") from e
+        self._md_tip_n = tip_n
+        env[:, plant.E_FWIRE : plant.E_FWIRE + 3] = 0.5 * (f_start + f_end)
+        env[:, plant.E_WEXT] = 1.0
 
     def _elastic_wire_in_chunk(self, env: FloatArray) -> None:
         """The elastic wire's entries: the lumped wire mass m_wire L / 3, the dashpot

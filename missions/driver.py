@@ -52,10 +52,11 @@ class MissionDriver:
                 float(sim.plant_ps.tree.submerged_weight_newton),
                 from_s=seaway.VESSEL_RUN_IN_S if sim.vessel_motion is not None else 0.0,
             )
-            if sim.wire_model == "elastic"
+            if sim.wire_model in ("elastic", "moordyn")
             else None
         )
-        """Slack wire and snap loads (missions.seaway), with the elastic wire: each one is an
+        """Slack wire and snap loads (missions.seaway), with the elastic or the MoorDyn wire
+        (the logged tension is MoorDyn's force on the tree then): each one is an
         event of kind ``wire`` (with the vessel moving, from ``VESSEL_RUN_IN_S`` on: the
         start of its motion is a step of the crane tip)."""
 

@@ -28,6 +28,7 @@ from pydantic import (
 
 from control.config import Allocation, Feedback, Mode, Reference
 from control.faults import Fault
+from sim import dynamic_wire
 from sim.environment import DEFAULT_WAVE_LOAD
 from sim.params import KdVector, KiVector, KpVector
 
@@ -159,11 +160,12 @@ class Setup(_Model):
     current: CurrentSetup = CurrentSetup(speed_mps=0.0, direction_deg=0.0)
     waves: WaveSetup | None = None
     vessel: VesselSetup | None = None
-    wire: Literal["quasi-static", "elastic"] = Field(
+    wire: Literal["quasi-static", "elastic", "moordyn"] = Field(
         default="quasi-static",
-        description="lift wire in the plant: quasi-static (spring on the tree's inertia) or "
+        description="lift wire in the plant: quasi-static (spring on the tree's inertia), "
         "elastic (with the wire's first axial mode: a third of its mass at the tree and "
-        "axial damping; resonance, slack and snap loads)",
+        "axial damping; resonance, slack and snap loads) or moordyn (a lumped-mass line "
+        "through MoorDyn, all its axial modes; about 40 times slower)",
     )
     feedback: Feedback = "perfect"
     allocation: Allocation = "priority"
@@ -418,6 +420,10 @@ class FaultSpec(_Model):
 
 
 MAX_FAULTS = 50
+MOORDYN_DEPTH_MIN_M = 25.0
+"""Shallowest tree with the moordyn wire [m]: its centre hangs the attachment height (2.6 m
+full scale) and the stretch below the wire's end, so 25 m leaves at least the 20 m of wire
+``sim.dynamic_wire.COUPLED_LENGTH_RANGE_M`` asks for."""
 
 
 class Mission(_Model):
@@ -448,13 +454,23 @@ class Mission(_Model):
         """Refuse a winch plan that hauls in more wire than there is (or pays out more than
         the winch holds), from the payout the set-up hangs the tree on: about its depth."""
         payout = self.setup.depth_m
+        lo, hi = (1.0, 5000.0)
+        if self.setup.wire == "moordyn":
+            lo, hi = dynamic_wire.COUPLED_LENGTH_RANGE_M
+            if not MOORDYN_DEPTH_MIN_M <= payout <= hi:
+                raise ValueError(
+                    f"setup.depth_m: the moordyn wire needs a tree depth in "
+                    f"[{MOORDYN_DEPTH_MIN_M:g}, {hi:g}] m (at least {lo:g} m of wire), "
+                    f"got {payout:g}"
+                )
         for i, leg in enumerate(self.legs):
             if leg.type == "wire":
                 payout += leg.change_m
-                if payout < 1.0 or payout > 5000.0:
+                if payout < lo or payout > hi:
                     raise ValueError(
                         f"legs[{i + 1}] (wire).change_m: the winch would end at about "
-                        f"{payout:.0f} m of wire; it must stay in [1, 5000] m"
+                        f"{payout:.0f} m of wire; it must stay in [{lo:g}, {hi:g}] m"
+                        + (" with the moordyn wire" if self.setup.wire == "moordyn" else "")
                     )
             elif leg.type in ("dock", "lift") and self.setup.docking_frame is not None:
                 payout = self.setup.docking_frame.landing_depth_m

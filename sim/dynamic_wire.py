@@ -14,8 +14,10 @@ What it is used for (``tests/test_dynamic_wire.py``):
   (the spring-mass estimate with a third of the wire's mass, Rayleigh's; MODEL_NOTES takes it
   from DNV's recommended practice for marine operations, not checked here against the text).
 
-It is not coupled into the compiled plant (``sim.plant``): the simulations keep the
-quasi-static wire. Optional: the module imports ``moordyn`` only when called.
+``CoupledWire`` is the same line with both ends driven from outside (the crane tip and the
+tree's attachment point): ``wire = "moordyn"`` in ``control.simulation``, which steps it
+beside the compiled plant (``sim.plant``) one step at a time and hands its force to the plant
+(``E_FWIRE``, ``E_WEXT``). Optional: the module imports ``moordyn`` only when called.
 """
 
 from __future__ import annotations
@@ -86,17 +88,8 @@ class HangingLine:
         w0 = ps.tree.submerged_weight_newton
         volume = max((m * g - w0) / (rho * g), 1e-6)
         ca = ps.tree.M_a[2, 2] / (rho * volume)
-        wire = ps.wire
         depth = self.static_depth_m()
-        lines = [
-            "--------------------- MoorDyn Input File ---------------------",
-            "rov-console lift wire (sim.dynamic_wire)",
-            "---------------------- LINE TYPES ----------------------------",
-            "TypeName Diam Mass/m EA BA/-zeta EI Cd Ca CdAx CaAx",
-            "(name) (m) (kg/m) (N) (N-s/-) (N-m^2) (-) (-) (-) (-)",
-            f"wire {wire.diameter_m} {wire.mass_per_length_kg_m} "
-            f"{wire.axial_stiffness_newton} -0.001 0.0 {wire.drag_coefficient} 1.0 0.0 0.0",
-        ]
+        lines = _line_type_header(ps)
         far = 1000.0 * self.length_m
         stretch = far  # the pull line is stretched by its own length: force ~ EA, soft
         if self.pull_newton > 0.0:
@@ -132,6 +125,23 @@ class HangingLine:
             "--------------------------------------------------------------",
         ]
         return "\n".join(lines) + "\n"
+
+
+def _line_type_header(ps: ParameterSet, internal_damping: float = -0.001) -> list[str]:
+    """The input file's head and its ``wire`` line type (the parameter set's wire: diameter,
+    mass per metre, EA, drag coefficient; added mass 1, no bending stiffness). Internal
+    damping as MoorDyn reads it: > 0, BA [N s] (axial force per unit strain rate); < 0, a
+    damping ratio of each segment's own vibration (default 0.1 %)."""
+    wire = ps.wire
+    return [
+        "--------------------- MoorDyn Input File ---------------------",
+        "rov-console lift wire (sim.dynamic_wire)",
+        "---------------------- LINE TYPES ----------------------------",
+        "TypeName Diam Mass/m EA BA/-zeta EI Cd Ca CdAx CaAx",
+        "(name) (m) (kg/m) (N) (N-s/-) (N-m^2) (-) (-) (-) (-)",
+        f"wire {wire.diameter_m} {wire.mass_per_length_kg_m} "
+        f"{wire.axial_stiffness_newton} {internal_damping} 0.0 {wire.drag_coefficient} 1.0 0.0 0.0",
+    ]
 
 
 def _quiet(fn: Callable[..., Any], *args: Any) -> Any:
@@ -220,3 +230,173 @@ def pulled_offset_m(line: HangingLine, relax_s: float = 300.0) -> float:
         return float(run.load_position()[0])
     finally:
         run.close()
+
+
+COUPLED_SEGMENTS = 20
+"""Segments of the coupled wire [-] (as ``HangingLine``: its period is within 0.2 % of T0)."""
+COUPLED_LENGTH_RANGE_M = (20.0, 4000.0)
+"""Wire lengths the coupled wire takes [m]. MoorDyn's internal step is proportional to the
+segment length (``WAVE_SPEED_FRACTION``): 5e-5 s at 100 m, 1e-5 s at 20 m, i.e. 1000 internal
+steps per 0.01 s plant step below 20 m, slower than real time; above 4000 m the line has not
+been checked (``HangingLine``'s range)."""
+RELAX_S = 10.0
+"""Time MoorDyn's initial-condition solver may take to settle the line between its two ends
+at the start [s] (the line starts straight and stretched; its weight settles in a few axial
+wave passages)."""
+
+
+def ned_to_moordyn(v_n: np.ndarray) -> list[float]:
+    """NED vector to MoorDyn's axes (x north, y west, z up: a half turn about north)."""
+    return [float(v_n[0]), -float(v_n[1]), -float(v_n[2])]
+
+
+def moordyn_to_ned(v: np.ndarray) -> np.ndarray:
+    """MoorDyn's axes (x north, y west, z up) to NED."""
+    return np.array([v[0], -v[1], -v[2]], dtype=float)
+
+
+def internal_damping_ns(ps: ParameterSet, length_m: float, damping_ratio: float) -> float:
+    """MoorDyn's BA [N s] that gives the tree's bounce on the wire the damping ratio
+    ``damping_ratio``: the whole line's dashpot is BA / L, made equal to the elastic wire's
+    c = 2 zeta sqrt(k_z (M + A33 + m_wire L / 3)) with k_z = EA / L, so both wire models damp
+    the bounce alike. (It also damps the line's own axial modes, e.g. 30 % of critical for
+    the first one with both ends held at 100 m, so the start-up transient dies at once.)"""
+    k_z = ps.wire.axial_stiffness_newton / length_m
+    m_heave = ps.tree.mass_kg + ps.tree.M_a[2, 2] + ps.wire.mass_per_length_kg_m * length_m / 3.0
+    return 2.0 * damping_ratio * math.sqrt(k_z * m_heave) * length_m
+
+
+def coupled_input_text(
+    ps: ParameterSet, length_m: float, water_depth_m: float, damping_ratio: float
+) -> str:
+    """MoorDyn input (v2 format) for the wire between two coupled points: 1, the crane tip,
+    and 2, the tree's attachment point, both moved by the caller. The points have no mass or
+    volume: the tree (its mass, added mass and W0) stays in the plant, MoorDyn carries the
+    wire's own mass, weight, elasticity and drag (``internal_damping_ns``: damping)."""
+    n = COUPLED_SEGMENTS
+    speed = math.sqrt(ps.wire.axial_stiffness_newton / ps.wire.mass_per_length_kg_m)
+    ba = internal_damping_ns(ps, length_m, damping_ratio)
+    lines = _line_type_header(ps, ba if ba > 0.0 else -0.001)
+    lines += [
+        "---------------------- POINTS --------------------------------",
+        "ID Attachment X Y Z Mass Volume CdA Ca",
+        "(#) (-) (m) (m) (m) (kg) (m^3) (m^2) (-)",
+        "1 Coupled 0.0 0.0 0.0 0.0 0.0 0.0 0.0",
+        f"2 Coupled 0.0 0.0 {-length_m} 0.0 0.0 0.0 0.0",
+        "---------------------- LINES ---------------------------------",
+        "ID LineType AttachA AttachB UnstrLen NumSegs Outputs",
+        "(#) (name) (#) (#) (m) (-) (-)",
+        f"1 wire 1 2 {length_m} {n} -",
+        "---------------------- OPTIONS -------------------------------",
+        f"{WAVE_SPEED_FRACTION * length_m / n / speed} dtM",
+        f"{wire_mod.GRAVITY} g",
+        f"{wire_mod.RHO_WATER} rho",
+        f"{water_depth_m} WtrDpth",
+        "0 writeLog",
+        f"{RELAX_S} TmaxIC",
+        "1 ICgenDynamic",
+        "8.0 CdScaleIC",
+        "1e-5 threshIC",
+        "--------------------------------------------------------------",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+class CoupledWire:
+    """The lift wire as a MoorDyn line between the crane tip and the tree's attachment point,
+    both driven from outside (``control.simulation`` with ``wire = "moordyn"``).
+
+    ``step`` advances the line by one plant step with both ends moving at constant velocity
+    from where they are now, and returns the wire's force on the tree's attachment point at
+    the end of the step, NED [N]. Close it with ``close``."""
+
+    def __init__(
+        self,
+        ps: ParameterSet,
+        length_m: float,
+        tip_n: np.ndarray,
+        attachment_n: np.ndarray,
+        water_depth_m: float,
+        damping_ratio: float,
+    ) -> None:
+        lo, hi = COUPLED_LENGTH_RANGE_M
+        if not (math.isfinite(length_m) and lo <= length_m <= hi):
+            raise ValueError(
+                f"wire length for the moordyn wire must lie in [{lo:g}, {hi:g}] m, "
+                f"got {length_m:.1f} m"
+            )
+        import moordyn
+
+        self._md = moordyn
+        self.ps = ps
+        self.length_m = float(length_m)
+        self._speed = math.sqrt(ps.wire.axial_stiffness_newton / ps.wire.mass_per_length_kg_m)
+        self._dir = tempfile.TemporaryDirectory()
+        path = Path(self._dir.name) / "wire.txt"
+        path.write_text(coupled_input_text(ps, length_m, water_depth_m, damping_ratio))
+        self.system: Any = None
+        self.system = _quiet(moordyn.Create, str(path))
+        self.line = moordyn.GetLine(self.system, 1)
+        x = ned_to_moordyn(tip_n) + ned_to_moordyn(attachment_n)
+        if _quiet(moordyn.Init, self.system, x, [0.0] * 6) != 0:
+            raise RuntimeError("MoorDyn could not initialise the wire")
+        self.t_s = 0.0
+        self.wire_force_n = self._point_force(2)
+        """Wire force on the tree's attachment point at ``t_s``, NED [N]."""
+
+    def _point_force(self, point_id: int) -> np.ndarray:
+        """The wire's force on MoorDyn's point ``point_id`` now, NED [N]."""
+        point = self._md.GetPoint(self.system, point_id)
+        return moordyn_to_ned(np.asarray(self._md.GetPointForce(point), dtype=float))
+
+    def top_tension_newton(self) -> float:
+        """Tension at the crane tip [N]."""
+        return float(np.linalg.norm(self._point_force(1)))
+
+    def set_length(self, length_m: float) -> None:
+        """Pay out or haul in to the unstretched length ``length_m``; MoorDyn's internal step
+        follows the segment length (``WAVE_SPEED_FRACTION``)."""
+        lo, hi = COUPLED_LENGTH_RANGE_M
+        if not (math.isfinite(length_m) and lo <= length_m <= hi):
+            raise ValueError(
+                f"wire length for the moordyn wire must lie in [{lo:g}, {hi:g}] m, "
+                f"got {length_m:.1f} m"
+            )
+        if length_m == self.length_m:
+            return
+        self._md.SetLineUnstretchedLength(self.line, float(length_m))
+        self._md.SetDt(self.system, WAVE_SPEED_FRACTION * length_m / COUPLED_SEGMENTS / self._speed)
+        self.length_m = float(length_m)
+
+    def step(
+        self,
+        tip_n: np.ndarray,
+        tip_velocity_n: np.ndarray,
+        attachment_n: np.ndarray,
+        attachment_velocity_n: np.ndarray,
+        dt_s: float,
+    ) -> np.ndarray:
+        """Advance dt_s from the ends' present positions and velocities; returns the force on
+        the attachment point at the end of the step, NED [N] (also kept as ``wire_force_n``)."""
+        x = ned_to_moordyn(tip_n) + ned_to_moordyn(attachment_n)
+        v = ned_to_moordyn(tip_velocity_n) + ned_to_moordyn(attachment_velocity_n)
+        # MoorDyn prints the time on every step, whatever its verbosity: to /dev/null
+        f = np.asarray(_quiet(self._md.Step, self.system, x, v, self.t_s, dt_s), dtype=float)
+        self.t_s += dt_s
+        if not np.all(np.isfinite(f)):
+            raise FloatingPointError(f"MoorDyn's wire force is not finite at t = {self.t_s:.2f} s")
+        self.wire_force_n = moordyn_to_ned(f[3:6])
+        return self.wire_force_n
+
+    def close(self) -> None:
+        """Free MoorDyn's system (also done when the object is collected)."""
+        if self.system is not None:
+            self._md.Close(self.system)
+            self.system = None
+            self._dir.cleanup()
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except Exception:  # interpreter shutdown: MoorDyn may be gone already
+            pass

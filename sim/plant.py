@@ -64,7 +64,9 @@ E_LAND = 21  # depth of the frame's landing surface and the seabed around it [m]
 E_WMASS = 22  # wire mass lumped at the tree, m_wire L / 3 [kg]; 0: the quasi-static wire
 E_WDAMP = 23  # axial damping of the wire, a dashpot beside its spring [N s/m]; 0: none
 E_VPIV = 24  # 24:27 velocity of the wire's top (crane tip plus pay-out), NED [m/s]
-N_ENV = 27
+E_FWIRE = 27  # 27:30 wire force on the tree's attachment point from outside (MoorDyn), NED [N]
+E_WEXT = 30  # 1: the wire force is E_FWIRE (the plant's own wire is off), 0: the plant's own
+N_ENV = 31
 
 
 class PlantArrays(NamedTuple):
@@ -321,7 +323,14 @@ def wire_force_n(p_att_n: np.ndarray, env: np.ndarray, W0: float) -> np.ndarray:
 def wire_force_damped_into(
     f: np.ndarray, p_att_n: np.ndarray, v_att_n: np.ndarray, env: np.ndarray, W0: float
 ) -> None:
-    """``wire_force_damped_n`` into ``f`` (3,), allocating nothing (the pivot as scalars)."""
+    """``wire_force_damped_n`` into ``f`` (3,), allocating nothing (the pivot as scalars).
+    With ``E_WEXT`` set, the force given from outside (``E_FWIRE``, the coupled MoorDyn wire)
+    instead of the plant's own wire."""
+    if env[E_WEXT] > 0.0:
+        f[0] = env[E_FWIRE]
+        f[1] = env[E_FWIRE + 1]
+        f[2] = env[E_FWIRE + 2]
+        return
     rest = W0 / env[E_KH] - W0 / env[E_KZ]
     dx = p_att_n[0] - (env[E_CT] + env[E_OFF])
     dy = p_att_n[1] - (env[E_CT + 1] + env[E_OFF + 1])
@@ -350,7 +359,8 @@ def wire_force_damped_n(
     """``wire_force_n`` with the wire's axial damping (``E_WDAMP``): the tension is
     k_z (d - rest) + c d_dot along the wire, d_dot the stretch rate of the attachment point
     against the wire's top (``E_VPIV``); never negative, zero when slack. With c = 0 it is
-    ``wire_force_n`` exactly."""
+    ``wire_force_n`` exactly. With ``E_WEXT`` set, the force given from outside
+    (``E_FWIRE``, the coupled MoorDyn wire) instead."""
     f = np.empty(3)
     wire_force_damped_into(f, p_att_n, v_att_n, env, W0)
     return f

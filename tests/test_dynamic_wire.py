@@ -1,5 +1,6 @@
 """The lift wire as a lumped-mass line (MoorDyn) against the quasi-static wire and the
-spring-mass period (issue 14). Not coupled into the plant: these check the quasi-static model."""
+spring-mass period (issue 14): the line on its own, with the tree as MoorDyn's point, checks the
+quasi-static model (the line coupled to the plant: ``tests/test_moordyn_wire.py``)."""
 
 import pytest
 
