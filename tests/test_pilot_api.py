@@ -33,11 +33,13 @@ def sim_of(client: TestClient):
 
 def until(ws, predicate, what: str, limit: int = 100) -> dict:
     """Read messages until one satisfies ``predicate``."""
+    m: dict = {}
     for _ in range(limit):
         m = ws.receive_json()
         if predicate(m):
             return m
-    raise AssertionError(f"no message with {what} in {limit}")
+    # the last message says what the page was told instead (mode, demand, an error)
+    raise AssertionError(f"no message with {what} in {limit}; the last: {m}")
 
 
 def test_the_page_is_served_self_contained(client: TestClient) -> None:
