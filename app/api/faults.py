@@ -83,22 +83,6 @@ class FaultIn(_In):
     direction_deg: Finite = Field(default=0.0, description="vessel drift: towards [deg]")
 
 
-class FaultOut(BaseModel):
-    kind: str
-    state: str = Field(description="active or scheduled")
-    start_s: float
-    duration_s: float
-    value: float
-    unit: str
-    thruster: int
-    direction_deg: float
-    text: str
-
-    @staticmethod
-    def of(f: FaultView) -> FaultOut:
-        return FaultOut(**f.__dict__)
-
-
 class FaultEventOut(BaseModel):
     t_s: float
     text: str
@@ -106,8 +90,8 @@ class FaultEventOut(BaseModel):
 
 class FaultsOut(BaseModel):
     t_s: float = Field(description="simulation time now [s]")
-    active: list[FaultOut]
-    scheduled: list[FaultOut]
+    active: list[FaultView]
+    scheduled: list[FaultView]
     events: list[FaultEventOut] = Field(description="the latest fault starts and ends")
 
 
@@ -147,7 +131,7 @@ def fault_kinds() -> list[FaultKindOut]:
 @router.get("/api/faults", response_model=FaultsOut)
 def get_faults(snapshot: SnapshotDep, _: InstructorDep) -> FaultsOut:
     """Faults active now and scheduled, and the latest starts and ends (instructor only)."""
-    views = [FaultOut.of(f) for f in snapshot.faults]
+    views = list(snapshot.faults)
     return FaultsOut(
         t_s=snapshot.t_s,
         active=[f for f in views if f.state == "active"],

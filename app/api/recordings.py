@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated
 
 from fastapi import APIRouter, HTTPException, status
@@ -10,10 +11,33 @@ from fastapi.responses import FileResponse
 
 from app.api.deps import UNPROCESSABLE, ConsoleDep, SnapshotDep, TokenDep, run_command
 from app.api.schemas import RecordingInfoOut, RecordingListOut, RecordingOut, RecordingStartIn
-from app.console import RECORDING_NAME, ConsoleError, list_recordings, recording_path
+from app.console import (
+    RECORDING_NAME,
+    Console,
+    ConsoleError,
+    Snapshot,
+    list_recordings,
+    recording_path,
+)
 from app.console.commands import StartRecording, StopRecording
 
 router = APIRouter(prefix="/api/recordings", tags=["recordings"])
+
+
+def finished_recording(name: str, console: Console, snapshot: Snapshot) -> Path:
+    """The file of a recording that exists and is not being written, else the HTTP error
+    (422 a name that is not a recording's, 404 none such, 409 still being written)."""
+    try:
+        path = recording_path(console.settings.recordings_dir, name)
+    except ConsoleError as err:
+        raise HTTPException(UNPROCESSABLE, f"name: {err}") from None
+    if not path.is_file():
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no recording named {name!r}")
+    if name == snapshot.recording:
+        raise HTTPException(
+            status.HTTP_409_CONFLICT, f"{name} is being written; stop the recording first"
+        )
+    return path
 
 
 @router.get("", response_model=RecordingListOut)
@@ -51,14 +75,5 @@ def download(
     snapshot: SnapshotDep,
 ) -> FileResponse:
     """The MCAP file (not while it is being written)."""
-    try:
-        path = recording_path(console.settings.recordings_dir, name)
-    except ConsoleError as err:
-        raise HTTPException(UNPROCESSABLE, f"name: {err}") from None
-    if not path.is_file():
-        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no recording named {name!r}")
-    if name == snapshot.recording:
-        raise HTTPException(
-            status.HTTP_409_CONFLICT, f"{name} is being written; stop the recording first"
-        )
+    path = finished_recording(name, console, snapshot)
     return FileResponse(path, media_type="application/octet-stream", filename=name)

@@ -5,40 +5,17 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, HTTPException, Query, status
+from fastapi import APIRouter, HTTPException, Query
 from fastapi import Path as FastApiPath
 from fastapi.responses import HTMLResponse
-from pydantic import BaseModel
 
 from app import scores as store
 from app.api.deps import UNPROCESSABLE, ConsoleDep, SnapshotDep
-from app.console import RECORDING_NAME, ConsoleError, recording_path
+from app.api.recordings import finished_recording
+from app.console import RECORDING_NAME
 from app.console.session import SCORES_DB
 
 router = APIRouter(tags=["scores"])
-
-
-class ScoreOut(BaseModel):
-    id: int
-    utc: str
-    trainee: str
-    mission: str
-    source: str
-    log_file: str | None
-    passed: bool
-    landed: bool | None
-    time_to_dock_s: float | None
-    miss_m: float | None
-    heading_error_deg: float | None
-    contact_speed_mps: float | None
-    rms_north_m: float
-    rms_east_m: float
-    rms_heading_deg: float
-    saturated_s: float
-    thrust_newton_s: float | None
-    faults: str
-    manual_share: float
-    flown_by: str
 
 
 def _history(console: ConsoleDep, trainee: str | None, mission: str | None) -> list[store.Score]:
@@ -48,27 +25,26 @@ def _history(console: ConsoleDep, trainee: str | None, mission: str | None) -> l
         raise HTTPException(UNPROCESSABLE, str(err)) from None
 
 
-@router.get("/api/scores", response_model=list[ScoreOut])
+@router.get("/api/scores", response_model=list[store.Score])
 def get_scores(
     console: ConsoleDep,
     trainee: Annotated[str | None, Query(max_length=200)] = None,
     mission: Annotated[str | None, Query(max_length=200)] = None,
     best: bool = False,
-) -> list[ScoreOut]:
+) -> list[store.Score]:
     """Stored scores, newest first (``best``: the best run of each mission)."""
     rows = _history(console, trainee, mission)
-    return [ScoreOut(**s.__dict__) for s in (store.best(rows) if best else rows)]
+    return store.best(rows) if best else rows
 
 
-@router.get("/api/scores/compare", response_model=dict[str, ScoreOut])
+@router.get("/api/scores/compare", response_model=dict[str, store.Score])
 def compare_scores(
     console: ConsoleDep,
     mission: Annotated[str, Query(min_length=1, max_length=200)],
     trainee: Annotated[str | None, Query(max_length=200)] = None,
-) -> dict[str, ScoreOut]:
+) -> dict[str, store.Score]:
     """The best run of ``mission`` flown by the autopilot, by hand and mixed, side by side."""
-    best = store.compare(_history(console, trainee, mission))
-    return {how: ScoreOut(**s.__dict__) for how, s in best.items()}
+    return store.compare(_history(console, trainee, mission))
 
 
 @router.get("/api/recordings/{name}/report", response_class=HTMLResponse)
@@ -83,16 +59,7 @@ def report(
     landings, pose, track and forces, events with who."""
     from app.report import debrief, render_html
 
-    try:
-        path = recording_path(console.settings.recordings_dir, name)
-    except ConsoleError as err:
-        raise HTTPException(UNPROCESSABLE, f"name: {err}") from None
-    if not path.is_file():
-        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no recording named {name!r}")
-    if name == snapshot.recording:
-        raise HTTPException(
-            status.HTTP_409_CONFLICT, f"{name} is being written; stop the recording first"
-        )
+    path = finished_recording(name, console, snapshot)
     try:
         return HTMLResponse(render_html(debrief(path)))
     except ValueError as err:
