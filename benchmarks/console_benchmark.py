@@ -207,12 +207,9 @@ def run(clients: int, seconds: float, mission: str, browser_nice: int) -> dict:
             before = [page.evaluate(read) for page in pages]
             tick0, t_sim0, wall0 = loop.ticks, loop.snapshot.t_s, time.perf_counter()
             time.sleep(seconds)
-            ticks, t_sim = loop.ticks - tick0, loop.snapshot.t_s - t_sim0
-            wall = time.perf_counter() - wall0
+            figures = _loop_figures(srv, wall0, tick0, t_sim0)
             after = [page.evaluate(read) for page in pages]
-            lateness_ms = loop.lateness_s()[-ticks:] * 1e3
             view_errors = list(srv.app.state.view.errors)
-            state = httpx.get(f"{srv.base_url}/api/state").json()
         finally:
             context.close()
 
@@ -226,21 +223,13 @@ def run(clients: int, seconds: float, mission: str, browser_nice: int) -> dict:
     panel_rates, tele_rates = rates("panel"), rates("telemetry")
     return {
         "clients": clients,
-        "window_s": round(wall, 2),
         "mission": mission,
         "browser_nice": browser_nice,
         "browser_processes_reniced": reniced,
-        "loop_ticks_per_s": round(ticks / wall, 2),
-        "simulated_s_per_wall_s": round(t_sim / wall, 4),
-        "jitter_median_ms": round(float(np.median(lateness_ms)), 3),
-        "jitter_p99_ms": round(float(np.percentile(lateness_ms, 99)), 3),
-        "jitter_max_ms": round(float(np.max(lateness_ms)), 3),
-        "overruns": state["loop"]["overruns"],
+        **figures,
         "panel_status_updates_per_s_per_client": [round(r, 1) for r in panel_rates],
         "telemetry_states_per_s_per_client": [round(r, 1) for r in tele_rates],
         "telemetry_requested_hz": TELEMETRY_HZ,
-        "mission_state": state["mission"]["state"],
-        "t_s": round(state["t_s"], 2),
         "view_errors": view_errors,
     }
 
@@ -266,35 +255,19 @@ def main() -> None:
     args = parser.parse_args()
     if args.telemetry_only:
         result = run_telemetry(args.clients, args.seconds, args.mission, args.speed)
-        result["load_average"] = [round(v, 2) for v in os.getloadavg()]
-        if args.json:
-            print(json.dumps(result, indent=2))
-            return
-        print(
-            f"{result['clients']} telemetry clients, speed {result['speed']}x, "
-            f"{result['window_s']} s window, mission {result['mission']} "
-            f"({result['mission_state']}), load {result['load_average']}"
-        )
-        print(
-            f"loop: {result['loop_ticks_per_s']} ticks/s, {result['simulated_s_per_wall_s']} "
-            f"simulated s per wall s, overruns {result['overruns']}"
-        )
-        print(
-            f"jitter: median {result['jitter_median_ms']} ms, p99 {result['jitter_p99_ms']} "
-            f"ms, max {result['jitter_max_ms']} ms"
-        )
-        print(f"telemetry states/s per client: {result['telemetry_states_per_s_per_client']}")
-        return
-    if args.speed != 1.0:
-        parser.error("--speed is for --telemetry-only (browsers run at 1x)")
-    result = run(args.clients, args.seconds, args.mission, args.browser_nice)
+        who = f"{result['clients']} telemetry clients, speed {result['speed']}x"
+    else:
+        if args.speed != 1.0:
+            parser.error("--speed is for --telemetry-only (browsers run at 1x)")
+        result = run(args.clients, args.seconds, args.mission, args.browser_nice)
+        who = f"{result['clients']} browsers (nice {result['browser_nice']})"
+    result["load_average"] = [round(v, 2) for v in os.getloadavg()]
     if args.json:
         print(json.dumps(result, indent=2))
         return
     print(
-        f"{result['clients']} browsers (nice {result['browser_nice']}), "
-        f"{result['window_s']} s window, mission {result['mission']} "
-        f"({result['mission_state']})"
+        f"{who}, {result['window_s']} s window, mission {result['mission']} "
+        f"({result['mission_state']}), load {result['load_average']}"
     )
     print(
         f"loop: {result['loop_ticks_per_s']} ticks/s, {result['simulated_s_per_wall_s']} "
@@ -304,10 +277,11 @@ def main() -> None:
         f"jitter: median {result['jitter_median_ms']} ms, p99 {result['jitter_p99_ms']} ms, "
         f"max {result['jitter_max_ms']} ms"
     )
-    print(
-        f"3D view status refreshes/s per client (sent at 5 Hz): "
-        f"{result['panel_status_updates_per_s_per_client']}"
-    )
+    if "panel_status_updates_per_s_per_client" in result:
+        print(
+            f"3D view status refreshes/s per client (sent at 5 Hz): "
+            f"{result['panel_status_updates_per_s_per_client']}"
+        )
     print(
         f"telemetry states/s per client (asked {TELEMETRY_HZ} Hz): "
         f"{result['telemetry_states_per_s_per_client']}"

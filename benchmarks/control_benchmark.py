@@ -201,6 +201,20 @@ def figures(steps: int, simulated_s: float, wall_s: float, cost: dict[str, float
     }
 
 
+def plant_costs(sim: Simulation) -> dict[str, float]:
+    """Microseconds per call of the plant's pieces at the simulation's present state."""
+    env = sim._environment_chunk(1)[0]
+    n = np.zeros(sim.n_thrusters)
+    x = sim.plant_state
+    return {
+        "plant RK4 step (4 rhs)": _per_call(_time_plant, x, n, env, sim.arrays, 0.01),
+        "plant right-hand side": _per_call(_time_rhs, x, n, env, sim.arrays),
+        "sensor sampling": _per_call(
+            _time_sensors, x, sim.held_y, np.zeros(11), np.ones(5, dtype=np.bool_)
+        ),
+    }
+
+
 def load_text() -> str:
     """The machine's load average (1, 5, 15 min): timings under load are upper bounds."""
     return "load average {:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
@@ -235,15 +249,9 @@ def main() -> None:
         file=out,
     )
     C = sim.C
-    env = sim._environment_chunk(1)[0]
-    n = np.zeros(ps.rov.thrusters.T.shape[1])
     x = sim.plant_state
     cost = {
-        "plant RK4 step (4 rhs)": _per_call(_time_plant, x, n, env, sim.arrays, 0.01),
-        "plant right-hand side": _per_call(_time_rhs, x, n, env, sim.arrays),
-        "sensor sampling": _per_call(
-            _time_sensors, x, sim.held_y, np.zeros(11), np.ones(5, dtype=np.bool_)
-        ),
+        **plant_costs(sim),
         "EKF predict": _per_call(_time_ekf, sim.xhat, sim.P_cov, C, 0.01),
         "EKF correct (position)": _per_call(_time_ekf_correct, sim.xhat, sim.P_cov),
         "reference (3rd order)": _per_call(_time_reference, np.zeros(9), np.ones(3), C.ref_params),

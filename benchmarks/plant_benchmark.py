@@ -15,11 +15,9 @@ import numpy as np
 from benchmarks.control_benchmark import (
     _per_call,
     _time_open_step,
-    _time_plant,
-    _time_rhs,
-    _time_sensors,
     figures,
     load_text,
+    plant_costs,
 )
 from control.simulation import Simulation
 from sim import environment as envmod
@@ -71,11 +69,7 @@ def main() -> None:
     n = np.zeros(ps.rov.thrusters.T.shape[1])
     x = sim.plant_state
     cost = {
-        "plant RK4 step (4 rhs)": _per_call(_time_plant, x, n, env, sim.arrays, 0.01),
-        "plant right-hand side": _per_call(_time_rhs, x, n, env, sim.arrays),
-        "sensor sampling": _per_call(
-            _time_sensors, x, sim.held_y, np.zeros(11), np.ones(5, dtype=np.bool_)
-        ),
+        **plant_costs(sim),
         "compiled step (RK4, sensors, log row)": _per_call(
             _time_open_step, x, sim.held_y, n, env, sim.arrays
         ),
