@@ -809,6 +809,33 @@ def _froude_krylov_into(
 
 
 @njit(inline="always", **JIT_NOALLOC)
+def _fluid_wrench_into(
+    tau: np.ndarray,
+    nu: np.ndarray,
+    R: np.ndarray,
+    M_rb: np.ndarray,
+    M_a: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    fk_mass: float,
+    env: np.ndarray,
+    work: PlantWork,
+) -> None:
+    """The water's wrench on one body (its velocity ``nu``, rotation ``R``), body axes, into
+    ``tau`` (6,): relative-velocity damping, Coriolis and added mass in the moving water, and
+    the Froude-Krylov force of the water's acceleration. The tree and the ROV share it."""
+    vec = work.vec
+    nu_rel = vec[V_NU_REL, 0:6]
+    v_c_b = vec[V_VCB, 0:3]
+    v_c_dot_b = vec[V_VCDB, 0:3]
+    _relative_velocity_into(
+        nu_rel, v_c_b, v_c_dot_b, R, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3]
+    )
+    _hydro_into(tau, M_rb, M_a, D_l, D_nl, nu, nu_rel, v_c_dot_b, vec[V_CRB, 0:6], vec[V_CA, 0:6])
+    _froude_krylov_into(tau, fk_mass, R, env[E_AC : E_AC + 3], vec[V_A, 0:3])
+
+
+@njit(inline="always", **JIT_NOALLOC)
 def tree_wrench_into(
     tau: np.ndarray,
     x: np.ndarray,
@@ -820,30 +847,22 @@ def tree_wrench_into(
     """Net weight, wire, push and hydrodynamic forces on the tree, tree axes (eq. 2.44), into
     ``tau`` (6,)."""
     vec = work.vec
-    nu = x[6:12]
-    nu_rel = vec[V_NU_REL, 0:6]
-    v_c_b = vec[V_VCB, 0:3]
-    v_c_dot_b = vec[V_VCDB, 0:3]
-    _relative_velocity_into(
-        nu_rel, v_c_b, v_c_dot_b, R_t, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3]
-    )
-    _hydro_into(
+    _fluid_wrench_into(
         tau,
+        x[6:12],
+        R_t,
         P.tree_M_rb,
         P.tree_M_a,
         P.tree_D_l,
         P.tree_D_nl,
-        nu,
-        nu_rel,
-        v_c_dot_b,
-        vec[V_CRB, 0:6],
-        vec[V_CA, 0:6],
+        P.tree_fk_mass,
+        env,
+        work,
     )
     a = vec[V_A, 0:3]
     b = vec[V_B, 0:3]
     c = vec[V_C, 0:3]
     d = vec[V_D, 0:3]
-    _froude_krylov_into(tau, P.tree_fk_mass, R_t, env[E_AC : E_AC + 3], a)
     # push and net weight, NED
     b[0] = env[E_PUSH]
     b[1] = env[E_PUSH + 1]
@@ -897,26 +916,18 @@ def rov_wrench_into(
     ``tau`` (6,). ``thrust_b`` is the thrusters' wrench thr_T @ f; sth ... cphi are the sines
     and cosines of the ROV's pitch and roll."""
     vec = work.vec
-    nu = x[18:24]
-    nu_rel = vec[V_NU_REL, 0:6]
-    v_c_b = vec[V_VCB, 0:3]
-    v_c_dot_b = vec[V_VCDB, 0:3]
-    _relative_velocity_into(
-        nu_rel, v_c_b, v_c_dot_b, R_r, nu, env[E_VC : E_VC + 3], env[E_AC : E_AC + 3]
-    )
-    _hydro_into(
+    _fluid_wrench_into(
         tau,
+        x[18:24],
+        R_r,
         P.rov_M_rb,
         P.rov_M_a,
         P.rov_D_l,
         P.rov_D_nl,
-        nu,
-        nu_rel,
-        v_c_dot_b,
-        vec[V_CRB, 0:6],
-        vec[V_CA, 0:6],
+        P.rov_fk_mass,
+        env,
+        work,
     )
-    _froude_krylov_into(tau, P.rov_fk_mass, R_r, env[E_AC : E_AC + 3], vec[V_A, 0:3])
     g = vec[V_G, 0:6]
     gvect_into(g, P.rov_W, P.rov_B, sth, cth, sphi, cphi, P.rov_r_cg, P.rov_r_cb)
     for i in range(6):
