@@ -190,5 +190,6 @@ def test_pilot_page_heading_reads_as_a_compass(psi_deg, shown):
     from app.console.pilot import compass_heading_deg
 
     heading = compass_heading_deg(math.radians(psi_deg))
+    # 1e-9 deg: the float error of rounding to 0.1 deg and wrapping (the page shows 0.1 deg)
     assert heading == pytest.approx(shown, abs=1e-9)
     assert 0.0 <= heading < 360.0 and f"{heading:.1f}" != "360.0"
