@@ -202,6 +202,13 @@ class Simulation:
             tree_heading_rad,
             has_rov and start_gripping,
         )
+        self.vessel_ramp_s = (
+            vesselmod.ramp_time_s(waves.peak_period_s)
+            if vessel is not None and waves is not None
+            else 0.0
+        )
+        """The vessel's motion grows in over this long from t = 0 [s] (``sim.vessel.ramp_in``,
+        two peak periods of the sea; 0: no vessel motion or no ramp)."""
         self.mdwire: dwire.CoupledWire | None = None
         """The MoorDyn wire (``wire = "moordyn"``), else None."""
         if wire == "moordyn":
@@ -790,8 +797,9 @@ class Simulation:
         env[:, plant.E_VPIV : plant.E_VPIV + 3] = vel
 
     def _vessel_in_chunk(self, env: FloatArray, n: int) -> None:
-        """Add the vessel's wave-frequency motion to the crane tip (sim.vessel); the crane
-        tip's mean position (``crane_tip_n``, where the vessel keeps station) is unchanged."""
+        """Add the vessel's wave-frequency motion to the crane tip (sim.vessel), grown in over
+        ``vessel_ramp_s``; the crane tip's mean position (``crane_tip_n``, where the vessel
+        keeps station) is unchanged."""
         if self.vessel_motion is None or self.wave_field is None:
             return
         t = self.t_s + self.dt_s * np.arange(n)
@@ -801,6 +809,7 @@ class Simulation:
             self.vessel_motion,
             float(self.crane_tip_n[0]),
             float(self.crane_tip_n[1]),
+            self.vessel_ramp_s,
         )
 
     # ------------------------------------------------------------------ injected faults
