@@ -72,7 +72,8 @@ and a dashpot beside the spring (``wire_damping_ratio``), so the lift wire's res
 T0 = 2 pi sqrt((M + A33 + m_wire L / 3) / (EA / L)) and slack and snap are simulated.
 ``moordyn``: a lumped-mass line (MoorDyn, ``sim.dynamic_wire.CoupledWire``) from the crane tip
 to the tree's attachment point, stepped beside the plant one step at a time (all its axial
-modes, its own weight, mass and drag in still water; the current acts on the tree only)."""
+modes, its own weight, mass and drag; the current, uniform over depth, on the wire as on the
+quasi-static wire, the waves on the tree only)."""
 WIRE_DAMPING_RATIO = 0.02
 """Damping ratio of the elastic wire's dashpot against its axial mode [-]: an assumed value
 for the internal (strand friction) damping of a steel wire rope, small beside the tree's
@@ -201,6 +202,13 @@ class Simulation:
             tree_heading_rad,
             has_rov and start_gripping,
         )
+        self.vessel_ramp_s = (
+            vesselmod.ramp_time_s(waves.peak_period_s)
+            if vessel is not None and waves is not None
+            else 0.0
+        )
+        """The vessel's motion grows in over this long from t = 0 [s] (``sim.vessel.ramp_in``,
+        two peak periods of the sea; 0: no vessel motion or no ramp)."""
         self.mdwire: dwire.CoupledWire | None = None
         """The MoorDyn wire (``wire = "moordyn"``), else None."""
         if wire == "moordyn":
@@ -760,6 +768,7 @@ class Simulation:
         f_start = wire.wire_force_n.copy()
         try:
             wire.set_length(self.wire_length_m)
+            wire.set_current(self._wire_current_n)
             f_end = wire.step(self._md_tip_n, tip_v, p_att, v_att, self.dt_s)
         except (FloatingPointError, RuntimeError) as e:
             raise SimulationDiverged(f"MoorDyn wire failed at t = {self.t_s:.2f} s: {e}") from e
@@ -788,8 +797,9 @@ class Simulation:
         env[:, plant.E_VPIV : plant.E_VPIV + 3] = vel
 
     def _vessel_in_chunk(self, env: FloatArray, n: int) -> None:
-        """Add the vessel's wave-frequency motion to the crane tip (sim.vessel); the crane
-        tip's mean position (``crane_tip_n``, where the vessel keeps station) is unchanged."""
+        """Add the vessel's wave-frequency motion to the crane tip (sim.vessel), grown in over
+        ``vessel_ramp_s``; the crane tip's mean position (``crane_tip_n``, where the vessel
+        keeps station) is unchanged."""
         if self.vessel_motion is None or self.wave_field is None:
             return
         t = self.t_s + self.dt_s * np.arange(n)
@@ -799,6 +809,7 @@ class Simulation:
             self.vessel_motion,
             float(self.crane_tip_n[0]),
             float(self.crane_tip_n[1]),
+            self.vessel_ramp_s,
         )
 
     # ------------------------------------------------------------------ injected faults
@@ -1057,6 +1068,9 @@ class Simulation:
         if self.faults:
             speeds, dirs = self._faulted_current(speeds, dirs)
         water_n = envmod.current_velocity_n(speeds, dirs)
+        # the current the MoorDyn wire sees over this chunk: uniform over depth, the mean speed
+        # and direction the quasi-static wire's drag offset takes below (no waves)
+        self._wire_current_n = envmod.current_velocity_n(np.mean(speeds), np.mean(dirs))
         accel_n = np.zeros_like(water_n)
         if self.wave_field is not None:
             t = self.t_s + self.dt_s * np.arange(n)

@@ -48,17 +48,14 @@ class MissionDriver:
         """Steps of the present request not yet run."""
         self._request_parts: list[LogRows] = []
         self.wire_watch = (
-            seaway.WireWatch(
-                float(sim.plant_ps.tree.submerged_weight_newton),
-                from_s=seaway.VESSEL_RUN_IN_S if sim.vessel_motion is not None else 0.0,
-            )
+            seaway.WireWatch(float(sim.plant_ps.tree.submerged_weight_newton))
             if sim.wire_model in ("elastic", "moordyn")
             else None
         )
         """Slack wire and snap loads (missions.seaway), with the elastic or the MoorDyn wire
         (the logged tension is MoorDyn's force on the tree then): each one is an
-        event of kind ``wire`` (with the vessel moving, from ``VESSEL_RUN_IN_S`` on: the
-        start of its motion is a step of the crane tip)."""
+        event of kind ``wire``, from t = 0 (the vessel's motion ramps in, ``sim.vessel``:
+        its start is no step of the crane tip)."""
 
     # ------------------------------------------------------------------ state
     @property

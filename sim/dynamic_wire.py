@@ -10,6 +10,9 @@ What it is used for (``tests/test_dynamic_wire.py``):
 
 - the static hang: the load's horizontal stiffness at the end of the wire against the closed
   form k = w / ln((W0 + w L) / W0) (eq. 2.30, corrected) that the quasi-static plant uses;
+- the static offset in a steady current (``current_offset_m``): the wire's own drag and the
+  tree's against eq. 2.29 (corrected) with the tree's drag as F0, as the quasi-static plant
+  holds the tree;
 - the vertical natural period against T0 = 2 pi sqrt((M + A33 + m_wire L / 3) / (EA / L))
   (the spring-mass estimate with a third of the wire's mass, Rayleigh's; MODEL_NOTES takes it
   from DNV's recommended practice for marine operations, not checked here against the text).
@@ -18,6 +21,19 @@ What it is used for (``tests/test_dynamic_wire.py``):
 tree's attachment point): ``wire = "moordyn"`` in ``control.simulation``, which steps it
 beside the compiled plant (``sim.plant``) one step at a time and hands its force to the plant
 (``E_FWIRE``, ``E_WEXT``). Optional: the module imports ``moordyn`` only when called.
+
+The water: MoorDyn-C 2.7 takes it as external kinematics (``WaveKin 1``; the coupler sets the
+water velocity at every node through ``ExternalWaveKinSet``, held until set again). Its
+initial-condition solver runs in still water whatever the options (2.7.2 sets the water up
+only after it), so a line in a current starts from the still hang and settles in time. The
+current is uniform over depth and horizontal, the one the quasi-static wire's offset
+(eq. 2.29, ``sim.site.wire_environment``) assumes; the waves act on the tree only, as with the
+quasi-static wire.
+
+Printing: MoorDyn logs through its own verbosity, set to errors only right after creation
+(``SetVerbosity``), and ``disableOutTime`` stops the time it otherwise prints on every step.
+Only the banner it prints while reading the input file, before any verbosity can be set,
+still goes to standard output: ``_quiet`` sends it to /dev/null, once per line.
 """
 
 from __future__ import annotations
@@ -33,9 +49,13 @@ from typing import Any
 
 import numpy as np
 
+from sim import site
 from sim import wire as wire_mod
 from sim.params import ParameterSet
 
+CURRENT_RANGE_MPS = 5.0
+"""Largest current speed the MoorDyn line takes [m/s] (the plant's current model: 0 to a few
+m/s)."""
 WAVE_SPEED_FRACTION = 0.04
 """MoorDyn's internal step as a fraction of the time an axial wave needs to cross one segment
 [-]. Its explicit integrator diverged at 0.16 (100 m, 20 segments); 0.04 is stable from 100 m
@@ -56,13 +76,22 @@ class HangingLine:
     far anchor; 0: none)."""
     relax_drag_area_m2: float = 0.0
     """Drag area C_D A of the tree's point [m^2]: damps the swing while MoorDyn relaxes to
-    the static hang (statics do not depend on it)."""
+    the static hang (statics do not depend on it in still water; in a current it is the
+    tree's drag, ``tree_drag_area_m2``)."""
+    current_mps: float = 0.0
+    """Steady current towards north, uniform over depth [m/s] (0: still water). MoorDyn's
+    initial-condition solver ignores it: ``current_offset_m`` lets the line settle in it."""
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.length_m) and 1.0 <= self.length_m <= 4000.0):
             raise ValueError(f"length_m must lie in [1, 4000], got {self.length_m!r}")
         if not 2 <= self.n_segments <= 500:
             raise ValueError(f"n_segments must lie in [2, 500], got {self.n_segments!r}")
+        if not (math.isfinite(self.current_mps) and abs(self.current_mps) <= CURRENT_RANGE_MPS):
+            raise ValueError(
+                f"current_mps must lie in [-{CURRENT_RANGE_MPS:g}, {CURRENT_RANGE_MPS:g}], "
+                f"got {self.current_mps!r}"
+            )
 
     @property
     def time_step_s(self) -> float:
@@ -118,6 +147,7 @@ class HangingLine:
             f"{rho} rho",
             f"{depth + 1000.0} WtrDpth",
             "0 writeLog",
+            *_WATER_AND_QUIET_OPTIONS,
             f"{relax_s} TmaxIC",
             "1 ICgenDynamic",
             "8.0 CdScaleIC",
@@ -125,6 +155,11 @@ class HangingLine:
             "--------------------------------------------------------------",
         ]
         return "\n".join(lines) + "\n"
+
+
+_WATER_AND_QUIET_OPTIONS = ("1 WaveKin", "1 disableOutTime")
+"""Input options: the water's velocity from the coupler (``_set_current``), and no time
+printed on each step."""
 
 
 def _line_type_header(ps: ParameterSet, internal_damping: float = -0.001) -> list[str]:
@@ -145,7 +180,8 @@ def _line_type_header(ps: ParameterSet, internal_damping: float = -0.001) -> lis
 
 
 def _quiet(fn: Callable[..., Any], *args: Any) -> Any:
-    """Call ``fn`` with the process's standard output sent to /dev/null (MoorDyn prints)."""
+    """Call ``fn`` with the process's standard output sent to /dev/null: only for
+    ``moordyn.Create``, whose banner comes before any verbosity can be set."""
     sys.stdout.flush()
     saved = os.dup(1)
     null = os.open(os.devnull, os.O_WRONLY)
@@ -159,19 +195,43 @@ def _quiet(fn: Callable[..., Any], *args: Any) -> Any:
         os.close(null)
 
 
+def _create(path: Path) -> Any:
+    """A MoorDyn system from the input file at ``path``, logging errors only."""
+    import moordyn  # type: ignore[import-untyped]
+
+    system = _quiet(moordyn.Create, str(path))
+    moordyn.SetVerbosity(system, moordyn.LEVEL_ERR)
+    return system
+
+
+def _set_current(system: Any, current_md: list[float], t_s: float) -> int:
+    """Give every point MoorDyn asks water kinematics for (its line nodes and points) the
+    water velocity ``current_md`` (MoorDyn's axes) and no acceleration; returns how many.
+    Call after ``moordyn.Init``."""
+    import moordyn
+
+    if moordyn.ExternalWaveKinInit(system) != 0:
+        raise RuntimeError("MoorDyn could not set up the external water kinematics")
+    n = len(moordyn.ExternalWaveKinGetCoordinates(system))
+    if moordyn.ExternalWaveKinSet(system, [current_md] * n, [[0.0, 0.0, 0.0]] * n, t_s) != 0:
+        raise RuntimeError("MoorDyn did not take the current")
+    return n
+
+
 class _Run:
     """A MoorDyn system built from a ``HangingLine``; close it with ``close``."""
 
     def __init__(self, line: HangingLine, relax_s: float) -> None:
-        import moordyn  # type: ignore[import-untyped]
+        import moordyn
 
         self._md = moordyn
         self._dir = tempfile.TemporaryDirectory()
         path = Path(self._dir.name) / "wire.txt"
         path.write_text(line.input_text(relax_s))
-        self.system = _quiet(moordyn.Create, str(path))
-        if _quiet(moordyn.Init, self.system, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]) != 0:
+        self.system = _create(path)
+        if moordyn.Init(self.system, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]) != 0:
             raise RuntimeError("MoorDyn could not initialise the wire")
+        _set_current(self.system, [line.current_mps, 0.0, 0.0], 0.0)
         self.load = moordyn.GetPoint(self.system, 2)
         self.t_s = 0.0
 
@@ -181,7 +241,7 @@ class _Run:
 
     def step(self, top: list[float], top_velocity: list[float], dt_s: float) -> np.ndarray:
         """Advance by dt_s with the crane tip at ``top``; returns the force on the tip [N]."""
-        force = _quiet(self._md.Step, self.system, top, top_velocity, self.t_s, dt_s)
+        force = self._md.Step(self.system, top, top_velocity, self.t_s, dt_s)
         self.t_s += dt_s
         return np.asarray(force, dtype=float)
 
@@ -230,6 +290,49 @@ def pulled_offset_m(line: HangingLine, relax_s: float = 300.0) -> float:
         return float(run.load_position()[0])
     finally:
         run.close()
+
+
+def tree_drag_area_m2(ps: ParameterSet, current_mps: float) -> float:
+    """The drag area C_D A [m^2] that gives MoorDyn's tree point, still in the current
+    ``current_mps``, the drag the plant gives the tree there: F0 = D_l v + D_nl v^2 (the
+    tree's surge coefficients, ``sim.site.tree_drag_force``) = rho C_D A v^2 / 2. MoorDyn's
+    point drag is quadratic only, so the two agree at this speed, not at others."""
+    if not (math.isfinite(current_mps) and current_mps != 0.0):
+        raise ValueError(f"current_mps must be a nonzero speed, got {current_mps!r}")
+    f0 = site.tree_drag_force(ps, current_mps)
+    return 2.0 * f0 / (wire_mod.RHO_WATER * current_mps**2)
+
+
+def current_offset_m(line: HangingLine, settle_s: float = 200.0) -> float:
+    """Horizontal offset of the tree's point downstream of the crane tip [m] in the line's
+    steady current, the wire's own drag and the tree's (``line.relax_drag_area_m2``, see
+    ``tree_drag_area_m2``) together. MoorDyn's initial-condition solver gives the still hang;
+    the current is then switched on and the line integrated for ``settle_s``. The tree's swing
+    is damped by its own drag in the current (linearised about the current: about 15 % of
+    critical at 100 m, 30 % at 400 m, 0.5 m/s), so 200 s take it to the static offset within
+    0.01 %."""
+    if line.current_mps == 0.0:
+        raise ValueError("current_mps must be nonzero for a current offset, got 0.0")
+    if not (math.isfinite(settle_s) and settle_s > 0.0):
+        raise ValueError(f"settle_s must be > 0 s, got {settle_s!r}")
+    run = _Run(line, relax_s=RELAX_S)
+    try:
+        dt = 1.0
+        for _ in range(int(math.ceil(settle_s / dt))):
+            run.step([0.0, 0.0, 0.0], [0.0, 0.0, 0.0], dt)
+        return float(run.load_position()[0])
+    finally:
+        run.close()
+
+
+def quasi_static_current_offset_m(ps: ParameterSet, length_m: float, current_mps: float) -> float:
+    """The quasi-static wire's offset of the load in a uniform current [m]: eq. 2.29
+    (corrected) with the wire's drag q and the tree's drag as F0, i.e. the wire's drag offset
+    the plant's equilibrium point carries plus F0 / k_h (eq. 2.30) of its spring."""
+    q = ps.wire.drag_per_length(current_mps)
+    w = ps.wire.submerged_weight_per_length()
+    f0 = site.tree_drag_force(ps, current_mps)
+    return wire_mod.horizontal_offset(q, w, ps.tree.submerged_weight_newton, length_m, f0)
 
 
 COUPLED_SEGMENTS = 20
@@ -293,6 +396,7 @@ def coupled_input_text(
         f"{wire_mod.RHO_WATER} rho",
         f"{water_depth_m} WtrDpth",
         "0 writeLog",
+        *_WATER_AND_QUIET_OPTIONS,
         f"{RELAX_S} TmaxIC",
         "1 ICgenDynamic",
         "8.0 CdScaleIC",
@@ -304,7 +408,8 @@ def coupled_input_text(
 
 class CoupledWire:
     """The lift wire as a MoorDyn line between the crane tip and the tree's attachment point,
-    both driven from outside (``control.simulation`` with ``wire = "moordyn"``).
+    both driven from outside (``control.simulation`` with ``wire = "moordyn"``), in the
+    current given by ``set_current`` (still water until then).
 
     ``step`` advances the line by one plant step with both ends moving at constant velocity
     from where they are now, and returns the wire's force on the tree's attachment point at
@@ -335,11 +440,14 @@ class CoupledWire:
         path = Path(self._dir.name) / "wire.txt"
         path.write_text(coupled_input_text(ps, length_m, water_depth_m, damping_ratio))
         self.system: Any = None
-        self.system = _quiet(moordyn.Create, str(path))
+        self.system = _create(path)
         self.line = moordyn.GetLine(self.system, 1)
         x = ned_to_moordyn(tip_n) + ned_to_moordyn(attachment_n)
-        if _quiet(moordyn.Init, self.system, x, [0.0] * 6) != 0:
+        if moordyn.Init(self.system, x, [0.0] * 6) != 0:
             raise RuntimeError("MoorDyn could not initialise the wire")
+        self.current_n = np.zeros(3)
+        """The water's velocity along the whole line, NED [m/s] (``set_current``)."""
+        self._n_water_points = _set_current(self.system, [0.0, 0.0, 0.0], 0.0)
         self.t_s = 0.0
         self.wire_force_n = self._point_force(2)
         """Wire force on the tree's attachment point at ``t_s``, NED [N]."""
@@ -352,6 +460,20 @@ class CoupledWire:
     def top_tension_newton(self) -> float:
         """Tension at the crane tip [N]."""
         return float(np.linalg.norm(self._point_force(1)))
+
+    def set_current(self, current_n: np.ndarray) -> None:
+        """The current along the whole line from now on, NED [m/s]: uniform over depth, as
+        the quasi-static wire's drag offset (eq. 2.29) takes it."""
+        current_n = np.asarray(current_n, dtype=float)
+        if current_n.shape != (3,) or not np.all(np.isfinite(current_n)):
+            raise ValueError(f"current_n must be 3 finite numbers, got {current_n!r}")
+        if np.array_equal(current_n, self.current_n):
+            return
+        u = ned_to_moordyn(current_n)
+        n = self._n_water_points
+        if self._md.ExternalWaveKinSet(self.system, [u] * n, [[0.0] * 3] * n, self.t_s) != 0:
+            raise RuntimeError("MoorDyn did not take the current")
+        self.current_n = current_n.copy()
 
     def set_length(self, length_m: float) -> None:
         """Pay out or haul in to the unstretched length ``length_m``; MoorDyn's internal step
@@ -380,8 +502,7 @@ class CoupledWire:
         the attachment point at the end of the step, NED [N] (also kept as ``wire_force_n``)."""
         x = ned_to_moordyn(tip_n) + ned_to_moordyn(attachment_n)
         v = ned_to_moordyn(tip_velocity_n) + ned_to_moordyn(attachment_velocity_n)
-        # MoorDyn prints the time on every step, whatever its verbosity: to /dev/null
-        f = np.asarray(_quiet(self._md.Step, self.system, x, v, self.t_s, dt_s), dtype=float)
+        f = np.asarray(self._md.Step(self.system, x, v, self.t_s, dt_s), dtype=float)
         self.t_s += dt_s
         if not np.all(np.isfinite(f)):
             raise FloatingPointError(f"MoorDyn's wire force is not finite at t = {self.t_s:.2f} s")

@@ -198,23 +198,58 @@ def crane_tip_raos_n(
     return tip_n
 
 
+RAMP_PEAK_PERIODS = 2.0
+"""The vessel's motion grows in over this many peak periods of the sea [-] (``ramp_in``).
+A simulation starts with the sea already running; without a ramp the crane tip would jump to
+its displaced place at t = 0 and start at full speed, and the tree bounce on the wire (to
+zero tension in Hs 4 m, Tp 10 s, elastic wire: a false slack). The half-cosine starts the tip
+with no displacement and no speed; while it lasts, its own rate adds at most
+(pi / (2 T_ramp)) / (2 pi / Tp) = Tp / (4 T_ramp) = 1/8 of the wave-frequency speed with
+T_ramp = 2 Tp, and its spectrum lies below about 1.5 / T_ramp (0.075 Hz at Tp 10 s), far
+under the wire's axial bounce (0.4 to 1.3 Hz from 1000 m to 100 m). Two periods also keep
+the run short: the motion is full after 20 s at Tp 10 s."""
+
+
+def ramp_time_s(peak_period_s: float) -> float:
+    """The ramp's length for a sea of peak period Tp: ``RAMP_PEAK_PERIODS`` Tp [s]."""
+    if not (math.isfinite(peak_period_s) and peak_period_s > 0.0):
+        raise ValueError(f"peak_period_s must be > 0 s, got {peak_period_s!r}")
+    return RAMP_PEAK_PERIODS * float(peak_period_s)
+
+
+def ramp_in(t_s: ArrayLike, ramp_s: float) -> FloatArray:
+    """The ramp's factor at times t_s [s]: (1 - cos(pi t / T_ramp)) / 2 from t = 0 to
+    T_ramp, 1 after it (0 before t = 0); ``ramp_s`` 0: 1 throughout (no ramp). Its value and
+    slope are continuous at both ends."""
+    t = np.asarray(t_s, dtype=np.float64)
+    if not (math.isfinite(ramp_s) and ramp_s >= 0.0):
+        raise ValueError(f"ramp_s must be >= 0 s, got {ramp_s!r}")
+    if ramp_s == 0.0:
+        return np.ones_like(t)
+    x = np.clip(t / ramp_s, 0.0, 1.0)
+    return 0.5 * (1.0 - np.cos(np.pi * x))
+
+
 def crane_tip_motion_n(
     field: envmod.WaveField,
     t_s: ArrayLike,
     motion: VesselMotion,
     north_m: float = 0.0,
     east_m: float = 0.0,
+    ramp_s: float = 0.0,
 ) -> FloatArray:
     """Displacement of the crane tip from its mean position, NED [m], shape (n, 3), at times
     t_s (n,) [s], for the vessel at (north, east): sum over the components of
-    Im(H_k A_k e^{i theta_k}) = A_k (Re H_k sin theta_k + Im H_k cos theta_k)."""
+    Im(H_k A_k e^{i theta_k}) = A_k (Re H_k sin theta_k + Im H_k cos theta_k), times the
+    ramp ``ramp_in(t, ramp_s)`` (0: none; a simulation uses ``ramp_time_s`` of its sea)."""
     t = np.asarray(t_s, dtype=np.float64)
     if t.ndim != 1:
         raise ValueError(f"t_s must be 1-D, got shape {t.shape}")
+    ramp = ramp_in(t, ramp_s)
     tip = crane_tip_raos_n(field.omega_rad_s, field.wavenumber_rad_m, field.direction_rad, motion)
     weights = np.concatenate(
         [field.amplitude_m[:, None] * tip.real, field.amplitude_m[:, None] * tip.imag], axis=1
     )
     offset = envmod.phase_offset(field, north_m, east_m)
     sin_sum, cos_sum = envmod.harmonic_sums(t, field.omega_rad_s, offset, weights)
-    return sin_sum[:, 0:3] + cos_sum[:, 3:6]
+    return (sin_sum[:, 0:3] + cos_sum[:, 3:6]) * ramp[:, None]

@@ -51,10 +51,11 @@ def test_calm_landing_has_no_slack_and_lands_at_the_winch_speed():
 
 def test_swell_without_heave_compensation_goes_slack_and_snaps():
     """Hs 8 m, Tp 10 s, head sea, compensation off: the crane tip's heave lifts the landed
-    tree off and drops it, the wire goes slack and snaps (measured: 12 slack, peak 692 kN,
-    2.3 x W0), and the contact speed carries the tip's heave (0.57 m/s against the winch's
-    0.05). With 80 % compensation it goes slack less often (measured 2), with a smaller
-    peak and contact speed."""
+    tree off and drops it, the wire goes slack and snaps (measured: 7 slack, peak 597 kN,
+    1.9 x W0; 12 and 692 kN before the vessel's motion ramped in, the tree meeting the
+    frame in another phase of its swing), and the contact speed carries the tip's heave
+    (0.58 m/s against the winch's 0.05). With 80 % compensation it goes slack less often
+    (measured 2), with a smaller peak and contact speed."""
     off = seaway.land_in_seaway(8.0, 10.0, False)
     on = seaway.land_in_seaway(8.0, 10.0, True)
     assert off.slack_events >= 3
@@ -65,7 +66,7 @@ def test_swell_without_heave_compensation_goes_slack_and_snaps():
     assert on.max_tension_newton < off.max_tension_newton
     assert on.contact_speed_mps < off.contact_speed_mps
     # the energy-balance estimate F = v_snap sqrt(K M) against the simulated peak less the
-    # static tension: 390 against 385 kN; within a factor 1.5 (the estimate takes the largest
+    # static tension: 395 against 290 kN; within a factor 1.5 (the estimate takes the largest
     # snap speed and no damping, the peak comes from the simulation)
     ratio = off.snap_estimate_newton / (off.snap_peak_newton - off.static_newton)
     assert 1 / 1.5 < ratio < 1.5
@@ -126,8 +127,9 @@ def test_docking_mission_from_a_heaving_vessel_logs_wire_events(tmp_path):
     wire = [e for e in r.events if e["kind"] == "wire"]
     kinds = [e["data"]["event"] for e in wire]
     assert "slack" in kinds and "snap" in kinds
-    # none from the vessel's start-up bounce (which reaches zero tension)
-    assert min(e["t_s"] for e in wire) >= seaway.VESSEL_RUN_IN_S
+    # judged from t = 0: none from the vessel's start (its motion ramps in over 20 s; the
+    # events come at the landing, after the first 40 s)
+    assert min(e["t_s"] for e in wire) >= 40.0
     (landing,) = r.landings
     assert landing.contact_speed_mps > 0.1
     from app.plots import mission_figures
