@@ -600,7 +600,10 @@ def study(
     duration: Annotated[
         float, typer.Option(help="table-4.1: seconds per run", min=130.0, max=36000.0)
     ] = 600.0,
-    seed: Annotated[int, typer.Option(help="random seed")] = 0,
+    seed: Annotated[
+        int | None,
+        typer.Option(help="random seed (default 0; landing-limit --mission: the mission's)"),
+    ] = None,
     variant: Annotated[
         list[str] | None,
         typer.Option(
@@ -612,11 +615,28 @@ def study(
     ] = None,
     json_out: Annotated[bool, typer.Option("--json")] = False,
     period: Annotated[
-        float, typer.Option(help="landing-limit: peak period Tp [s]", min=3.0, max=25.0)
-    ] = 10.0,
+        float | None,
+        typer.Option(
+            help="landing-limit: peak period Tp [s] (default 10; not with --mission)",
+            min=3.0,
+            max=25.0,
+        ),
+    ] = None,
     compensation: Annotated[
-        bool, typer.Option(help="landing-limit: the crane's heave compensation (80 %)")
-    ] = True,
+        bool | None,
+        typer.Option(
+            help="landing-limit: the crane's heave compensation (80 %) (default on; not with "
+            "--mission)"
+        ),
+    ] = None,
+    mission: Annotated[
+        str | None,
+        typer.Option(
+            help="landing-limit: a library mission or a .toml file whose [setup] gives the "
+            "installation (parameter set, plant, docking frame, waves' period and direction, "
+            "vessel, wire, current, seed); only Hs is swept"
+        ),
+    ] = None,
     hs_step: Annotated[
         float, typer.Option(help="landing-limit: Hs step [m]", min=0.1, max=12.0)
     ] = 0.5,
@@ -639,8 +659,24 @@ def study(
     if name not in studies.STUDIES:
         raise typer.BadParameter(f"study must be one of {', '.join(studies.STUDIES)}, got {name!r}")
     if name == "landing-limit":
-        _landing_limit(period, compensation, hs_step, hs_max, seed, plot, json_out)
+        if mission is not None:
+            _mission_landing_limit(
+                mission, period, compensation, hs_step, hs_max, seed, plot, json_out
+            )
+            return
+        _landing_limit(
+            10.0 if period is None else period,
+            True if compensation is None else compensation,
+            hs_step,
+            hs_max,
+            0 if seed is None else seed,
+            plot,
+            json_out,
+        )
         return
+    if mission is not None:
+        _fail(f"--mission is for the landing-limit study, not {name}")
+    seed = 0 if seed is None else seed
     if name == "table-4.1":
         try:
             variants = (
@@ -713,28 +749,7 @@ def _landing_limit(
     if plot is not None:
         seaway.tension_figure(landings[-1], plot)
     if json_out:
-        typer.echo(
-            json.dumps(
-                {
-                    "last_hs_within_limits_m": hs,
-                    "landings": [
-                        {
-                            "hs_m": x.significant_height_m,
-                            "within_limits": x.within_limits,
-                            "slack_events": x.slack_events,
-                            "snap_events": x.snap_events,
-                            "snap_peak_newton": x.snap_peak_newton,
-                            "snap_estimate_newton": x.snap_estimate_newton,
-                            "contact_speed_mps": x.contact_speed_mps,
-                            "min_tension_newton": x.min_tension_newton,
-                            "max_tension_newton": x.max_tension_newton,
-                        }
-                        for x in landings
-                    ],
-                },
-                indent=2,
-            )
-        )
+        typer.echo(json.dumps(_landing_limit_json(hs, landings), indent=2))
         return
     for x in landings:
         typer.echo(x.words())
@@ -743,6 +758,86 @@ def _landing_limit(
         f"last Hs within the limits at Tp {period:g} s, heave compensation {comp}: {hs:g} m"
         + (f" (the largest tried, {hs_max:g} m)" if landings[-1].within_limits else "")
     )
+
+
+def _landing_limit_json(hs: float, landings: list) -> dict:
+    return {
+        "last_hs_within_limits_m": hs,
+        "landings": [
+            {
+                "hs_m": x.significant_height_m,
+                "within_limits": x.within_limits,
+                "slack_events": x.slack_events,
+                "snap_events": x.snap_events,
+                "snap_peak_newton": x.snap_peak_newton,
+                "snap_estimate_newton": x.snap_estimate_newton,
+                "contact_speed_mps": x.contact_speed_mps,
+                "min_tension_newton": x.min_tension_newton,
+                "max_tension_newton": x.max_tension_newton,
+            }
+            for x in landings
+        ],
+    }
+
+
+def _mission_landing_limit(
+    mission: str,
+    period: float | None,
+    compensation: bool | None,
+    hs_step: float,
+    hs_max: float,
+    seed: int | None,
+    plot: Path | None,
+    json_out: bool,
+) -> None:
+    """The landing-limit study for the installation a mission's [setup] describes: only Hs
+    is swept; the mission's own Hs is reported beside the limit."""
+    from missions import schema, seaway
+
+    if period is not None:
+        _fail(
+            "--period cannot be given with --mission: the peak period comes from the "
+            "mission's setup.waves.peak_period_s (change it there, or drop --mission)"
+        )
+    if compensation is not None:
+        _fail(
+            "--compensation/--no-compensation cannot be given with --mission: heave "
+            "compensation comes from the mission's setup.vessel.heave_compensation"
+        )
+    if hs_step > hs_max:
+        _fail(f"--hs-step must be at most --hs-max ({hs_max:g}), got {hs_step:g}")
+    try:
+        spec = schema.load_mission(mission)
+        scenario = seaway.LandingScenario.from_setup(spec.setup, spec.name)
+        hs, landings = scenario.limit(hs_step, hs_max, seed=seed)
+    except ValueError as err:
+        _fail(str(err))
+        return
+    if plot is not None:
+        seaway.tension_figure(landings[-1], plot)
+    verdict = seaway.hs_verdict(scenario.significant_height_m, hs, landings)
+    if json_out:
+        out = {
+            "mission": spec.name,
+            "installation": scenario.words(seed),
+            "peak_period_s": scenario.peak_period_s,
+            "heave_compensation": scenario.heave_compensation,
+            "seed": scenario.seed if seed is None else seed,
+            "mission_hs_m": scenario.significant_height_m,
+            "mission_hs_within_limit": scenario.significant_height_m <= hs,
+            "verdict": verdict,
+        }
+        out.update(_landing_limit_json(hs, landings))
+        typer.echo(json.dumps(out, indent=2))
+        return
+    typer.echo(scenario.words(seed))
+    for x in landings:
+        typer.echo(x.words())
+    typer.echo(
+        f"last Hs within the limits: {hs:g} m"
+        + (f" (the largest tried, {hs_max:g} m)" if landings[-1].within_limits else "")
+    )
+    typer.echo(verdict)
 
 
 @app.command()

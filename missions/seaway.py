@@ -29,18 +29,23 @@ from __future__ import annotations
 
 import math
 import textwrap
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from control.columns import LogRows
 from control.simulation import Simulation
+from missions.setup import current_params, vary_tree
 from sim import environment as envmod
 from sim import params as params_mod
 from sim import site
 from sim import vessel as vesselmod
 from sim.docking import DockingFrame
+
+if TYPE_CHECKING:
+    from missions import schema
 
 FloatArray = NDArray[np.float64]
 
@@ -57,6 +62,8 @@ the hover included: with the ramp nothing there needs leaving out. Measured, tre
 0.91 W0 against 0.92, 0.85, 0.88 W0 from 40 to 120 s. Before the ramp the tip jumped to its
 displaced place at t = 0: 8 or 9 slack episodes in the first 40 s, snaps up to 5.9 W0, so
 the first 40 s were left out of the judgement."""
+HOVER_M = 5.0
+"""How high the tree's bottom hovers over the post tops before the lowering [m]."""
 SNAP_WINDOW_S = 2.0
 """How long after the slack ends the snap's peak tension is looked for [s] (longer than the
 wire's axial period, 0.8 to 2.6 s from 100 to 1000 m at full scale)."""
@@ -206,12 +213,22 @@ def land_in_seaway(
     *,
     params: str = "full-scale",
     landing_depth_m: float = 110.0,
-    hover_m: float = 5.0,
+    hover_m: float = HOVER_M,
     lower_rate_mps: float = 0.05,
     hover_s: float = HOVER_S,
     settle_s: float = 20.0,
     seed: int = 0,
     wire: str = "elastic",
+    frame_heading_rad: float = 0.0,
+    wave_direction_rad: float = 0.0,
+    wave_load: str = envmod.DEFAULT_WAVE_LOAD,
+    water_depth_m: float | None = None,
+    moving_vessel: bool = True,
+    vessel_heading_rad: float | None = None,
+    heave_compensation_efficiency: float | None = None,
+    current: envmod.CurrentParams | None = None,
+    mass_scale: float = 1.0,
+    weight_scale: float = 1.0,
 ) -> SeawayLanding:
     """Lower the tree from ``hover_m`` above the post tops onto a docking frame below the
     crane tip, the vessel moving in a head sea (JONSWAP, ``sim.environment``), the tree alone
@@ -221,13 +238,23 @@ def land_in_seaway(
     ``hover_s`` at the start depth (``HOVER_S``). The wire is judged over the whole run: a
     slack episode counts when the wire takes the load again after it (the tree lifted off by
     the crane tip's heave, then the snap); the last one, the set-down the winch pays out for,
-    never ends and is not a slack event."""
+    never ends and is not a slack event.
+
+    The installation (``LandingScenario.from_setup`` takes it from a mission): the frame's
+    heading (the tree hangs turned to it), the waves' direction (towards, from north), load
+    and water depth (None: the landing depth), the vessel (``moving_vessel`` False: the crane
+    tip stands still; its heading, None: bow into the waves; the compensation's efficiency,
+    None: ``VesselMotion``'s default), the current, and the tree's mass and submerged weight
+    scaled (``missions.setup.vary_tree``). The crane tip stands over the frame's centre; the
+    current pushes the tree off it. The defaults are the study's own scenario."""
     if not (math.isfinite(significant_height_m) and 0.0 <= significant_height_m <= 20.0):
         raise ValueError(f"significant_height_m must lie in [0, 20], got {significant_height_m}")
     ps = params_mod.load(params)
+    if mass_scale != 1.0 or weight_scale != 1.0:
+        ps = vary_tree(ps, mass_scale, weight_scale)  # no controller: the plant is the tree
     layout = ps.spec.docking.to_numeric()
     half_h = float(ps.tree.dimensions_m[2]) / 2.0
-    frame = DockingFrame(np.zeros(2), 0.0, landing_depth_m)
+    frame = DockingFrame(np.zeros(2), frame_heading_rad, landing_depth_m)
     post_top = frame.post_top_depth_m(layout)
     waves = None
     vessel = None
@@ -235,20 +262,33 @@ def land_in_seaway(
         waves = envmod.WaveParams(
             significant_height_m=significant_height_m,
             peak_period_s=peak_period_s,
-            direction_rad=0.0,
-            water_depth_m=landing_depth_m,
+            direction_rad=wave_direction_rad,
+            load=wave_load,
+            water_depth_m=landing_depth_m if water_depth_m is None else water_depth_m,
         )
-        vessel = vesselmod.VesselMotion(heading_rad=math.pi, heave_compensation=heave_compensation)
+        if moving_vessel:
+            heading = vessel_heading_rad
+            if heading is None:
+                heading = wave_direction_rad + math.pi  # bow into the waves
+            vessel = vesselmod.VesselMotion(
+                heading_rad=heading, heave_compensation=heave_compensation
+            )
+            if heave_compensation_efficiency is not None:
+                vessel = replace(
+                    vessel, heave_compensation_efficiency=heave_compensation_efficiency
+                )
     sim = Simulation(
         ps,
         tree_depth_m=post_top - hover_m - half_h,
         has_rov=False,
         control=False,
         crane_tip_n=(0.0, 0.0, 0.0),
+        current=current,
         waves=waves,
         vessel=vessel,
         seed=seed,
         wire=wire,
+        tree_heading_rad=frame_heading_rad,
     )
     sim.set_docking_frame(frame)
     static = float(ps.tree.submerged_weight_newton)
@@ -338,6 +378,163 @@ def landing_limit(
             break
         last_ok = hs
     return last_ok, landings
+
+
+SLACK_WIRES = ("elastic", "moordyn")
+"""Wire models that can go slack (``control.simulation.WIRE_MODELS``; the quasi-static wire
+is a spring that pulls as well as pushes)."""
+
+
+@dataclass(frozen=True)
+class LandingScenario:
+    """A planner's installation from a mission's set-up: everything about a landing in a
+    seaway but the sea's height, which ``landing_limit`` sweeps. ``keywords()`` are
+    ``land_in_seaway``'s arguments (its defaults are the study's own scenario)."""
+
+    source: str
+    """The mission's name (what the messages name)."""
+    significant_height_m: float
+    """The mission's own Hs [m], to report beside the limit."""
+    peak_period_s: float
+    heave_compensation: bool
+    params: str
+    mass_scale: float
+    weight_scale: float
+    landing_depth_m: float
+    frame_heading_rad: float
+    wave_direction_rad: float
+    wave_load: str
+    water_depth_m: float | None
+    moving_vessel: bool
+    vessel_heading_rad: float | None
+    heave_compensation_efficiency: float | None
+    current: envmod.CurrentParams
+    wire: str
+    seed: int
+
+    @classmethod
+    def from_setup(cls, setup: schema.Setup, source: str = "the mission") -> LandingScenario:
+        """The scenario a mission's ``[setup]`` describes; ValueError naming the field when it
+        has nothing to land on, no sea to sweep or a wire that cannot go slack."""
+        frame, waves, vessel = setup.docking_frame, setup.waves, setup.vessel
+        if frame is None:
+            raise ValueError(
+                f"{source}: setup.docking_frame is missing: the landing-limit study needs a "
+                "docking frame to land on ([setup.docking_frame] with center_ne_m, heading_deg "
+                "and landing_depth_m)"
+            )
+        if waves is None:
+            raise ValueError(
+                f"{source}: setup.waves.peak_period_s is missing: the landing-limit study "
+                "sweeps Hs at the mission's peak period, so it needs [setup.waves] with "
+                "peak_period_s (> 0, at most 40 s), significant_height_m and direction_deg"
+            )
+        if setup.wire not in SLACK_WIRES:
+            raise ValueError(
+                f"{source}: setup.wire is {setup.wire!r}: the quasi-static wire cannot go slack "
+                "(a spring on the tree that pulls and pushes alike), so no landing would ever "
+                'fail the slack criterion; set setup.wire to "elastic" or "moordyn"'
+            )
+        params_mod.load(setup.params)  # a ParameterError (ValueError) naming the set
+        return cls(
+            source=source,
+            significant_height_m=waves.significant_height_m,
+            peak_period_s=waves.peak_period_s,
+            heave_compensation=vessel is not None and vessel.heave_compensation,
+            params=setup.params,
+            mass_scale=setup.plant.mass_scale,
+            weight_scale=setup.plant.weight_scale,
+            landing_depth_m=frame.landing_depth_m,
+            frame_heading_rad=math.radians(frame.heading_deg),
+            wave_direction_rad=math.radians(waves.direction_deg),
+            wave_load=waves.load,
+            water_depth_m=waves.water_depth_m,
+            moving_vessel=vessel is not None,
+            vessel_heading_rad=None
+            if vessel is None or vessel.heading_deg is None
+            else math.radians(vessel.heading_deg),
+            heave_compensation_efficiency=None
+            if vessel is None
+            else vessel.heave_compensation_efficiency,
+            current=current_params(setup.current),
+            wire=setup.wire,
+            seed=setup.seed,
+        )
+
+    def keywords(self) -> dict[str, object]:
+        """``land_in_seaway``'s (and ``landing_limit``'s) keyword arguments."""
+        skip = ("source", "significant_height_m", "peak_period_s", "heave_compensation")
+        return {k: v for k, v in vars(self).items() if k not in skip}
+
+    def limit(
+        self, hs_step_m: float, hs_max_m: float, seed: int | None = None
+    ) -> tuple[float, list[SeawayLanding]]:
+        """``landing_limit`` for this installation (``seed``: instead of the mission's)."""
+        kw = self.keywords()
+        if seed is not None:
+            kw["seed"] = seed
+        try:
+            return landing_limit(
+                self.peak_period_s, self.heave_compensation, hs_step_m, hs_max_m, **kw
+            )
+        except ValueError as err:
+            raise ValueError(
+                f"{self.source}: cannot land on the frame at setup.docking_frame."
+                f"landing_depth_m = {self.landing_depth_m:g} m with the {self.wire} wire "
+                f"(the tree starts {HOVER_M:g} m above the post tops): {err}"
+            ) from None
+
+    def words(self, seed: int | None = None) -> str:
+        """The installation in one paragraph."""
+        deg = math.degrees
+        if not self.moving_vessel:
+            vessel = "no [setup.vessel]: the crane tip stands still"
+        else:
+            heading = (
+                "bow into the waves"
+                if self.vessel_heading_rad is None
+                else f"heading {deg(self.vessel_heading_rad):g} deg"
+            )
+            eff = self.heave_compensation_efficiency
+            comp = (
+                f"heave compensation on ({100 * eff:.0f} %)"
+                if self.heave_compensation and eff is not None
+                else "heave compensation off"
+            )
+            vessel = f"vessel {heading}, {comp}"
+        c = self.current
+        return (
+            f"{self.source}: {self.params} (tree mass x{self.mass_scale:g}, submerged weight "
+            f"x{self.weight_scale:g}), frame at {self.landing_depth_m:g} m heading "
+            f"{deg(self.frame_heading_rad):g} deg; sea Tp {self.peak_period_s:g} s towards "
+            f"{deg(self.wave_direction_rad):g} deg ({self.wave_load} load); {vessel}; "
+            f"{self.wire} wire; current {c.speed_mps:g} m/s towards "
+            f"{deg(c.direction_rad):g} deg; seed {self.seed if seed is None else seed}"
+        )
+
+
+def hs_verdict(mission_hs_m: float, limit_m: float, landings: list[SeawayLanding]) -> str:
+    """The mission's own Hs against the limit the sweep found, in words."""
+    last = landings[-1]
+    if mission_hs_m == 0.0:
+        return f"your mission's sea is calm (Hs 0 m); the limit is {limit_m:g} m"
+    if mission_hs_m <= limit_m:
+        return f"your mission's Hs {mission_hs_m:g} m is within the limit {limit_m:g} m"
+    if last.within_limits:
+        return (
+            f"your mission's Hs {mission_hs_m:g} m is above the largest Hs tried "
+            f"({last.significant_height_m:g} m, within the limits): raise --hs-max"
+        )
+    failed = last.significant_height_m
+    if mission_hs_m >= failed:
+        return (
+            f"your mission's Hs {mission_hs_m:g} m is NOT within the limit {limit_m:g} m "
+            f"(a landing at Hs {failed:g} m already was not)"
+        )
+    return (
+        f"your mission's Hs {mission_hs_m:g} m lies between the limit {limit_m:g} m and the "
+        f"first Hs not within the limits ({failed:g} m): try a smaller --hs-step"
+    )
 
 
 def tension_figure(landing: SeawayLanding, path) -> object:

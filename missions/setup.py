@@ -31,18 +31,7 @@ def build_simulation(
     plant_ps = None
     if s.plant.mass_scale != 1.0 or s.plant.weight_scale != 1.0:
         plant_ps = vary_tree(ps, s.plant.mass_scale, s.plant.weight_scale)
-    d = math.radians(s.current.direction_deg)
-    db = math.radians(s.current.direction_band_deg)
-    cur = envmod.CurrentParams(
-        speed_mps=s.current.speed_mps,
-        direction_rad=d,
-        speed_min_mps=max(s.current.speed_mps - s.current.speed_band_mps, 0.0),
-        speed_max_mps=s.current.speed_mps + s.current.speed_band_mps,
-        direction_min_rad=d - db,
-        direction_max_rad=d + db,
-        speed_walk_mps_per_sqrt_s=s.current.speed_walk_mps_per_sqrt_s,
-        direction_walk_rad_per_sqrt_s=math.radians(s.current.direction_walk_deg_per_sqrt_s),
-    )
+    cur = current_params(s.current)
     waves = None
     if s.waves is not None:
         water_depth = s.waves.water_depth_m
@@ -99,6 +88,22 @@ def build_simulation(
     for fault in mission.faults:
         sim.inject_fault(fault.fault())
     return sim
+
+
+def current_params(c: schema.CurrentSetup) -> envmod.CurrentParams:
+    """The current (and its bounded random walk) a set-up's ``[setup.current]`` describes."""
+    d = math.radians(c.direction_deg)
+    db = math.radians(c.direction_band_deg)
+    return envmod.CurrentParams(
+        speed_mps=c.speed_mps,
+        direction_rad=d,
+        speed_min_mps=max(c.speed_mps - c.speed_band_mps, 0.0),
+        speed_max_mps=c.speed_mps + c.speed_band_mps,
+        direction_min_rad=d - db,
+        direction_max_rad=d + db,
+        speed_walk_mps_per_sqrt_s=c.speed_walk_mps_per_sqrt_s,
+        direction_walk_rad_per_sqrt_s=math.radians(c.direction_walk_deg_per_sqrt_s),
+    )
 
 
 def charted_frame(mission: schema.Mission) -> DockingFrame | None:
