@@ -77,8 +77,13 @@ def test_gain_change_in_the_panel_is_applied(
     before = api.get("/api/gains").json()
     target = before["kp"][0] * 1.5
     kp = ", ".join(f"{v:g}" for v in [target, *before["kp"][1:]])
-    field(page, "kp [surge, sway, yaw]").fill(kp)
-    time.sleep(0.2)  # viser sends an input's value at most every 50 ms
+    box = field(page, "kp [surge, sway, yaw]")
+    box.fill(kp)
+    box.press("Tab")
+    # the typed row reaches the server before Apply is pressed (viser sends an input's value
+    # at most every 50 ms; under load 10 in CI a fixed 0.2 s was not enough)
+    panel = next(iter(server.app.state.view._panels.values()))
+    wait_for(lambda: str(panel.gain_rows["kp"].value) == kp, 10.0, "the typed kp on the server")
     click(page, "Apply gains")
     wait_for(
         lambda: abs(api.get("/api/gains").json()["kp"][0] - target) < 1e-6,
