@@ -787,7 +787,7 @@ def _closed_steps(
     return n
 
 
-@njit(**JIT_NOALLOC)
+@njit(inline="always", **JIT_NOALLOC)
 def write_plant_row(
     row: np.ndarray,
     t: float,

@@ -1020,7 +1020,7 @@ def rhs(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays) -> np
     return xdot
 
 
-@njit(**JIT_NOALLOC)
+@njit(inline="always", **JIT_NOALLOC)
 def rk4_step_into(
     out: np.ndarray,
     x: np.ndarray,
