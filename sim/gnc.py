@@ -84,6 +84,17 @@ def ssa(angle: float) -> float:
 
 
 @njit(**JIT)
+def ssa_each(angles: np.ndarray) -> np.ndarray:
+    """``ssa`` of every element of a 1-D array (a new array): the compiled scalar ``ssa`` per
+    element, so the same numbers as ``np.array([ssa(v) for v in angles])`` without a call
+    from Python per element."""
+    out = np.empty(angles.shape[0])
+    for i in range(angles.shape[0]):
+        out[i] = ssa(angles[i])
+    return out
+
+
+@njit(**JIT)
 def sat(x: float, limit: float) -> float:
     """Saturate x into [-limit, limit]."""
     if x > limit:

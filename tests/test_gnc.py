@@ -21,6 +21,7 @@ from sim.gnc import (
     m2c,
     quaternion_wxyz_from_rpy_radians,
     ssa,
+    ssa_each,
 )
 
 angle = st.floats(-10.0, 10.0, allow_nan=False)
@@ -163,3 +164,20 @@ def test_dot_into_is_the_blas_product_to_the_bit_without_the_runtime() -> None:
 def test_dot_into_refuses_an_array_it_would_have_to_copy() -> None:
     with pytest.raises(Exception, match="contiguous"):
         _dot_into_no_runtime(np.ones((4, 4))[::2, ::2], np.ones(2), np.empty(2))
+
+
+def test_ssa_each_is_ssa_of_every_element_to_the_bit() -> None:
+    """The scores' heading errors go through ``ssa_each``: the compiled scalar ``ssa`` of each
+    element, the same bits as calling it per element, just below -pi and at odd multiples of
+    pi included."""
+    rng = np.random.default_rng(4)
+    angles = np.concatenate(
+        [
+            rng.uniform(-20.0, 20.0, 2000),
+            [-math.pi, math.pi, 3.0 * math.pi, np.nextafter(-math.pi, -4.0), 0.0, -0.0],
+        ]
+    )
+    want = np.array([ssa(float(v)) for v in angles])
+    got = ssa_each(angles)
+    assert got.tobytes() == want.tobytes()
+    assert np.all((got >= -math.pi) & (got < math.pi))
