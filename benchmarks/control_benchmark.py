@@ -90,16 +90,24 @@ def _time_open_step(x, y, n, env, P, reps):
     return done
 
 
+# The control system's pieces likewise: their in-place kernels, with one work space, from
+# loops without the runtime, as ``control.loop._closed_steps`` runs them.
+@njit(**_NO_NRT)
+def _control_steps(x, y, fresh, xhat, Pc, cs, target, C, Q, row, W, reps):
+    tau = W.vec[loop.W_TAU6, 0:6]
+    for k in range(reps):
+        loop.control_step_into(tau, k * 0.01, x, y, fresh, xhat, Pc, cs, target, C, Q, 0.01, row, W)
+    return tau[0]
+
+
 @njit(cache=True)
 def _time_control_step(x, y, xhat, Pc, cs, target, C, Q, reps):
-    row = np.zeros(loop.N_LOG)
     fresh = np.zeros(5, dtype=np.bool_)  # no fresh sample: EKF corrections timed apart
-    tau = np.zeros(6)
-    for k in range(reps):
-        tau, _, _, cs = loop.control_step(
-            k * 0.01, x, y, fresh, xhat, Pc, cs, target, C, Q, 0.01, row
-        )
-    return tau
+    W = loop.make_control_work()
+    row = np.zeros(loop.N_LOG)
+    return _control_steps(
+        x, y, fresh, xhat.copy(), Pc.copy(), cs.copy(), target, C, Q, row, W, reps
+    )
 
 
 @njit(cache=True)
@@ -110,70 +118,80 @@ def _time_sensors(x, held, noise, fresh, reps):
     return held
 
 
+@njit(**_NO_NRT)
+def _predicts(xh, Pc, tau, C, dt, W, reps):
+    for _ in range(reps):
+        ekf.predict_into(
+            xh, Pc, tau, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, C.T_b, C.GQG,
+            W.vec[loop.W_F0, 0:9], W.vec[loop.W_FJ, 0:9], W.vec[loop.W_XP, 0:9],
+            W.mat[loop.MW_PHI], W.mat[loop.MW_TMP],
+        )  # fmt: skip
+    return xh[0]
+
+
 @njit(cache=True)
 def _time_ekf(xh, Pc, C, dt, reps):
-    tau = np.zeros(3)
+    return _predicts(xh.copy(), Pc.copy(), np.zeros(3), C, dt, loop.make_control_work(), reps)
+
+
+@njit(**_NO_NRT)
+def _corrections(xh, Pc, z0, z1, W, reps):
+    s = 0.0
     for _ in range(reps):
-        xh, Pc = ekf.predict(
-            xh, Pc, tau, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, C.T_b, C.GQG
-        )
-    return xh
+        n0, _n1 = ekf.correct_into(
+            xh, Pc, 2, z0, z1, 0, 1, 0.01, 0.01, -1,
+            W.vec[loop.W_K0, 0:9], W.vec[loop.W_K1, 0:9], W.mat[loop.MW_A],
+        )  # fmt: skip
+        s += n0
+    return s
 
 
 @njit(cache=True)
 def _time_ekf_correct(xh, Pc, reps):
-    z = xh[0:2].copy()
-    rows = np.array([0, 1])
-    r = np.array([0.01, 0.01])
+    return _corrections(xh.copy(), Pc.copy(), xh[0], xh[1], loop.make_control_work(), reps)
+
+
+@njit(**_NO_NRT)
+def _references(state, target, params_, reps):
     for _ in range(reps):
-        xh, Pc, _ = ekf.correct(xh, Pc, z, rows, r, -1)
-    return xh
+        refkernel.reference_step_into(state, loop.REF_THIRD, state, target, 0.01, params_)
+    return state[0]
 
 
 @njit(cache=True)
 def _time_reference(state, target, params_, reps):
+    return _references(state.copy(), target, params_, reps)
+
+
+@njit(**_NO_NRT)
+def _controllers(C, eta, z, out, terms, work, reps):
     for _ in range(reps):
-        state = refkernel.third_order_step(state, target, 0.01, params_)
-    return state
+        pid.tree_pid_into(
+            out[0], out[1], terms, out[2], out[3], eta, z, z, z, z, out[1], C.Kp, C.Ki, C.Kd,
+            True, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, loop.EYE3, loop.EYE3, C.i_limit, 0.01,
+            work,
+        )  # fmt: skip
+    return out[1, 0]
 
 
 @njit(cache=True)
 def _time_controller(C, reps):
     eta = np.array([0.1, 0.2, 0.3])
-    i_n = np.zeros(3)
-    z = np.zeros(3)
+    return _controllers(C, eta, np.zeros(3), np.zeros((4, 3)), np.zeros((4, 3)),
+                        np.zeros((5, 3)), reps)  # fmt: skip
+
+
+@njit(**_NO_NRT)
+def _allocations(C, tau, f, W, reps):
     for _ in range(reps):
-        _, i_n, _, _, _ = pid.tree_pid(
-            eta,
-            z,
-            z,
-            z,
-            z,
-            i_n,
-            C.Kp,
-            C.Ki,
-            C.Kd,
-            True,
-            C.M,
-            C.D_l,
-            C.D_nl,
-            C.k_h,
-            C.p_eq,
-            loop.EYE3,
-            loop.EYE3,
-            C.i_limit,
-            0.01,
-        )
-    return i_n
+        loop.allocate_into(f, tau, C, W)
+    return f[0]
 
 
 @njit(cache=True)
 def _time_allocation(C, reps):
     tau = np.array([30.0, -20.0, 0.0, 0.0, 0.0, 15.0])
-    f = np.zeros(C.f_lo.shape[0])
-    for _ in range(reps):
-        f = loop.allocate(tau, C)
-    return f
+    return _allocations(C, tau, np.zeros(C.f_lo.shape[0]), loop.make_control_work(), reps)
 
 
 def _per_call(fn, *args, reps: int = 20000, repeats: int = 5) -> float:

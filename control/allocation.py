@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numba
 import numpy as np
@@ -368,6 +369,11 @@ def _priority_plan(config: ThrusterConfig, priority: tuple[int, ...]) -> _Priori
     )
 
 
+_NOALLOC: dict[str, Any] = {"cache": True, "_nrt": False}
+"""The kernels of the closed loop's step: compiled without numba's runtime, so they cannot
+allocate (see ``sim.gnc.JIT_NOALLOC``)."""
+
+
 @numba.njit(cache=True, inline="always")
 def _dot(a: FloatArray, b: FloatArray) -> float:
     """a @ b for short vectors (a plain loop compiles faster than a BLAS call)."""
@@ -398,8 +404,8 @@ def _step_to_limit(
     return alpha, blocking
 
 
-@numba.njit(cache=True, inline="always")
-def _serve_stage(
+@numba.njit(inline="always", **_NOALLOC)
+def _serve_stage_into(
     k: int,
     A: FloatArray,
     D: FloatArray,
@@ -407,24 +413,29 @@ def _serve_stage(
     f: FloatArray,
     f_lo: FloatArray,
     f_hi: FloatArray,
-) -> FloatArray:
-    """Move f along stage k's least-norm direction towards tau_rows[k], as far as the box
-    allows; when thruster i stops it, freeze i at its limit and continue with the others."""
-    f = f.copy()
+    delta: FloatArray,
+) -> None:
+    """Move f (in place) along stage k's least-norm direction towards tau_rows[k], as far as
+    the box allows; when thruster i stops it, freeze i at its limit and continue with the
+    others. ``delta`` (m,) is a work array."""
     mask = 0
     for _ in range(f.size + 1):
-        delta = D[k, mask] * (tau_rows[k] - _dot(A[k], f))
+        # delta = D[k, mask] * (tau_rows[k] - a_k f)
+        gap = tau_rows[k] - _dot(A[k], f)
+        for i in range(f.size):
+            delta[i] = D[k, mask, i] * gap
         alpha, blocking = _step_to_limit(f, delta, f_lo, f_hi)
-        f = f + alpha * delta
+        for i in range(f.size):
+            f[i] = f[i] + alpha * delta[i]
         if blocking < 0:
             break
         f[blocking] = f_hi[blocking] if delta[blocking] > 0.0 else f_lo[blocking]
         mask |= 1 << blocking
-    return f
 
 
-@numba.njit(cache=True, inline="always")
-def _serve_remaining(
+@numba.njit(inline="always", **_NOALLOC)
+def _serve_remaining_into(
+    f_new: FloatArray,
     k: int,
     A: FloatArray,
     R: FloatArray,
@@ -433,15 +444,15 @@ def _serve_remaining(
     f_lo: FloatArray,
     f_hi: FloatArray,
     tol: float,
-) -> tuple[np.bool_, FloatArray]:
-    """Least-norm f' serving rows k..K-1 at once without moving rows 0..k-1, and whether f'
-    is inside the box (within tol)."""
-    residual = np.zeros(A.shape[0])
-    for j in range(k, A.shape[0]):
-        residual[j] = tau_rows[j] - _dot(A[j], f)
-    f_new = f.copy()
+    residual: FloatArray,
+) -> bool:
+    """Least-norm f' (into ``f_new``) serving rows k..K-1 at once without moving rows
+    0..k-1, and whether f' is inside the box (within tol). ``residual`` (K,) is a work
+    array."""
+    for j in range(A.shape[0]):
+        residual[j] = tau_rows[j] - _dot(A[j], f) if j >= k else 0.0
     for i in range(f.size):
-        f_new[i] += _dot(R[k, i], residual)
+        f_new[i] = f[i] + _dot(R[k, i], residual)
     # np.all(f_new >= f_lo - tol) and np.all(f_new <= f_hi + tol), then the clip, element by
     # element (the same comparisons and numpy's scalar minimum and maximum; no temporaries)
     inside = True
@@ -454,7 +465,7 @@ def _serve_remaining(
                 inside = False
     for i in range(f.size):
         f_new[i] = np.minimum(np.maximum(f_new[i], f_lo[i]), f_hi[i])
-    return np.bool_(inside), f_new
+    return inside
 
 
 @numba.njit(cache=True, inline="always")
@@ -468,13 +479,38 @@ def _priority_forces(
     tol: float,
 ) -> FloatArray:
     """(m,) forces of the recursive null-space allocation (see ``allocate_priority``)."""
-    f = np.zeros(A.shape[1])
+    out = np.empty(A.shape[1])
+    work = np.empty((3, max(A.shape[0], A.shape[1])))
+    _priority_forces_into(out, A, D, R, tau_rows, f_lo, f_hi, tol, work)
+    return out
+
+
+@numba.njit(inline="always", **_NOALLOC)
+def _priority_forces_into(
+    out: FloatArray,
+    A: FloatArray,
+    D: FloatArray,
+    R: FloatArray,
+    tau_rows: FloatArray,
+    f_lo: FloatArray,
+    f_hi: FloatArray,
+    tol: float,
+    work: FloatArray,
+) -> None:
+    """``_priority_forces`` into ``out`` (m,), allocating nothing; ``work`` (3, >= max(K, m))
+    holds the stage's forces, the step direction and the residual."""
+    m = A.shape[1]
+    f = work[0, 0:m]
+    delta = work[1, 0:m]
+    residual = work[2, 0 : A.shape[0]]
+    for i in range(m):
+        f[i] = 0.0
     for k in range(A.shape[0]):
-        inside, f_all = _serve_remaining(k, A, R, tau_rows, f, f_lo, f_hi, tol)
-        if inside:
-            return f_all
-        f = _serve_stage(k, A, D, tau_rows, f, f_lo, f_hi)
-    return np.minimum(np.maximum(f, f_lo), f_hi)  # remove round off at the limits
+        if _serve_remaining_into(out, k, A, R, tau_rows, f, f_lo, f_hi, tol, residual):
+            return
+        _serve_stage_into(k, A, D, tau_rows, f, f_lo, f_hi, delta)
+    for i in range(m):
+        out[i] = np.minimum(np.maximum(f[i], f_lo[i]), f_hi[i])  # round off at the limits
 
 
 def allocate_priority(

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from sim.gnc import JIT, ssa
+from sim.gnc import JIT, JIT_NOALLOC, dot_into, ssa
 
 N_X = 9
 NORTH, EAST, PSI, SURGE, SWAY, YAW_RATE, B_N, B_E, B_PSI = range(9)
@@ -113,12 +113,45 @@ def predict(
     GQG: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """One prediction step (table 3.1): x+ = x + h f(x, u); P+ = Phi P Phi^T + Gamma Q Gamma^T
-    with Phi = I + h df/dx (forward-difference Jacobian, step 1e-6 scaled to each state)."""
-    f0 = np.empty(9)
+    with Phi = I + h df/dx (forward-difference Jacobian, step 1e-6 scaled to each state).
+    Returns new arrays (``predict_into`` is the step in place)."""
+    x_new = x.copy()
+    P_new = P.copy()
+    predict_into(
+        x_new, P_new, tau, dt, M_inv, M, D_l, D_nl, k_h, p_eq, T_b, GQG,
+        np.empty(9), np.empty(9), np.empty(9), np.empty((9, 9)), np.empty((9, 9)),
+    )  # fmt: skip
+    return x_new, P_new
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def predict_into(
+    x: np.ndarray,
+    P: np.ndarray,
+    tau: np.ndarray,
+    dt: float,
+    M_inv: np.ndarray,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    T_b: np.ndarray,
+    GQG: np.ndarray,
+    f0: np.ndarray,
+    fj: np.ndarray,
+    xp: np.ndarray,
+    phi: np.ndarray,
+    tmp: np.ndarray,
+) -> None:
+    """``predict`` in place: advances ``x`` (9,) and ``P`` (9, 9), allocating nothing. The
+    work arrays ``f0``, ``fj``, ``xp`` (9,), ``phi``, ``tmp`` (9, 9) are overwritten (nothing is
+    read from them before it is written)."""
     _model_rhs_into(f0, x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
-    phi = np.eye(9)
-    xp = x.copy()  # one work copy: each column perturbs one state and puts it back
-    fj = np.empty(9)
+    for i in range(9):
+        for j in range(9):
+            phi[i, j] = 1.0 if i == j else 0.0
+        xp[i] = x[i]  # one work copy: each column perturbs one state and puts it back
     for j in range(9):
         eps = 1e-6 * max(1.0, abs(x[j]))
         xp[j] = x[j] + eps
@@ -126,24 +159,20 @@ def predict(
         xp[j] = x[j]
         for i in range(9):
             phi[i, j] += dt * (fj[i] - f0[i]) / eps
-    x_new = np.empty(9)
     for i in range(9):
-        x_new[i] = x[i] + dt * f0[i]
-    # phi P phi^T by the same two BLAS products as ``phi @ P @ phi.T``, into preallocated
-    # arrays; + GQG and the symmetrisation 0.5 (A + A^T) element by element, in place
-    tmp = np.empty((9, 9))
-    np.dot(phi, P, tmp)
-    P_new = np.empty((9, 9))
-    np.dot(tmp, phi.T, P_new)
+        x[i] = x[i] + dt * f0[i]
+    # phi P phi^T by the same two BLAS products as ``phi @ P @ phi.T``; + GQG and the
+    # symmetrisation 0.5 (A + A^T) element by element, in place
+    dot_into(phi, P, tmp)
+    dot_into(tmp, phi.T, P)
     for i in range(9):
         for j in range(9):
-            P_new[i, j] += GQG[i, j]
+            P[i, j] += GQG[i, j]
     for i in range(9):
         for j in range(i):
-            v = 0.5 * (P_new[i, j] + P_new[j, i])
-            P_new[i, j] = v
-            P_new[j, i] = v
-    return x_new, P_new
+            v = 0.5 * (P[i, j] + P[j, i])
+            P[i, j] = v
+            P[j, i] = v
 
 
 @njit(inline="always", **JIT)
@@ -154,66 +183,97 @@ def correct(
 
     ``angle_row`` is the index within ``rows`` whose innovation is an angle (wrapped with ssa),
     or -1. Returns (x, P, normalised innovation squared per row) -- the last is what the
-    operator's "observer innovation" alarm watches.
-
-    Table 3.1 written for H = rows of the identity, with m = len(rows) <= 2 (the loop's
-    sensors): S = P[rows, rows] + R, K = P[:, rows] S^-1 (S^-1 in closed form), and the
-    Joseph form (I - K H) P (I - K H)^T + K R K^T as rank-m updates. The same algebra as the
-    dense products, in a different summation order (the last bits differ)."""
+    operator's "observer innovation" alarm watches. New arrays; ``correct_into`` corrects in
+    place."""
     m = rows.shape[0]
     if m > 2:
         raise ValueError("correct: at most 2 measured rows")
-    innov = np.empty(m)
-    for i in range(m):
-        innov[i] = z[i] - x[rows[i]]
-    if angle_row >= 0:
-        innov[angle_row] = ssa(innov[angle_row])
+    x_new = x.copy()
+    P_new = P.copy()
+    nis = np.empty(m)
+    z1 = z[1] if m == 2 else 0.0
+    row1 = rows[1] if m == 2 else -1
+    r1 = r_var[1] if m == 2 else 0.0
+    n0, n1 = correct_into(
+        x_new, P_new, m, z[0], z1, rows[0], row1, r_var[0], r1, angle_row,
+        np.empty(N_X), np.empty(N_X), np.empty((N_X, N_X)),
+    )  # fmt: skip
+    nis[0] = n0
+    if m == 2:
+        nis[1] = n1
+    return x_new, P_new, nis
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def correct_into(
+    x: np.ndarray,
+    P: np.ndarray,
+    m: int,
+    z0: float,
+    z1: float,
+    row0: int,
+    row1: int,
+    r0: float,
+    r1: float,
+    angle_row: int,
+    k0: np.ndarray,
+    k1: np.ndarray,
+    A: np.ndarray,
+) -> tuple[float, float]:
+    """``correct`` in place, for m = 1 (``z0`` of state ``row0``, variance ``r0``) or m = 2
+    measured rows (and ``z1``, ``row1``, ``r1``): updates ``x`` (9,) and ``P`` (9, 9),
+    allocating nothing; ``k0``, ``k1`` (9,) and ``A`` (9, 9) are work arrays. Returns the
+    normalised innovations squared (the second 0.0 when m = 1).
+
+    Table 3.1 written for H = rows of the identity, with m <= 2 (the loop's sensors):
+    S = P[rows, rows] + R, K = P[:, rows] S^-1 (S^-1 in closed form), and the Joseph form
+    (I - K H) P (I - K H)^T + K R K^T as rank-m updates. The same algebra as the dense
+    products, in a different summation order (the last bits differ)."""
+    e0 = z0 - x[row0]
+    e1 = z1 - x[row1] if m == 2 else 0.0
+    if angle_row == 0:
+        e0 = ssa(e0)
+    elif angle_row == 1:
+        e1 = ssa(e1)
     # innovation covariance and its inverse
-    s00 = P[rows[0], rows[0]] + r_var[0]
+    s00 = P[row0, row0] + r0
     if m == 1:
         i00, i01, i10, i11 = 1.0 / s00, 0.0, 0.0, 0.0
         s11 = 1.0
     else:
-        s01 = P[rows[0], rows[1]]
-        s10 = P[rows[1], rows[0]]
-        s11 = P[rows[1], rows[1]] + r_var[1]
+        s01 = P[row0, row1]
+        s10 = P[row1, row0]
+        s11 = P[row1, row1] + r1
         det = s00 * s11 - s01 * s10
         i00, i01, i10, i11 = s11 / det, -s01 / det, -s10 / det, s00 / det
     # gain K (9, m), as two columns
-    k0 = np.empty(N_X)
-    k1 = np.zeros(N_X)
     for i in range(N_X):
         if m == 1:
-            k0[i] = P[i, rows[0]] * i00
+            k0[i] = P[i, row0] * i00
+            k1[i] = 0.0
         else:
-            k0[i] = P[i, rows[0]] * i00 + P[i, rows[1]] * i10
-            k1[i] = P[i, rows[0]] * i01 + P[i, rows[1]] * i11
-    x_new = np.empty(N_X)
-    e1 = innov[1] if m == 2 else 0.0
+            k0[i] = P[i, row0] * i00 + P[i, row1] * i10
+            k1[i] = P[i, row0] * i01 + P[i, row1] * i11
     for i in range(N_X):
-        x_new[i] = x[i] + (k0[i] * innov[0] + k1[i] * e1)
-    # Joseph form: A = (I - K H) P, then A (I - K H)^T + K R K^T
-    r1 = r_var[1] if m == 2 else 0.0
-    c1 = rows[1] if m == 2 else rows[0]
-    A = np.empty((N_X, N_X))
+        x[i] = x[i] + (k0[i] * e0 + k1[i] * e1)
+    # Joseph form: A = (I - K H) P, then P+ = A (I - K H)^T + K R K^T (A is all of the old P
+    # that P+ needs, so P+ is written over P)
+    rr1 = r1 if m == 2 else 0.0
+    c1 = row1 if m == 2 else row0
     for i in range(N_X):
         for j in range(N_X):
-            A[i, j] = P[i, j] - (k0[i] * P[rows[0], j] + k1[i] * P[c1, j])
-    P_new = np.empty((N_X, N_X))
+            A[i, j] = P[i, j] - (k0[i] * P[row0, j] + k1[i] * P[c1, j])
     for i in range(N_X):
         for j in range(N_X):
-            P_new[i, j] = (
+            P[i, j] = (
                 A[i, j]
-                - (A[i, rows[0]] * k0[j] + A[i, c1] * k1[j])
-                + (k0[i] * r_var[0] * k0[j] + k1[i] * r1 * k1[j])
+                - (A[i, row0] * k0[j] + A[i, c1] * k1[j])
+                + (k0[i] * r0 * k0[j] + k1[i] * rr1 * k1[j])
             )
     for i in range(N_X):
         for j in range(i):
-            v = 0.5 * (P_new[i, j] + P_new[j, i])
-            P_new[i, j] = v
-            P_new[j, i] = v
-    nis = np.empty(m)
-    nis[0] = innov[0] * innov[0] / s00
-    if m == 2:
-        nis[1] = innov[1] * innov[1] / s11
-    return x_new, P_new, nis
+            v = 0.5 * (P[i, j] + P[j, i])
+            P[i, j] = v
+            P[j, i] = v
+    nis1 = e1 * e1 / s11 if m == 2 else 0.0
+    return e0 * e0 / s00, nis1

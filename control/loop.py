@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from control import ekf, pid, quality, refkernel
-from control.allocation import _priority_forces
+from control.allocation import _priority_forces_into
 from control.columns import (
     L_ACCEPT,
     L_BIAS,
@@ -51,23 +51,24 @@ from sim import plant, sensors, thrusters
 from sim.gnc import JIT, JIT_NOALLOC, Rzyx_into, mv3_into
 
 EYE3 = np.eye(3)
-# the EKF's measured state rows (constant, so no array is made per correction)
-_ROWS_PSI = np.array([2])
-_ROWS_NE = np.array([0, 1])
-_ROWS_R = np.array([5])
-_ROWS_UV = np.array([3, 4])
 
 
 @njit(**JIT)
 def _matvec(A: np.ndarray, v: np.ndarray) -> np.ndarray:
     """A @ v for the small matrices of the loop, by a plain loop (no BLAS call)."""
     out = np.empty(A.shape[0])
+    _matvec_into(out, A, v)
+    return out
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _matvec_into(out: np.ndarray, A: np.ndarray, v: np.ndarray) -> None:
+    """``_matvec`` into ``out`` (must not alias ``v``)."""
     for i in range(A.shape[0]):
         acc = 0.0
         for j in range(A.shape[1]):
             acc += A[i, j] * v[j]
         out[i] = acc
-    return out
 
 
 # --- modes, allocation kinds, reference kinds ---
@@ -158,37 +159,89 @@ class QualityState(NamedTuple):
     counters: np.ndarray  # (5, 4) int
 
 
-@njit(inline="always", **JIT)
+# --- the control system's work space (``ControlWork``): rows of ``vec`` ---
+W_ETA, W_DETA, W_REF, W_TAU6, W_TAU_TREE, W_I_NEXT, W_E, W_DE = 0, 1, 2, 3, 4, 5, 6, 7
+W_TAU3, W_F, W_N, W_ACH, W_ACH3, W_TAU_OBS = 8, 9, 10, 11, 12, 13
+W_F0, W_FJ, W_XP, W_K0, W_K1 = 14, 15, 16, 17, 18  # the EKF's
+W_NE, W_UV, W_ACCEPT, W_BTAU, W_ZERO = 19, 20, 21, 22, 23
+W_ETA4, W_DETA4, W_FI, W_E4, W_TAU_ROV, W_ROWS = 24, 25, 26, 27, 28, 29
+N_CVEC = 30
+CW_WIDTH = 12
+"""Width of the work rows: the longest vector of the step (the EKF's 9, the thrusters' M_MAX,
+the allocation's rows)."""
+MW_PHI, MW_TMP, MW_A = 0, 1, 2  # ``ControlWork.mat`` 9x9 slots: the EKF's Phi, Phi P, Joseph A
+
+
+class ControlWork(NamedTuple):
+    """Work space of the control system's step (as ``sim.plant.PlantWork`` is the plant's):
+    every vector and matrix the step makes lives here, so the step allocates nothing. It
+    carries no state from one step to the next (each step writes what it reads)."""
+
+    vec: np.ndarray  # (N_CVEC, CW_WIDTH) rows W_*
+    mat: np.ndarray  # (3, 9, 9) slots MW_*
+    terms: np.ndarray  # (4, 3) the tree controller's P, I, D and feedforward parts
+    pid: np.ndarray  # (5, 3) the tree controller's anti-windup and feedforward vectors
+    bump: np.ndarray  # (3, 3) the bumpless hand-over's vectors
+    alloc: np.ndarray  # (3, CW_WIDTH) the priority allocation's forces, step, residual
+
+
+@njit(**JIT)
+def make_control_work() -> ControlWork:
+    """A fresh control work space (once per chunk)."""
+    return ControlWork(
+        np.zeros((N_CVEC, CW_WIDTH)),
+        np.zeros((3, 9, 9)),
+        np.zeros((4, 3)),
+        np.zeros((5, 3)),
+        np.zeros((3, 3)),
+        np.zeros((3, CW_WIDTH)),
+    )
+
+
+@njit(**JIT)
 def allocate(tau6: np.ndarray, C: ControlArrays) -> np.ndarray:
     """Thruster forces for an ROV wrench (pinv or priority, see control.allocation)."""
+    f = np.empty(C.f_lo.shape[0])
+    allocate_into(f, tau6, C, make_control_work())
+    return f
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def allocate_into(f: np.ndarray, tau6: np.ndarray, C: ControlArrays, W: ControlWork) -> None:
+    """``allocate`` into ``f`` (m,), allocating nothing."""
     if C.alloc_kind == ALLOC_PRIORITY:
-        rows = np.empty(C.prio_rows.shape[0])
+        rows = W.vec[W_ROWS, 0 : C.prio_rows.shape[0]]
         for i in range(rows.shape[0]):
             rows[i] = tau6[C.prio_rows[i]]
-        return _priority_forces(C.prio_A, C.prio_D, C.prio_R, rows, C.f_lo, C.f_hi, C.alloc_tol)
-    m = C.pinv_T.shape[0]
-    f = np.zeros(m)
-    for i in range(m):
+        _priority_forces_into(
+            f, C.prio_A, C.prio_D, C.prio_R, rows, C.f_lo, C.f_hi, C.alloc_tol, W.alloc
+        )
+        return
+    for i in range(C.pinv_T.shape[0]):
         s = 0.0
         for j in range(C.pinv_rows.shape[0]):
             s += C.pinv_T[i, j] * tau6[C.pinv_rows[j]]
         f[i] = min(max(s, C.f_lo[i]), C.f_hi[i])
-    return f
 
 
-@njit(inline="always", **JIT)
-def speeds_from_forces(f: np.ndarray, C: ControlArrays) -> np.ndarray:
-    """Propeller speeds for thruster forces: the inverse thruster model (sim.thrusters)."""
-    return thrusters.speed_from_thrust(f, C.k_pos, C.k_neg, C.n_max)
-
-
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def tree_measurements(y: np.ndarray, psi_hat: float, C: ControlArrays):
     """Move the ROV's measurements to the tree's origin (eq. 3.4-3.6), with the configured
     mounting vector r and relative heading. Returns (north_east (2), psi, u_v (2), r)."""
+    ne = np.empty(2)
+    uv = np.empty(2)
+    psi, rate = tree_measurements_into(ne, uv, y, psi_hat, C)
+    return ne, psi, uv, rate
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def tree_measurements_into(
+    ne: np.ndarray, uv: np.ndarray, y: np.ndarray, psi_hat: float, C: ControlArrays
+) -> tuple[float, float]:
+    """``tree_measurements`` with north_east and u_v into ``ne``, ``uv`` (2,); returns
+    (psi, r)."""
     c, s = np.cos(psi_hat), np.sin(psi_hat)
     r = C.r_mount
-    ne = np.empty(2)
     ne[0] = y[0] - (c * r[0] - s * r[1])
     ne[1] = y[1] - (s * r[0] + c * r[1])
     psi = y[4] - C.psi_rel
@@ -196,41 +249,44 @@ def tree_measurements(y: np.ndarray, psi_hat: float, C: ControlArrays):
     u_t = cr * y[5] - sr * y[6]
     v_t = sr * y[5] + cr * y[6]
     rate = y[10]
-    uv = np.empty(2)
     uv[0] = u_t + rate * r[1]
     uv[1] = v_t - rate * r[0]
-    return ne, psi, uv, rate
+    return psi, rate
 
 
-@njit(**JIT)
-def _truth_tree(x: np.ndarray):
+@njit(inline="always", **JIT_NOALLOC)
+def _truth_tree_into(eta: np.ndarray, deta: np.ndarray, x: np.ndarray) -> None:
     """Perfect feedback: the tree's [north, east, psi] and their NED rates."""
-    eta = np.array([x[0], x[1], x[5]])
+    eta[0], eta[1], eta[2] = x[0], x[1], x[5]
     c, s = np.cos(x[5]), np.sin(x[5])
-    deta = np.array([c * x[6] - s * x[7], s * x[6] + c * x[7], x[11]])
-    return eta, deta
+    deta[0] = c * x[6] - s * x[7]
+    deta[1] = s * x[6] + c * x[7]
+    deta[2] = x[11]
 
 
-@njit(**JIT)
-def _rov_pose(x: np.ndarray, y: np.ndarray, use_truth: bool):
+@njit(inline="always", **JIT_NOALLOC)
+def _rov_pose_into(
+    eta4: np.ndarray, deta4: np.ndarray, x: np.ndarray, y: np.ndarray, use_truth: bool
+) -> None:
     """The ROV's [north, east, down, psi] and rates for the free-ROV controller."""
-    eta4 = np.empty(4)
     if use_truth:  # pose and body velocities [u, v, w, r] of the plant state
-        eta4[0:3] = x[12:15]
+        eta4[0], eta4[1], eta4[2] = x[12], x[13], x[14]
         eta4[3] = x[17]
         u, v, w, r = x[18], x[19], x[20], x[23]
     else:  # fix (north, east), depth sensor, compass, DVL, gyro
-        eta4[0:2] = y[0:2]
+        eta4[0], eta4[1] = y[0], y[1]
         eta4[2] = y[3]
         eta4[3] = y[4]
         u, v, w, r = y[5], y[6], y[7], y[10]
     c, s = np.cos(eta4[3]), np.sin(eta4[3])
-    deta4 = np.array([c * u - s * v, s * u + c * v, w, r])
-    return eta4, deta4
+    deta4[0] = c * u - s * v
+    deta4[1] = s * u + c * v
+    deta4[2] = w
+    deta4[3] = r
 
 
-@njit(inline="always", **JIT)
-def _observe(
+@njit(inline="always", **JIT_NOALLOC)
+def _observe_into(
     t: float,
     y: np.ndarray,
     fresh: np.ndarray,
@@ -238,14 +294,16 @@ def _observe(
     P: np.ndarray,
     C: ControlArrays,
     Q: QualityState,
-    dt: float,
     log_row: np.ndarray,
-):
-    """Signal checks, then EKF correction with each accepted fresh sample, then prediction."""
-    accepted = np.zeros(5, dtype=np.bool_)
+    W: ControlWork,
+) -> None:
+    """Signal checks, then EKF correction (of ``xhat``, ``P`` in place) with each accepted
+    fresh sample."""
+    accepted = W.vec[W_ACCEPT, 0:5]
     for k in range(5):
+        ok = False
         if fresh[k]:
-            accepted[k] = quality.check_sample(
+            ok = quality.check_sample(
                 k,
                 y,
                 t,
@@ -262,38 +320,36 @@ def _observe(
                 C.q_var,
                 sensors.Y_SENSOR,
             )
-    ne, psi_m, uv, rate = tree_measurements(y, xhat[2], C)
-    if accepted[sensors.COMPASS]:
-        z1 = np.empty(1)
-        z1[0] = psi_m
-        r1 = np.empty(1)
-        r1[0] = C.r_psi
-        xhat, P, nis = ekf.correct(xhat, P, z1, _ROWS_PSI, r1, 0)
-        log_row[L_NIS + 2] = nis[0]
-    if accepted[sensors.POSITION]:
-        ne, psi_m, uv, rate = tree_measurements(y, xhat[2], C)
-        r2 = np.empty(2)
-        r2[0] = r2[1] = C.r_pos
-        xhat, P, nis = ekf.correct(xhat, P, ne, _ROWS_NE, r2, -1)
-        log_row[L_NIS] = nis[0]
-        log_row[L_NIS + 1] = nis[1]
-    if accepted[sensors.GYRO]:
-        z1 = np.empty(1)
-        z1[0] = rate
-        r1 = np.empty(1)
-        r1[0] = C.r_gyro
-        xhat, P, _ = ekf.correct(xhat, P, z1, _ROWS_R, r1, -1)
-    if accepted[sensors.DVL]:
-        r2 = np.empty(2)
-        r2[0] = r2[1] = C.r_dvl
-        xhat, P, _ = ekf.correct(xhat, P, uv, _ROWS_UV, r2, -1)
+        accepted[k] = 1.0 if ok else 0.0
+    ne = W.vec[W_NE, 0:2]
+    uv = W.vec[W_UV, 0:2]
+    k0 = W.vec[W_K0, 0:9]
+    k1 = W.vec[W_K1, 0:9]
+    A = W.mat[MW_A]
+    psi_m, rate = tree_measurements_into(ne, uv, y, xhat[2], C)
+    if accepted[sensors.COMPASS] > 0.5:
+        nis, _ = ekf.correct_into(xhat, P, 1, psi_m, 0.0, 2, -1, C.r_psi, 0.0, 0, k0, k1, A)
+        log_row[L_NIS + 2] = nis
+    if accepted[sensors.POSITION] > 0.5:
+        psi_m, rate = tree_measurements_into(ne, uv, y, xhat[2], C)
+        nis0, nis1 = ekf.correct_into(
+            xhat, P, 2, ne[0], ne[1], 0, 1, C.r_pos, C.r_pos, -1, k0, k1, A
+        )
+        log_row[L_NIS] = nis0
+        log_row[L_NIS + 1] = nis1
+    if accepted[sensors.GYRO] > 0.5:
+        ekf.correct_into(xhat, P, 1, rate, 0.0, 5, -1, C.r_gyro, 0.0, -1, k0, k1, A)
+    if accepted[sensors.DVL] > 0.5:
+        ekf.correct_into(xhat, P, 2, uv[0], uv[1], 3, 4, C.r_dvl, C.r_dvl, -1, k0, k1, A)
     for k in range(5):
-        log_row[L_ACCEPT + k] = 1.0 if accepted[k] else 0.0
-    return xhat, P
+        log_row[L_ACCEPT + k] = accepted[k]
 
 
-@njit(**JIT)
-def manual_step(x: np.ndarray, y: np.ndarray, cs: np.ndarray, C: ControlArrays, dt: float):
+@njit(inline="always", **JIT_NOALLOC)
+def manual_step_into(
+    tau: np.ndarray, x: np.ndarray, y: np.ndarray, cs: np.ndarray, C: ControlArrays, dt: float,
+    W: ControlWork,
+) -> None:  # fmt: skip
     """Flown by hand: the pilot's demand (``cs[CS_PILOT:+4]``, ROV axes [X, Y, Z, N]) on the
     axes the pilot is using; the free-ROV station keeping on the others, with its set point at
     the pose where the pilot let go (horizontal position always; heading and depth only with
@@ -301,57 +357,63 @@ def manual_step(x: np.ndarray, y: np.ndarray, cs: np.ndarray, C: ControlArrays, 
     axis is under the pilot its set point follows the ROV and its integral (what holds against
     the current) is frozen. The step that enters this mode starts the holds where the ROV is,
     their integral set so the thrust does not jump (bumpless, as the free mode). Writes
-    ``cs`` in place; returns the ROV wrench (6,)."""
-    eta4, deta4 = _rov_pose(x, y, not C.feedback_ekf)
+    ``cs`` in place and the ROV wrench into ``tau`` (6,)."""
+    eta4 = W.vec[W_ETA4, 0:4]
+    deta4 = W.vec[W_DETA4, 0:4]
+    _rov_pose_into(eta4, deta4, x, y, not C.feedback_ekf)
     if int(cs[CS_LAST_MODE]) != MODE_MANUAL:
-        cs[CS_FSP : CS_FSP + 4] = eta4
-        cs[CS_FI : CS_FI + 4] = pid.bumpless_free_integral(
-            cs[CS_TAU : CS_TAU + 6].copy(), eta4, deta4, eta4, C.free_Kp, C.free_Kd
+        for k in range(4):
+            cs[CS_FSP + k] = eta4[k]
+        pid.bumpless_free_integral_into(
+            cs[CS_FI : CS_FI + 4], cs[CS_TAU : CS_TAU + 6], eta4, deta4, eta4, C.free_Kp, C.free_Kd
         )
     d = cs[CS_PILOT : CS_PILOT + 4]
     # which of [north+east, down, psi] the pilot flies now
-    flown = np.array(
-        [
-            d[0] != 0.0 or d[1] != 0.0,
-            d[2] != 0.0 or cs[CS_HOLD + 1] < 0.5,
-            d[3] != 0.0 or cs[CS_HOLD] < 0.5,
-        ]
-    )
-    if flown[0]:
-        cs[CS_FSP : CS_FSP + 2] = eta4[0:2]
-    if flown[1]:
+    flown_ne = d[0] != 0.0 or d[1] != 0.0
+    flown_down = d[2] != 0.0 or cs[CS_HOLD + 1] < 0.5
+    flown_psi = d[3] != 0.0 or cs[CS_HOLD] < 0.5
+    if flown_ne:
+        cs[CS_FSP] = eta4[0]
+        cs[CS_FSP + 1] = eta4[1]
+    if flown_down:
         cs[CS_FSP + 2] = eta4[2]
-    if flown[2]:
+    if flown_psi:
         cs[CS_FSP + 3] = eta4[3]
-    tau, fi, e4 = pid.free_rov_pid(
+    fi = W.vec[W_FI, 0:4]
+    e4 = W.vec[W_E4, 0:4]
+    pid.free_rov_pid_into(
+        tau,
+        fi,
+        e4,
         eta4,
         deta4,
-        cs[CS_FSP : CS_FSP + 4].copy(),
-        cs[CS_FI : CS_FI + 4].copy(),
+        cs[CS_FSP : CS_FSP + 4],
+        cs[CS_FI : CS_FI + 4],
         C.free_Kp,
         C.free_Ki,
         C.free_Kd,
         dt,
     )
     # conditional integration: a hold catching the ROV after a fast release does not wind up
-    band = np.array([MANUAL_I_BAND_M, MANUAL_I_BAND_M, MANUAL_I_BAND_M, MANUAL_I_BAND_RAD])
     for k in range(4):
-        if abs(e4[k]) > band[k]:
+        band = MANUAL_I_BAND_M if k < 3 else MANUAL_I_BAND_RAD
+        if abs(e4[k]) > band:
             fi[k] = cs[CS_FI + k]
-    if flown[0]:
+    if flown_ne:
         tau[0], tau[1] = d[0], d[1]
-        fi[0:2] = cs[CS_FI : CS_FI + 2]
-    if flown[1]:
+        fi[0] = cs[CS_FI]
+        fi[1] = cs[CS_FI + 1]
+    if flown_down:
         tau[2] = d[2]
         fi[2] = cs[CS_FI + 2]
-    if flown[2]:
+    if flown_psi:
         tau[5] = d[3]
         fi[3] = cs[CS_FI + 3]
-    cs[CS_FI : CS_FI + 4] = fi
-    return tau
+    for k in range(4):
+        cs[CS_FI + k] = fi[k]
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def control_step(
     t: float,
     x: np.ndarray,
@@ -367,27 +429,66 @@ def control_step(
     log_row: np.ndarray,
 ):
     """Observer, reference, supervisor and controller for one step. Returns
-    (tau_rov6, xhat, Pc, cs). ``cs`` is a fresh copy, updated."""
+    (tau_rov6, xhat, Pc, cs), new arrays (``control_step_into`` updates its own in place)."""
+    xhat = xhat.copy()
+    Pc = Pc.copy()
     cs = cs.copy()
+    tau6 = np.empty(6)
+    control_step_into(
+        tau6, t, x, y, fresh, xhat, Pc, cs, target, C, Q, dt, log_row, make_control_work()
+    )
+    return tau6, xhat, Pc, cs
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def control_step_into(
+    tau6: np.ndarray,
+    t: float,
+    x: np.ndarray,
+    y: np.ndarray,
+    fresh: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    cs: np.ndarray,
+    target: np.ndarray,
+    C: ControlArrays,
+    Q: QualityState,
+    dt: float,
+    log_row: np.ndarray,
+    W: ControlWork,
+) -> None:
+    """``control_step``: the wrench for the allocation into ``tau6`` (6,); the observer
+    (``xhat``, ``Pc``) and the controller state ``cs`` updated in place. Allocates nothing."""
+    eta = W.vec[W_ETA, 0:3]
+    deta = W.vec[W_DETA, 0:3]
     if C.feedback_ekf:
-        xhat, Pc = _observe(t, y, fresh, xhat, Pc, C, Q, dt, log_row)
-        eta = xhat[0:3].copy()
+        _observe_into(t, y, fresh, xhat, Pc, C, Q, log_row, W)
+        eta[0], eta[1], eta[2] = xhat[0], xhat[1], xhat[2]
         c, s = np.cos(eta[2]), np.sin(eta[2])
-        deta = np.array([c * xhat[3] - s * xhat[4], s * xhat[3] + c * xhat[4], xhat[5]])
+        deta[0] = c * xhat[3] - s * xhat[4]
+        deta[1] = s * xhat[3] + c * xhat[4]
+        deta[2] = xhat[5]
     else:
-        eta, deta = _truth_tree(x)
+        _truth_tree_into(eta, deta, x)
     mode = int(cs[CS_MODE])
-    ref = cs[CS_REF : CS_REF + 9].copy()
+    ref = W.vec[W_REF, 0:9]
+    for i in range(9):
+        ref[i] = cs[CS_REF + i]
     if mode == MODE_TREE and int(cs[CS_LAST_MODE]) != MODE_TREE:
-        ref[:] = 0.0
-        ref[0:3] = eta
-        cs[CS_I : CS_I + 3] = pid.bumpless_tree_integral(
-            np.array([cs[CS_TAU], cs[CS_TAU + 1], cs[CS_TAU + 5]]),
+        for i in range(9):
+            ref[i] = eta[i] if i < 3 else 0.0
+        tau_rov3 = W.vec[W_BTAU, 0:3]
+        tau_rov3[0], tau_rov3[1], tau_rov3[2] = cs[CS_TAU], cs[CS_TAU + 1], cs[CS_TAU + 5]
+        zero = W.vec[W_ZERO, 0:3]
+        zero[0] = zero[1] = zero[2] = 0.0
+        pid.bumpless_tree_integral_into(
+            cs[CS_I : CS_I + 3],
+            tau_rov3,
             eta,
             deta,
             eta,
-            np.zeros(3),
-            np.zeros(3),
+            zero,
+            zero,
             C.Kp,
             C.Kd,
             C.use_ff,
@@ -397,18 +498,32 @@ def control_step(
             C.k_h,
             C.p_eq,
             C.A_inv,
+            W.bump,
         )
-    ref = refkernel.reference_step(C.ref_kind, ref, target, dt, C.ref_params)
-    cs[CS_REF : CS_REF + 9] = ref
-    tau6 = np.zeros(6)
+    refkernel.reference_step_into(
+        cs[CS_REF : CS_REF + 9], C.ref_kind, ref, target, dt, C.ref_params
+    )
+    ref = cs[CS_REF : CS_REF + 9]
+    for i in range(6):
+        tau6[i] = 0.0
     if mode == MODE_TREE:
-        tau_tree, i_next, terms, e, de = pid.tree_pid(
+        tau_tree = W.vec[W_TAU_TREE, 0:3]
+        i_next = W.vec[W_I_NEXT, 0:3]
+        e = W.vec[W_E, 0:3]
+        de = W.vec[W_DE, 0:3]
+        terms = W.terms
+        pid.tree_pid_into(
+            tau_tree,
+            i_next,
+            terms,
+            e,
+            de,
             eta,
             deta,
             ref[0:3],
             ref[3:6],
             ref[6:9],
-            cs[CS_I : CS_I + 3].copy(),
+            cs[CS_I : CS_I + 3],
             C.Kp,
             C.Ki,
             C.Kd,
@@ -422,66 +537,92 @@ def control_step(
             EYE3,
             C.i_limit,
             dt,
+            W.pid,
         )
-        cs[CS_I : CS_I + 3] = i_next
-        cs[CS_E : CS_E + 3] = e
-        cs[CS_DE : CS_DE + 3] = de
+        for k in range(3):
+            cs[CS_I + k] = i_next[k]
+            cs[CS_E + k] = e[k]
+            cs[CS_DE + k] = de[k]
         # allocation works on the tree's origin (see closed_loop.system_thruster_config)
         tau6[0] = tau_tree[0]
         tau6[1] = tau_tree[1]
         tau6[2] = C.heave_newton
         tau6[5] = tau_tree[2]
-        tau3 = _matvec(C.A, tau_tree)
+        tau3 = W.vec[W_TAU3, 0:3]
+        _matvec_into(tau3, C.A, tau_tree)
         log_row[L_TAU_ROV] = tau3[0]
         log_row[L_TAU_ROV + 1] = tau3[1]
         log_row[L_TAU_ROV + 2] = C.heave_newton
         log_row[L_TAU_ROV + 3] = 0.0
         log_row[L_TAU_ROV + 4] = 0.0
         log_row[L_TAU_ROV + 5] = tau3[2]
-        log_row[L_TAU_TREE : L_TAU_TREE + 3] = tau_tree
+        for k in range(3):
+            log_row[L_TAU_TREE + k] = tau_tree[k]
         for j in range(4):
-            log_row[L_TERMS + 3 * j : L_TERMS + 3 * j + 3] = terms[j]
+            for k in range(3):
+                log_row[L_TERMS + 3 * j + k] = terms[j, k]
     elif mode == MODE_MANUAL:
-        tau_rov6 = manual_step(x, y, cs, C, dt)
-        log_row[L_TAU_ROV : L_TAU_ROV + 6] = tau_rov6
-        tau6 = _matvec(C.rov_to_tree, tau_rov6)
+        tau_rov6 = W.vec[W_TAU_ROV, 0:6]
+        manual_step_into(tau_rov6, x, y, cs, C, dt, W)
+        for k in range(6):
+            log_row[L_TAU_ROV + k] = tau_rov6[k]
+        _matvec_into(tau6, C.rov_to_tree, tau_rov6)
     else:
-        eta4, deta4 = _rov_pose(x, y, not C.feedback_ekf)
+        eta4 = W.vec[W_ETA4, 0:4]
+        deta4 = W.vec[W_DETA4, 0:4]
+        _rov_pose_into(eta4, deta4, x, y, not C.feedback_ekf)
         if int(cs[CS_LAST_MODE]) != MODE_FREE:
-            cs[CS_FSP : CS_FSP + 4] = eta4
-            cs[CS_FI : CS_FI + 4] = pid.bumpless_free_integral(
-                cs[CS_TAU : CS_TAU + 6].copy(), eta4, deta4, eta4, C.free_Kp, C.free_Kd
+            for k in range(4):
+                cs[CS_FSP + k] = eta4[k]
+            pid.bumpless_free_integral_into(
+                cs[CS_FI : CS_FI + 4],
+                cs[CS_TAU : CS_TAU + 6],
+                eta4,
+                deta4,
+                eta4,
+                C.free_Kp,
+                C.free_Kd,
             )
-        tau_rov6, fi, _ = pid.free_rov_pid(
+        tau_rov6 = W.vec[W_TAU_ROV, 0:6]
+        fi = W.vec[W_FI, 0:4]
+        pid.free_rov_pid_into(
+            tau_rov6,
+            fi,
+            W.vec[W_E4, 0:4],
             eta4,
             deta4,
-            cs[CS_FSP : CS_FSP + 4].copy(),
-            cs[CS_FI : CS_FI + 4].copy(),
+            cs[CS_FSP : CS_FSP + 4],
+            cs[CS_FI : CS_FI + 4],
             C.free_Kp,
             C.free_Ki,
             C.free_Kd,
             dt,
         )
-        cs[CS_FI : CS_FI + 4] = fi
-        log_row[L_TAU_ROV : L_TAU_ROV + 6] = tau_rov6
-        tau6 = _matvec(C.rov_to_tree, tau_rov6)
+        for k in range(4):
+            cs[CS_FI + k] = fi[k]
+        for k in range(6):
+            log_row[L_TAU_ROV + k] = tau_rov6[k]
+        _matvec_into(tau6, C.rov_to_tree, tau_rov6)
     cs[CS_LAST_MODE] = mode
-    cs[CS_TAU : CS_TAU + 6] = log_row[L_TAU_ROV : L_TAU_ROV + 6]
-    log_row[L_ETA_HAT : L_ETA_HAT + 3] = eta
+    for k in range(6):
+        cs[CS_TAU + k] = log_row[L_TAU_ROV + k]
+    for k in range(3):
+        log_row[L_ETA_HAT + k] = eta[k]
     if C.feedback_ekf:
-        log_row[L_NU_HAT : L_NU_HAT + 3] = xhat[3:6]
+        for k in range(3):
+            log_row[L_NU_HAT + k] = xhat[3 + k]
     else:
         log_row[L_NU_HAT] = x[6]
         log_row[L_NU_HAT + 1] = x[7]
         log_row[L_NU_HAT + 2] = x[11]
-    log_row[L_BIAS : L_BIAS + 3] = xhat[6:9]
-    log_row[L_ETA_D : L_ETA_D + 3] = ref[0:3]
-    log_row[L_DETA_D : L_DETA_D + 3] = ref[3:6]
+    for k in range(3):
+        log_row[L_BIAS + k] = xhat[6 + k]
+        log_row[L_ETA_D + k] = ref[k]
+        log_row[L_DETA_D + k] = ref[3 + k]
     log_row[L_MODE] = mode
-    return tau6, xhat, Pc, cs
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def finish_step(
     x: np.ndarray,
     f: np.ndarray,
@@ -497,36 +638,156 @@ def finish_step(
     work: plant.PlantWork,
 ):
     """Thrusters, plant step and observer prediction, given the allocated forces f, and the
-    row's plant columns. Advances the plant state ``x`` in place (through ``work``, no
-    allocation) and returns (xhat, Pc). The one step body after allocation: the compiled
-    chunk and the Python chunk (QP allocation) both end every step here."""
-    n = speeds_from_forces(f, C)
-    ach = _matvec(C.T6, f)
+    row's plant columns. Advances the plant state ``x`` in place and returns (xhat, Pc), new
+    arrays. The Python chunk (QP allocation) ends every step here; the compiled chunk calls
+    ``finish_step_into``."""
+    xhat = xhat.copy()
+    Pc = Pc.copy()
+    finish_step_into(
+        x, f, env_k, xhat, Pc, C, P, dt, t_next, held_y, log_row, work, make_control_work()
+    )
+    return xhat, Pc
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def finish_step_into(
+    x: np.ndarray,
+    f: np.ndarray,
+    env_k: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    C: ControlArrays,
+    P: plant.PlantArrays,
+    dt: float,
+    t_next: float,
+    held_y: np.ndarray,
+    log_row: np.ndarray,
+    work: plant.PlantWork,
+    W: ControlWork,
+) -> None:
+    """``finish_step`` with the observer (``xhat``, ``Pc``) predicted in place; allocates
+    nothing."""
     m = f.shape[0]
+    n = W.vec[W_N, 0:m]
+    thrusters.speed_from_thrust_into(n, f, C.k_pos, C.k_neg, C.n_max)
+    ach = W.vec[W_ACH, 0:6]
+    _matvec_into(ach, C.T6, f)
     for i in range(m):
         lim = C.f_hi[i] if f[i] >= 0.0 else -C.f_lo[i]
         log_row[L_F + i] = f[i]
         log_row[L_N + i] = n[i]
         log_row[L_UTIL + i] = min(abs(f[i]) / lim, 1.0)
-    log_row[L_TAU_ACH : L_TAU_ACH + 6] = ach
+    for k in range(6):
+        log_row[L_TAU_ACH + k] = ach[k]
     plant.rk4_step_into(x, x, n, env_k, P, dt, work)
     if C.feedback_ekf:
         # the observer's input: the achieved wrench moved to the tree (eq. 3.6)
-        ach3 = np.empty(3)
+        ach3 = W.vec[W_ACH3, 0:3]
         ach3[0], ach3[1], ach3[2] = ach[0], ach[1], ach[5]
-        tau_tree = _matvec(C.A_inv, ach3)
+        tau_tree = W.vec[W_TAU_OBS, 0:3]
+        _matvec_into(tau_tree, C.A_inv, ach3)
         mode = int(log_row[L_MODE])
         on_tree = mode == MODE_TREE or (mode == MODE_MANUAL and env_k[plant.E_GRIP] > 0.5)
         if not on_tree:
-            tau_tree[:] = 0.0
-        xhat, Pc = ekf.predict(
-            xhat, Pc, tau_tree, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, C.T_b, C.GQG
+            tau_tree[0] = tau_tree[1] = tau_tree[2] = 0.0
+        ekf.predict_into(
+            xhat,
+            Pc,
+            tau_tree,
+            dt,
+            C.M_inv,
+            C.M,
+            C.D_l,
+            C.D_nl,
+            C.k_h,
+            C.p_eq,
+            C.T_b,
+            C.GQG,
+            W.vec[W_F0, 0:9],
+            W.vec[W_FJ, 0:9],
+            W.vec[W_XP, 0:9],
+            W.mat[MW_PHI],
+            W.mat[MW_TMP],
         )
     write_plant_row(log_row, t_next, x, held_y, env_k, P, work)
-    return xhat, Pc
+
+
+@njit(**JIT)
+def run_chunk(
+    k0: int,
+    x: np.ndarray,
+    held_y: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    cs: np.ndarray,
+    target: np.ndarray,
+    env: np.ndarray,
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    P: plant.PlantArrays,
+    C: ControlArrays,
+    Q: QualityState,
+    dt: float,
+):
+    """Advance len(env) steps with the target held. Returns
+    (x, held_y, xhat, Pc, cs, log (n, N_LOG), n_done); n_done < n when the plant diverged."""
+    n = env.shape[0]
+    log = np.zeros((n, N_LOG))
+    # the states are advanced in place (``_closed_steps``): copies, so the caller's arrays are
+    # left as they were
+    x = x.copy()
+    held_y = held_y.copy()
+    xhat = xhat.copy()
+    Pc = np.ascontiguousarray(Pc).copy()
+    cs = cs.copy()
+    work = plant.make_work(P.thr_T.shape[1])
+    n_done = _closed_steps(
+        k0, x, held_y, xhat, Pc, cs, target, env, noise, fresh, P, C, Q, dt, log, work,
+        make_control_work(),
+    )  # fmt: skip
+    return x, held_y, xhat, Pc, cs, log, n_done
 
 
 @njit(**JIT_NOALLOC)
+def _closed_steps(
+    k0: int,
+    x: np.ndarray,
+    held_y: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    cs: np.ndarray,
+    target: np.ndarray,
+    env: np.ndarray,
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    P: plant.PlantArrays,
+    C: ControlArrays,
+    Q: QualityState,
+    dt: float,
+    log: np.ndarray,
+    work: plant.PlantWork,
+    W: ControlWork,
+) -> int:
+    """The steps of ``run_chunk``: sensors, control step, allocation, thrusters, plant and
+    observer prediction, advancing x, held_y, xhat, Pc, cs (and the signal checks' state Q) in
+    place and writing the log's rows, allocating nothing. Returns the number of steps done
+    (< n when x stopped being finite)."""
+    n = env.shape[0]
+    tau6 = W.vec[W_TAU6, 0:6]
+    f = W.vec[W_F, 0 : C.f_lo.shape[0]]
+    for j in range(n):
+        t = (k0 + j) * dt
+        row = log[j]
+        sensors.sample_into(held_y, x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
+        control_step_into(tau6, t, x, held_y, fresh[j], xhat, Pc, cs, target, C, Q, dt, row, W)
+        allocate_into(f, tau6, C, W)
+        finish_step_into(x, f, env[j], xhat, Pc, C, P, dt, t + dt, held_y, row, work, W)
+        if not plant.all_finite(x):
+            return j
+    return n
+
+
+@njit(inline="always", **JIT_NOALLOC)
 def write_plant_row(
     row: np.ndarray,
     t: float,
@@ -569,47 +830,6 @@ def log_site(
     f = work.vec[plant.V_D, 0:3]
     plant.wire_force_damped_into(f, p_att, v_att, env_k, P.tree_W0)
     row[L_TENSION] = np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
-
-
-@njit(**JIT)
-def run_chunk(
-    k0: int,
-    x: np.ndarray,
-    held_y: np.ndarray,
-    xhat: np.ndarray,
-    Pc: np.ndarray,
-    cs: np.ndarray,
-    target: np.ndarray,
-    env: np.ndarray,
-    noise: np.ndarray,
-    fresh: np.ndarray,
-    P: plant.PlantArrays,
-    C: ControlArrays,
-    Q: QualityState,
-    dt: float,
-):
-    """Advance len(env) steps with the target held. Returns
-    (x, held_y, xhat, Pc, cs, log (n, N_LOG), n_done); n_done < n when the plant diverged."""
-    n = env.shape[0]
-    log = np.zeros((n, N_LOG))
-    # the state and the held sensor values are advanced in place: copies, so the caller's
-    # arrays are left as they were
-    x = x.copy()
-    held_y = held_y.copy()
-    work = plant.make_work(P.thr_T.shape[1])
-    for j in range(n):
-        k = k0 + j
-        t = k * dt
-        row = log[j]
-        sensors.sample_into(held_y, x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
-        tau6, xhat, Pc, cs = control_step(
-            t, x, held_y, fresh[j], xhat, Pc, cs, target, C, Q, dt, row
-        )
-        f = allocate(tau6, C)
-        xhat, Pc = finish_step(x, f, env[j], xhat, Pc, C, P, dt, t + dt, held_y, row, work)
-        if not plant.all_finite(x):
-            return x, held_y, xhat, Pc, cs, log, j
-    return x, held_y, xhat, Pc, cs, log, n
 
 
 @njit(**JIT)

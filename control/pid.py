@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from sim.gnc import JIT, ssa
+from sim.gnc import JIT, JIT_NOALLOC, dot_into, ssa
 
 
 @njit(inline="always", **JIT)
@@ -74,10 +74,32 @@ def feedforward(
     k_h: float,
     p_eq: np.ndarray,
 ) -> np.ndarray:
-    """Control plant model driven by the reference, tree axes [N, N, N m].
+    """Control plant model driven by the reference, tree axes [N, N, N m] (a new array;
+    ``feedforward_into`` writes it into one)."""
+    tau = np.empty(3)
+    feedforward_into(tau, psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq, np.empty(3))
+    return tau
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def feedforward_into(
+    tau: np.ndarray,
+    psi: float,
+    eta_d: np.ndarray,
+    deta_d: np.ndarray,
+    ddeta_d: np.ndarray,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    acc: np.ndarray,
+) -> None:
+    """``feedforward`` into ``tau`` (3,), ``acc`` (3,) a work array.
 
     Written with scalars (the operations of ``ned_to_body``, ``coriolis3`` and the vector
-    sums, in their order); ``M @ acc`` stays the product the vector form used."""
+    sums, in their order); ``M @ acc`` stays the BLAS product the vector form used
+    (``dot_into``)."""
     cd, sd = rot2(eta_d[2])
     nu0 = cd * deta_d[0] + sd * deta_d[1]
     nu1 = -sd * deta_d[0] + cd * deta_d[1]
@@ -85,11 +107,10 @@ def feedforward(
     r_d = deta_d[2]
     # d/dt (R^T v_d) = R^T a_d - r_d R^T S v_d  with S = [[0, -1], [1, 0]]
     sv0, sv1 = -deta_d[1], deta_d[0]
-    acc = np.empty(3)
     acc[0] = (cd * ddeta_d[0] + sd * ddeta_d[1]) - r_d * (cd * sv0 + sd * sv1)
     acc[1] = (-sd * ddeta_d[0] + cd * ddeta_d[1]) - r_d * (-sd * sv0 + cd * sv1)
     acc[2] = ddeta_d[2]
-    tau = M @ acc
+    dot_into(M, acc, tau)
     # + C(nu_d) nu_d as in coriolis3, then damping
     ax = M[0, 0] * nu0 + M[0, 1] * nu1 + M[0, 2] * nu2
     ay = M[1, 0] * nu0 + M[1, 1] * nu1 + M[1, 2] * nu2
@@ -106,7 +127,6 @@ def feedforward(
     tau[0] = tau[0] + (c * sp0 + s * sp1)
     tau[1] = tau[1] + (-s * sp0 + c * sp1)
     tau[2] = tau[2] + 0.0
-    return tau
 
 
 @njit(inline="always", **JIT)
@@ -136,33 +156,82 @@ def tree_pid(
     eta, deta: estimated pose and its NED rate; eta_d, deta_d, ddeta_d: reference (NED);
     i_n: integral state (NED forces and yaw moment). A, A_inv: [X, Y, N] wrench maps tree ->
     ROV and back (eq. 3.7 restricted to surge, sway, yaw). Returns (tau_tree (3), i_n_next (3),
-    terms (4, 3): P, I, D and feedforward parts in tree axes, e (3), de (3))."""
-    psi = eta[2]
-    c, s = rot2(psi)
+    terms (4, 3): P, I, D and feedforward parts in tree axes, e (3), de (3)). New arrays
+    (``tree_pid_into`` writes into given ones)."""
+    tau = np.empty(3)
+    i_next = np.empty(3)
+    terms = np.empty((4, 3))
     e = np.empty(3)
     de = np.empty(3)
+    tree_pid_into(
+        tau, i_next, terms, e, de, eta, deta, eta_d, deta_d, ddeta_d, i_n, Kp, Ki, Kd,
+        use_ff, M, D_l, D_nl, k_h, p_eq, A, A_inv, i_limit_rov, dt, np.empty((5, 3)),
+    )  # fmt: skip
+    return tau, i_next, terms, e, de
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def tree_pid_into(
+    tau: np.ndarray,
+    i_next: np.ndarray,
+    terms: np.ndarray,
+    e: np.ndarray,
+    de: np.ndarray,
+    eta: np.ndarray,
+    deta: np.ndarray,
+    eta_d: np.ndarray,
+    deta_d: np.ndarray,
+    ddeta_d: np.ndarray,
+    i_n: np.ndarray,
+    Kp: np.ndarray,
+    Ki: np.ndarray,
+    Kd: np.ndarray,
+    use_ff: bool,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    A: np.ndarray,
+    A_inv: np.ndarray,
+    i_limit_rov: np.ndarray,
+    dt: float,
+    work: np.ndarray,
+) -> None:
+    """``tree_pid`` into tau, i_next (3,), terms (4, 3), e, de (3,); ``work`` (5, 3) holds
+    the anti-windup's and the feedforward's vectors. ``i_next`` may be ``i_n`` itself (the
+    integral is read before it is written); the other outputs must not alias the inputs."""
+    i_b = work[0]
+    i_rov = work[1]
+    clipped = work[2]
+    i_use = work[3]
+    psi = eta[2]
+    c, s = rot2(psi)
     for k in range(3):
         e[k] = eta[k] - eta_d[k]
         de[k] = deta[k] - deta_d[k] if use_ff else deta[k]
     e[2] = ssa(e[2])
     # anti-windup (eq. 3.19): clamp the integral part in the ROV frame
-    i_b = np.empty(3)
     i_b[0] = c * i_n[0] + s * i_n[1]
     i_b[1] = -s * i_n[0] + c * i_n[1]
     i_b[2] = i_n[2]
-    i_rov = A @ i_b
-    clipped = np.empty(3)
+    dot_into(A, i_b, i_rov)
     changed = False
     for k in range(3):
         clipped[k] = np.minimum(np.maximum(i_rov[k], -i_limit_rov[k]), i_limit_rov[k])
         changed = changed or clipped[k] != i_rov[k]
-    i_use = i_n.copy()
     if changed:
-        i_use = body_to_ned(A_inv @ clipped, psi)
+        # body_to_ned(A_inv @ clipped, psi)
+        dot_into(A_inv, clipped, i_b)
+        i_use[0] = c * i_b[0] - s * i_b[1]
+        i_use[1] = s * i_b[0] + c * i_b[1]
+        i_use[2] = i_b[2]
+    else:
+        for k in range(3):
+            i_use[k] = i_n[k]
     # P, I and D parts moved to the tree's axes (ned_to_body), with p_n = -K_p e, d_n = -K_d de
     p0, p1, p2 = -Kp[0] * e[0], -Kp[1] * e[1], -Kp[2] * e[2]
     d0, d1, d2 = -Kd[0] * de[0], -Kd[1] * de[1], -Kd[2] * de[2]
-    terms = np.zeros((4, 3))
     terms[0, 0] = c * p0 + s * p1
     terms[0, 1] = -s * p0 + c * p1
     terms[0, 2] = p2
@@ -173,13 +242,13 @@ def tree_pid(
     terms[2, 1] = -s * d0 + c * d1
     terms[2, 2] = d2
     if use_ff:
-        terms[3] = feedforward(psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq)
-    tau = np.empty(3)
-    i_next = np.empty(3)
+        feedforward_into(terms[3], psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq, work[4])
+    else:
+        for k in range(3):
+            terms[3, k] = 0.0
     for k in range(3):
         tau[k] = terms[0, k] + terms[1, k] + terms[2, k] + terms[3, k]
         i_next[k] = i_use[k] - Ki[k] * e[k] * dt
-    return tau, i_next, terms, e, de
 
 
 @njit(**JIT)
@@ -195,16 +264,46 @@ def free_rov_pid(
 ):
     """Station keeping of the ROV alone in [north, east, down, psi] (section 3.4): PID in NED,
     rotated into the ROV's axes. Returns (tau_rov (6,), i4_next, e4)."""
-    e = eta4 - eta4_d
+    tau = np.empty(6)
+    i_next = np.empty(4)
+    e = np.empty(4)
+    free_rov_pid_into(tau, i_next, e, eta4, deta4, eta4_d, i4, Kp, Ki, Kd, dt)
+    return tau, i_next, e
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def free_rov_pid_into(
+    tau: np.ndarray,
+    i_next: np.ndarray,
+    e: np.ndarray,
+    eta4: np.ndarray,
+    deta4: np.ndarray,
+    eta4_d: np.ndarray,
+    i4: np.ndarray,
+    Kp: np.ndarray,
+    Ki: np.ndarray,
+    Kd: np.ndarray,
+    dt: float,
+) -> None:
+    """``free_rov_pid`` into tau (6,), i_next (4,) and e (4,), element by element (the
+    operations of the vector form, in its order); the outputs must not alias the inputs."""
+    for k in range(4):
+        e[k] = eta4[k] - eta4_d[k]
     e[3] = ssa(e[3])
-    tau_n = -Kp * e - Kd * deta4 + i4
+    # tau_n = -Kp * e - Kd * deta4 + i4
+    t0 = -Kp[0] * e[0] - Kd[0] * deta4[0] + i4[0]
+    t1 = -Kp[1] * e[1] - Kd[1] * deta4[1] + i4[1]
+    t2 = -Kp[2] * e[2] - Kd[2] * deta4[2] + i4[2]
+    t3 = -Kp[3] * e[3] - Kd[3] * deta4[3] + i4[3]
     c, s = rot2(eta4[3])
-    tau = np.zeros(6)
-    tau[0] = c * tau_n[0] + s * tau_n[1]
-    tau[1] = -s * tau_n[0] + c * tau_n[1]
-    tau[2] = tau_n[2]
-    tau[5] = tau_n[3]
-    return tau, i4 - Ki * e * dt, e
+    tau[0] = c * t0 + s * t1
+    tau[1] = -s * t0 + c * t1
+    tau[2] = t2
+    tau[3] = 0.0
+    tau[4] = 0.0
+    tau[5] = t3
+    for k in range(4):
+        i_next[k] = i4[k] - Ki[k] * e[k] * dt
 
 
 @njit(**JIT)
@@ -227,13 +326,57 @@ def bumpless_tree_integral(
 ) -> np.ndarray:
     """The integral state that makes the tree controller output ``tau_rov3`` (ROV frame,
     [X, Y, N]) right now: used when the supervisor hands over, so thrust does not jump."""
+    out = np.empty(3)
+    bumpless_tree_integral_into(
+        out, tau_rov3, eta, deta, eta_d, deta_d, ddeta_d, Kp, Kd, use_ff, M, D_l, D_nl, k_h,
+        p_eq, A_inv, np.empty((3, 3)),
+    )  # fmt: skip
+    return out
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def bumpless_tree_integral_into(
+    out: np.ndarray,
+    tau_rov3: np.ndarray,
+    eta: np.ndarray,
+    deta: np.ndarray,
+    eta_d: np.ndarray,
+    deta_d: np.ndarray,
+    ddeta_d: np.ndarray,
+    Kp: np.ndarray,
+    Kd: np.ndarray,
+    use_ff: bool,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    A_inv: np.ndarray,
+    work: np.ndarray,
+) -> None:
+    """``bumpless_tree_integral`` into ``out`` (3,), ``work`` (3, 3); the vector form's
+    operations element by element, ``A_inv @`` the same BLAS product."""
     psi = eta[2]
-    e = pose_error(eta, eta_d)
-    de = deta - deta_d if use_ff else deta.copy()
-    tau_tree = A_inv @ tau_rov3
+    tau_tree = work[0]
+    dot_into(A_inv, tau_rov3, tau_tree)
     if use_ff:
-        tau_tree = tau_tree - feedforward(psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq)
-    return body_to_ned(tau_tree, psi) + Kp * e + Kd * de
+        ff = work[1]
+        feedforward_into(ff, psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq, work[2])
+        for k in range(3):
+            tau_tree[k] = tau_tree[k] - ff[k]
+    c, s = rot2(psi)
+    b0 = c * tau_tree[0] - s * tau_tree[1]
+    b1 = s * tau_tree[0] + c * tau_tree[1]
+    b2 = tau_tree[2]
+    e0 = eta[0] - eta_d[0]
+    e1 = eta[1] - eta_d[1]
+    e2 = ssa(eta[2] - eta_d[2])
+    de0 = deta[0] - deta_d[0] if use_ff else deta[0]
+    de1 = deta[1] - deta_d[1] if use_ff else deta[1]
+    de2 = deta[2] - deta_d[2] if use_ff else deta[2]
+    out[0] = b0 + Kp[0] * e0 + Kd[0] * de0
+    out[1] = b1 + Kp[1] * e1 + Kd[1] * de1
+    out[2] = b2 + Kp[2] * e2 + Kd[2] * de2
 
 
 @njit(**JIT)
@@ -246,12 +389,30 @@ def bumpless_free_integral(
     Kd: np.ndarray,
 ) -> np.ndarray:
     """The free-ROV integral state that reproduces ``tau_rov6`` right now."""
-    e = eta4 - eta4_d
-    e[3] = ssa(e[3])
+    out = np.empty(4)
+    bumpless_free_integral_into(out, tau_rov6, eta4, deta4, eta4_d, Kp, Kd)
+    return out
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def bumpless_free_integral_into(
+    out: np.ndarray,
+    tau_rov6: np.ndarray,
+    eta4: np.ndarray,
+    deta4: np.ndarray,
+    eta4_d: np.ndarray,
+    Kp: np.ndarray,
+    Kd: np.ndarray,
+) -> None:
+    """``bumpless_free_integral`` into ``out`` (4,), element by element; ``out`` must not
+    alias the inputs."""
     c, s = rot2(eta4[3])
-    tau_n = np.empty(4)
-    tau_n[0] = c * tau_rov6[0] - s * tau_rov6[1]
-    tau_n[1] = s * tau_rov6[0] + c * tau_rov6[1]
-    tau_n[2] = tau_rov6[2]
-    tau_n[3] = tau_rov6[5]
-    return tau_n + Kp * e + Kd * deta4
+    t0 = c * tau_rov6[0] - s * tau_rov6[1]
+    t1 = s * tau_rov6[0] + c * tau_rov6[1]
+    t2 = tau_rov6[2]
+    t3 = tau_rov6[5]
+    e3 = ssa(eta4[3] - eta4_d[3])
+    out[0] = t0 + Kp[0] * (eta4[0] - eta4_d[0]) + Kd[0] * deta4[0]
+    out[1] = t1 + Kp[1] * (eta4[1] - eta4_d[1]) + Kd[1] * deta4[1]
+    out[2] = t2 + Kp[2] * (eta4[2] - eta4_d[2]) + Kd[2] * deta4[2]
+    out[3] = t3 + Kp[3] * e3 + Kd[3] * deta4[3]

@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from control import reference
-from sim.gnc import JIT
+from sim.gnc import JIT, JIT_NOALLOC
 
 _first_kernel = njit(**JIT)(reference.first_order_kernel)
 
@@ -47,16 +47,46 @@ def first_order_step(
     state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
 ) -> np.ndarray:
     """One exact step of the saturated first-order model (thesis section 3.3)."""
-    error = target - state[0:3]
-    new_error, rate, accel = _first_kernel(error, 1.0 / params[0], params[3], dt)
     out = np.empty(9)
-    out[0:3] = target - new_error
-    out[3:6] = rate
-    out[6:9] = accel
+    first_order_step_into(out, state, target, dt, params)
     return out
 
 
-@njit(inline="always", **JIT)
+@njit(inline="always", **JIT_NOALLOC)
+def _first_order_axis(
+    e: float, time_constant_s: float, max_rate: float, dt: float
+) -> tuple[float, float, float]:
+    """``reference.first_order_kernel`` for one axis, on scalars: the same operations in the
+    same order (numpy's abs, maximum, minimum, exp and sign on scalars, ``np.where`` as a
+    branch). Returns (e+, rate+, acc+)."""
+    abs_error = np.abs(e)
+    linear_error = time_constant_s * max_rate
+    saturated_time = np.maximum(abs_error - linear_error, 0.0) / max_rate
+    decayed = np.minimum(abs_error, linear_error) * np.exp(
+        -np.maximum(dt - saturated_time, 0.0) / time_constant_s
+    )
+    abs_new = abs_error - max_rate * dt if dt <= saturated_time else decayed
+    new_error = np.sign(e) * abs_new
+    rate = np.sign(new_error) * np.minimum(abs_new / time_constant_s, max_rate)
+    accel = -rate / time_constant_s if abs_new < linear_error else 0.0
+    return new_error, rate, accel
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def first_order_step_into(
+    out: np.ndarray, state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
+) -> None:
+    """``first_order_step`` into ``out`` (9,), which may be ``state`` itself."""
+    for i in range(3):
+        new_error, rate, accel = _first_order_axis(
+            target[i] - state[i], 1.0 / params[0, i], params[3, i], dt
+        )
+        out[i] = target[i] - new_error
+        out[3 + i] = rate
+        out[6 + i] = accel
+
+
+@njit(inline="always", **JIT_NOALLOC)
 def _third_order_axis(
     e: float,
     v: float,
@@ -101,6 +131,15 @@ def third_order_step(
     """One step of the speed- and acceleration-limited third-order model (per axis, see
     ``_third_order_axis``)."""
     out = np.empty(9)
+    third_order_step_into(out, state, target, dt, params)
+    return out
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def third_order_step_into(
+    out: np.ndarray, state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
+) -> None:
+    """``third_order_step`` into ``out`` (9,), which may be ``state`` itself."""
     for i in range(3):
         delta, vel, acc = _third_order_axis(
             target[i] - state[i],
@@ -117,7 +156,6 @@ def third_order_step(
         out[i] = state[i] + delta
         out[3 + i] = vel
         out[6 + i] = acc
-    return out
 
 
 @njit(inline="always", **JIT)
@@ -125,6 +163,17 @@ def reference_step(
     kind: int, state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
 ) -> np.ndarray:
     """Dispatch on the model kind (0 first order, 1 third order)."""
+    out = np.empty(9)
+    reference_step_into(out, kind, state, target, dt, params)
+    return out
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def reference_step_into(
+    out: np.ndarray, kind: int, state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
+) -> None:
+    """``reference_step`` into ``out`` (9,), which may be ``state`` itself; allocates nothing."""
     if kind == 0:
-        return first_order_step(state, target, dt, params)
-    return third_order_step(state, target, dt, params)
+        first_order_step_into(out, state, target, dt, params)
+    else:
+        third_order_step_into(out, state, target, dt, params)

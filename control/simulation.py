@@ -261,6 +261,8 @@ class Simulation:
     ) -> None:
         ps = self.plant_ps
         self.arrays = plant.plant_arrays(ps, has_rov=self.has_rov)
+        self._wire_env_memo: tuple[tuple[float, ...], FloatArray] | None = None
+        self._k_h_memo: tuple[float, float] | None = None
         self.rng = np.random.default_rng(seed)
         self.current_params = current or steady_current(0.0, 0.0)
         self.current_state = envmod.initial_current(self.current_params)
@@ -716,11 +718,14 @@ class Simulation:
     def _sync_site(self) -> None:
         """The vessel's position and the wire length are known on board: keep the control
         plant model's wire spring (equilibrium point and stiffness) up to date."""
-        k_h = wm.horizontal_stiffness(
-            self.plant_ps.wire.submerged_weight_per_length(),
-            self.ps.tree.submerged_weight_newton,
-            self.wire_length_m,
-        )
+        if self._k_h_memo is None or self._k_h_memo[0] != self.wire_length_m:
+            k = wm.horizontal_stiffness(
+                self.plant_ps.wire.submerged_weight_per_length(),
+                self.ps.tree.submerged_weight_newton,
+                self.wire_length_m,
+            )
+            self._k_h_memo = (self.wire_length_m, float(k))
+        k_h = self._k_h_memo[1]
         if (k_h != self.C.k_h) or np.any(self.C.p_eq != self.crane_tip_n[0:2]):
             self.C = self.C._replace(k_h=float(k_h), p_eq=self.crane_tip_n[0:2].copy())
 
@@ -1046,6 +1051,8 @@ class Simulation:
     # ------------------------------------------------------------------ environment rows
     def _ramp(self, start: float, target: float, rate: float, n: int) -> FloatArray:
         """Values after each of n steps moving from start towards target at rate."""
+        if target == start:  # idle: start + 0 * ..., the same numbers without the ramp
+            return np.full(n, start + 0.0)
         steps = np.arange(1, n + 1) * self.dt_s * rate
         return start + np.sign(target - start) * np.minimum(steps, abs(target - start))
 
@@ -1058,6 +1065,19 @@ class Simulation:
         frac = self._ramp(0.0, dist, self.crane_speed_mps, n) / dist
         return self.crane_tip_n[None, :] + frac[:, None] * delta[None, :]
 
+    def _wire_environment(self, speed_mps: float, direction_rad: float) -> FloatArray:
+        """``site.wire_environment`` for the present payout and crane tip in a current of this
+        mean speed and direction (a new array). The last answer is kept: a chunk asking for
+        the same inputs as the one before (winch and vessel still, a steady current) gets a
+        copy of it instead of the wire's closed forms again (the same numbers)."""
+        key = (self.wire_length_m, *self.crane_tip_n.tolist(), speed_mps, direction_rad)
+        if self._wire_env_memo is None or self._wire_env_memo[0] != key:
+            env = site.wire_environment(
+                self.plant_ps, self.wire_length_m, self.crane_tip_n, speed_mps, direction_rad
+            )
+            self._wire_env_memo = (key, env)
+        return self._wire_env_memo[1].copy()
+
     def _environment_chunk(self, n: int) -> FloatArray:
         """(n, N_ENV) environment rows (sim.plant.E_*); advances the current, the winch and
         the vessel to the end of the chunk."""
@@ -1067,11 +1087,24 @@ class Simulation:
         )
         if self.faults:
             speeds, dirs = self._faulted_current(speeds, dirs)
-        water_n = envmod.current_velocity_n(speeds, dirs)
-        # the current the MoorDyn wire sees over this chunk: uniform over depth, the mean speed
-        # and direction the quasi-static wire's drag offset takes below (no waves)
-        self._wire_current_n = envmod.current_velocity_n(np.mean(speeds), np.mean(dirs))
-        accel_n = np.zeros_like(water_n)
+        if self.mdwire is not None:
+            # the current the MoorDyn wire sees over this chunk: uniform over depth, the mean
+            # speed and direction the quasi-static wire's drag offset takes (no waves)
+            self._wire_current_n = envmod.current_velocity_n(np.mean(speeds), np.mean(dirs))
+        base = self._wire_environment(float(np.mean(speeds)), float(np.mean(dirs)))
+        base[plant.E_PUSH : plant.E_PUSH + 3] = self.push_newton
+        base[plant.E_GRIP] = 1.0 if self.gripping else 0.0
+        if self.docking_frame is not None:
+            base[plant.E_FRAME : plant.E_FRAME + 2] = self.docking_frame.center_n
+            base[plant.E_FRAME_PSI] = self.docking_frame.heading_rad
+            base[plant.E_LAND] = self.docking_frame.landing_depth_m
+        env = np.repeat(base[None, :], n, axis=0)
+        # the current's velocity (envmod.current_velocity_n's operations, written straight
+        # into the rows) and the waves' velocity and acceleration added to it
+        env[:, plant.E_VC] = speeds * np.cos(dirs)
+        env[:, plant.E_VC + 1] = speeds * np.sin(dirs)
+        env[:, plant.E_VC + 2] = 0.0
+        env[:, plant.E_AC : plant.E_AC + 3] = 0.0
         if self.wave_field is not None:
             t = self.t_s + self.dt_s * np.arange(n)
             # the tree's centre, kept inside the water column (a tree in the seabed's contact
@@ -1080,21 +1113,9 @@ class Simulation:
             v_w, a_w = envmod.wave_kinematics_n(
                 self.wave_field, t, depth, float(self.x[0]), float(self.x[1])
             )
-            water_n = water_n + v_w
+            env[:, plant.E_VC : plant.E_VC + 3] += v_w
             if self.wave_load != "drag":
-                accel_n = accel_n + a_w
-        base = site.wire_environment(
-            ps, self.wire_length_m, self.crane_tip_n, float(np.mean(speeds)), float(np.mean(dirs))
-        )
-        base[plant.E_PUSH : plant.E_PUSH + 3] = self.push_newton
-        base[plant.E_GRIP] = 1.0 if self.gripping else 0.0
-        if self.docking_frame is not None:
-            base[plant.E_FRAME : plant.E_FRAME + 2] = self.docking_frame.center_n
-            base[plant.E_FRAME_PSI] = self.docking_frame.heading_rad
-            base[plant.E_LAND] = self.docking_frame.landing_depth_m
-        env = np.repeat(base[None, :], n, axis=0)
-        env[:, plant.E_VC : plant.E_VC + 3] = water_n
-        env[:, plant.E_AC : plant.E_AC + 3] = accel_n
+                env[:, plant.E_AC : plant.E_AC + 3] += a_w
         # winch and vessel move smoothly within the chunk
         lengths = self._ramp(self.wire_length_m, self.wire_target_m, self.wire_rate_mps, n)
         env[:, plant.E_LREST] = lengths + site.self_weight_stretch(ps, self.wire_length_m)

@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from control.columns import LogRows
-from sim.gnc import ssa
+from sim.gnc import ssa, ssa_each
 from sim.sensors import SENSOR_NAMES
 
 FloatArray = NDArray[np.float64]
@@ -141,7 +141,7 @@ def tracking_figures(rows: LogRows, dt_s: float) -> tuple[float, float, float, f
     tree, ref = rows["tree_eta_n"], rows["eta_ref_n"]
     err_n = tree[:, 0] - ref[:, 0]
     err_e = tree[:, 1] - ref[:, 1]
-    err_psi = np.array([ssa(v) for v in tree[:, 5] - ref[:, 2]])
+    err_psi = ssa_each(tree[:, 5] - ref[:, 2])
     util = rows["thruster_utilisation"]
     umax = float(util.max()) if util.size else 0.0
     sat = float(np.sum(np.any(util >= SATURATED, axis=1)) * dt_s) if util.size else 0.0
@@ -155,7 +155,7 @@ def settling_time(rows: LogRows, dt_s: float, tol_m: float, tol_deg: float) -> f
     moving = np.any(np.abs(np.diff(ref, axis=0)) > 1e-9, axis=1)
     last_change = int(np.flatnonzero(moving)[-1]) + 1 if moving.any() else 0
     err_pos = np.hypot(tree[:, 0] - ref[:, 0], tree[:, 1] - ref[:, 1])
-    err_psi = np.degrees(np.abs([ssa(v) for v in tree[:, 5] - ref[:, 2]]))
+    err_psi = np.degrees(np.abs(ssa_each(tree[:, 5] - ref[:, 2])))
     outside = (err_pos > tol_m) | (err_psi > tol_deg)
     out_idx = np.flatnonzero(outside[last_change:])
     if out_idx.size == 0:

@@ -13,7 +13,7 @@ from control.simulation import Simulation
 from missions import runner, schema, seaway
 from sim import environment as envmod
 from sim import params
-from sim.gnc import ssa
+from sim.gnc import ssa_each
 from sim.vessel import VesselMotion
 
 # Thesis table 4.1: (T, Hs) -> (uncontrolled N, E, psi_deg), (controlled N, E, psi_deg)
@@ -208,7 +208,7 @@ def controlled_case(
     set_point = cl.eta_estimate
     cl.run_for(WARMUP_S)
     log = cl.run_for(duration_s)["tree_eta_n"]
-    err_psi = np.array([ssa(v) for v in log[:, 5] - set_point[2]])
+    err_psi = ssa_each(log[:, 5] - set_point[2])
     return (
         _rms_about(log[:, 0], set_point[0]),
         _rms_about(log[:, 1], set_point[1]),

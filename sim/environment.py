@@ -35,7 +35,10 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
+
+from sim.gnc import JIT_NOALLOC
 
 GRAVITY_MPS2 = 9.81
 """Acceleration of gravity [m/s^2] (MODEL_NOTES, conventions)."""
@@ -235,9 +238,34 @@ def _reflected_walk(
     with. Eq. 2.49-2.50 as a discrete walk: x(k+1) = x(k) + increment(k), mirrored at the
     bounds.
     """
-    free = start + sign * np.concatenate(([0.0], np.cumsum(increments)))
+    free = np.empty(increments.shape[0] + 1)
+    if _walk_into(free, float(start), float(sign), increments, lo, hi):
+        return free, int(sign)  # inside the band all the way: nothing to fold
     path, side = _fold_into_band(free, lo, hi)
     return path, int(sign * side[-1])
+
+
+@njit(**JIT_NOALLOC)
+def _walk_into(
+    out: NDArray[np.float64],
+    start: float,
+    sign: float,
+    increments: NDArray[np.float64],
+    lo: float,
+    hi: float,
+) -> bool:
+    """The free walk ``start + sign * [0, cumsum(increments)]`` into ``out`` (n + 1,): the
+    operations of the numpy form (``cumsum`` adds in order), compiled, as the simulator asks
+    for it every chunk. Returns whether every value lies in [lo, hi]."""
+    acc = 0.0
+    out[0] = start + sign * 0.0
+    inside = lo <= out[0] <= hi
+    for i in range(increments.shape[0]):
+        acc = increments[0] if i == 0 else acc + increments[i]  # as cumsum, -0.0 included
+        out[i + 1] = start + sign * acc
+        if not lo <= out[i + 1] <= hi:
+            inside = False
+    return inside
 
 
 def advance_current(

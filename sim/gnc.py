@@ -10,10 +10,14 @@ Angles are radians, ``eta = [x, y, z, phi, theta, psi]`` (NED) and ``nu = [u, v,
 from __future__ import annotations
 
 import math
-from typing import Any, Literal, TypedDict
+from collections.abc import Callable
+from typing import Any, Literal, TypedDict, cast
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.core.extending import intrinsic
+from numba.core.typing import signature
+from numba.np import linalg as _nplinalg
 
 
 # Compile options for the numeric core: no Python-style zero-division checks. No fast-math:
@@ -33,6 +37,38 @@ JIT_NOALLOC: dict[str, Any] = {"cache": True, "error_model": "numpy", "_nrt": Fa
 step): compiled without numba's runtime, so an array made inside one, or anything else that
 needs the runtime, is a compile error, and array views cost no reference counting."""
 
+
+def _dot_into_typer(typingctx, a, b, out):
+    """``np.dot(a, b, out)`` for contiguous float64 arrays, usable in kernels compiled without
+    numba's runtime (``JIT_NOALLOC``): the same BLAS call (``gemv`` for a matrix and a vector,
+    ``gemm`` for two matrices) as ``np.dot(a, b, out)`` and ``a @ b``, so the same bits, but it
+    returns nothing (numba's own ``np.dot(a, b, out)`` returns ``out``, which needs the
+    runtime). ``out`` must not alias ``a`` or ``b``. Built on numba's lowering of
+    ``np.dot(a, b, out)`` (``numba.np.linalg.dot_3_mm`` / ``dot_3_vm``), a private API: if a
+    numba release moves it, use ``np.dot(a, b, out)`` in kernels compiled with ``JIT``."""
+    arrays = (a, b, out)
+    if not all(isinstance(t, types.Array) and t.layout in "CF" for t in arrays):
+        raise TypeError("dot_into needs C- or F-contiguous arrays (a copy would allocate)")
+    if not (a.dtype == b.dtype == out.dtype == types.float64):
+        raise TypeError("dot_into needs float64 arrays")
+    if (a.ndim, b.ndim, out.ndim) not in ((2, 2, 2), (2, 1, 1)):
+        raise TypeError("dot_into takes (matrix, matrix, matrix) or (matrix, vector, vector)")
+
+    def codegen(context, builder, sig, args):
+        _nplinalg.ensure_blas()
+        inner = signature(out, a, b, out)
+        if b.ndim == 2:
+            _nplinalg.dot_3_mm(context, builder, inner, args)
+        else:
+            _nplinalg.dot_3_vm(context, builder, inner, args)
+        return context.get_dummy_value()
+
+    return types.none(a, b, out), codegen
+
+
+dot_into = cast(Callable[[np.ndarray, np.ndarray, np.ndarray], None], intrinsic(_dot_into_typer))
+
+
 # Named indices into eta / nu (SNAME 1950, thesis table 2.1).
 X, Y, Z, PHI, THETA, PSI = 0, 1, 2, 3, 4, 5
 U, V, W, P, Q, R = 0, 1, 2, 3, 4, 5
@@ -45,6 +81,17 @@ def ssa(angle: float) -> float:
     wrapped = (angle + np.pi) % (2.0 * np.pi)
     wrapped = wrapped - 2.0 * np.pi * (wrapped >= 2.0 * np.pi)
     return wrapped - np.pi
+
+
+@njit(**JIT)
+def ssa_each(angles: np.ndarray) -> np.ndarray:
+    """``ssa`` of every element of a 1-D array (a new array): the compiled scalar ``ssa`` per
+    element, so the same numbers as ``np.array([ssa(v) for v in angles])`` without a call
+    from Python per element."""
+    out = np.empty(angles.shape[0])
+    for i in range(angles.shape[0]):
+        out[i] = ssa(angles[i])
+    return out
 
 
 @njit(**JIT)

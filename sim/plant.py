@@ -963,7 +963,7 @@ def rov_wrench(
     return tau
 
 
-@njit(**JIT_NOALLOC)
+@njit(inline="always", **JIT_NOALLOC)
 def rhs_into(
     xdot: np.ndarray,
     x: np.ndarray,
@@ -1020,7 +1020,7 @@ def rhs(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays) -> np
     return xdot
 
 
-@njit(**JIT_NOALLOC)
+@njit(inline="always", **JIT_NOALLOC)
 def rk4_step_into(
     out: np.ndarray,
     x: np.ndarray,
@@ -1048,16 +1048,23 @@ def rk4_step_into(
     k3 = vec[V_K3, 0:n]
     k4 = vec[V_K4, 0:n]
     h2 = 0.5 * dt
-    rhs_into(k1, x, thrust_b, env, P, work)
+    # the four stages as one loop round one (inlined) right-hand side, so ``P`` is not passed
+    # to a call four times per step: stage s evaluates the slope at xs into row V_K1 + s
+    # (stage 0 at a copy of x: the same numbers), then sets the next stage's state
     for i in range(n):
-        xs[i] = x[i] + h2 * k1[i]
-    rhs_into(k2, xs, thrust_b, env, P, work)
-    for i in range(n):
-        xs[i] = x[i] + h2 * k2[i]
-    rhs_into(k3, xs, thrust_b, env, P, work)
-    for i in range(n):
-        xs[i] = x[i] + dt * k3[i]
-    rhs_into(k4, xs, thrust_b, env, P, work)
+        xs[i] = x[i]
+    for stage in range(4):
+        k = vec[V_K1 + stage, 0:n]
+        rhs_into(k, xs, thrust_b, env, P, work)
+        if stage == 0:
+            for i in range(n):
+                xs[i] = x[i] + h2 * k1[i]
+        elif stage == 1:
+            for i in range(n):
+                xs[i] = x[i] + h2 * k2[i]
+        elif stage == 2:
+            for i in range(n):
+                xs[i] = x[i] + dt * k3[i]
     h6 = dt / 6.0
     for i in range(n):
         out[i] = x[i] + h6 * (((k1[i] + 2.0 * k2[i]) + 2.0 * k3[i]) + k4[i])

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numba import njit
@@ -77,10 +78,21 @@ class NoiseChunk:
     """(n, 5) True where sensor k delivers a new sample at that step."""
 
 
+@lru_cache(maxsize=64)
+def _due_pattern(decimation: tuple[int, ...], phase: int, n: int) -> NDArray[np.bool_]:
+    """(n, 5) True where sensor k samples, for the n steps from a step whose index is
+    ``phase`` modulo the sensors' common period (the pattern repeats with it: kept, read-only,
+    instead of made again for every chunk)."""
+    steps = phase + np.arange(n)
+    due = (steps[:, None] % np.array(decimation)[None, :]) == 0
+    due.flags.writeable = False
+    return due
+
+
 def draw_noise(cfg: SensorConfig, rng: np.random.Generator, first_step: int, n: int) -> NoiseChunk:
     """Draw the noise and the sample/dropout pattern for n steps."""
-    steps = first_step + np.arange(n)
-    due = (steps[:, None] % cfg.decimation[None, :]) == 0
+    period = math.lcm(*(int(d) for d in cfg.decimation))
+    due = _due_pattern(tuple(int(d) for d in cfg.decimation), first_step % period, n)
     kept = rng.random((n, N_SENSORS)) >= cfg.dropout_probability[None, :]
     noise = rng.standard_normal((n, N_Y)) * cfg.noise_std[None, :]
     return NoiseChunk(noise=noise, fresh=due & kept)

@@ -35,7 +35,7 @@ def thrust_of_one(n_rps: float, k_pos: float, k_neg: float, n_max: float) -> flo
     return k_pos * n * n if n >= 0.0 else -k_neg * n * n
 
 
-@njit(**JIT)
+@njit(**JIT_NOALLOC)
 def speed_of_one(force_newton: float, k_pos: float, k_neg: float, n_max: float) -> float:
     """Propeller speed [rev/s] giving thrust ``force_newton`` [N]: ``sqrt(f / k_pos)`` for
     ``f >= 0``, ``-sqrt(-f / k_neg)`` below, clipped to ``n_max`` (eq. 3.22)."""
@@ -69,6 +69,18 @@ def speed_from_thrust(
 ) -> FloatArray:
     """(m,) propeller speeds [rev/s] from (m,) thrusts [N] (``speed_of_one`` per thruster)."""
     n = np.empty(force_newton.shape[0])
-    for i in range(force_newton.shape[0]):
-        n[i] = speed_of_one(force_newton[i], k_pos[i], k_neg[i], n_max[i])
+    speed_from_thrust_into(n, force_newton, k_pos, k_neg, n_max)
     return n
+
+
+@njit(**JIT_NOALLOC)
+def speed_from_thrust_into(
+    out: FloatArray,
+    force_newton: FloatArray,
+    k_pos: FloatArray,
+    k_neg: FloatArray,
+    n_max: FloatArray,
+) -> None:
+    """``speed_from_thrust`` into ``out`` (m,), allocating nothing."""
+    for i in range(force_newton.shape[0]):
+        out[i] = speed_of_one(force_newton[i], k_pos[i], k_neg[i], n_max[i])

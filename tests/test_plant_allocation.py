@@ -140,3 +140,82 @@ def test_a_used_work_space_gives_the_step_of_a_fresh_one(has_rov: bool) -> None:
         xdot = np.full(plant.N_STATE, np.nan)
         plant.rhs_into(xdot, x, np.zeros(6), env, P, used)
         assert np.all(xdot[12:] == 0.0)
+
+
+_CLOSED_PROBE = """
+import json, sys
+import numpy as np
+from numba import njit
+from numba.core.runtime import rtsys
+from control import loop
+from control.config import ControlSettings
+from control.simulation import Simulation
+from sim import params, plant
+
+feedback, allocation, mode = sys.argv[1:4]
+settings = ControlSettings(feedback=feedback, allocation=allocation, feedforward=True)
+sim = Simulation(params.load("model-scale"), tree_depth_m=400.0, settings=settings)
+sim.set_target(2.0, 1.0, 0.3)
+sim.step(50)
+sim.set_mode(mode)
+if mode == "manual":
+    sim.set_pilot_demand(0.2, 0.0, -0.1, 0.05)
+env, noise = sim._chunk_inputs(201)
+
+@njit
+def wrapper_steps(x, y, xhat, Pc, cs, target, C, Q, fresh, reps):
+    row = np.zeros(loop.N_LOG)
+    for k in range(reps):
+        tau6, xhat, Pc, cs = loop.control_step(
+            k * 0.01, x, y, fresh, xhat, Pc, cs, target, C, Q, 0.01, row
+        )
+
+def closed(n):
+    loop._closed_steps(
+        sim.step_index, sim.x.copy(), sim.held_y.copy(), sim.xhat.copy(), sim.P_cov.copy(),
+        sim.cs.copy(), sim.target, env[:n], noise.noise[:n], noise.fresh[:n], sim.arrays,
+        sim.C, sim.Q, sim.dt_s, np.zeros((n, loop.N_LOG)), plant.make_work(sim.n_thrusters),
+        loop.make_control_work(),
+    )
+
+def wrapper(n):
+    wrapper_steps(sim.x, sim.held_y, sim.xhat, sim.P_cov, sim.cs, sim.target, sim.C, sim.Q,
+                  noise.fresh[0], n)
+
+out = {}
+for name, fn in (("closed", closed), ("wrapper", wrapper)):
+    fn(1)  # compile
+    counts = []
+    for reps in (1, 201):
+        before = rtsys.get_allocation_stats().alloc
+        fn(reps)
+        counts.append(rtsys.get_allocation_stats().alloc - before)
+    out[name] = (counts[1] - counts[0]) / 200
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.parametrize(
+    ("feedback", "allocation", "mode"),
+    [("ekf", "priority", "tree"), ("ekf", "pinv", "free"), ("perfect", "priority", "manual")],
+)
+def test_closed_loop_step_allocates_nothing(feedback: str, allocation: str, mode: str) -> None:
+    """The closed loop's step (sensors, signal checks, EKF, reference, controller, allocation,
+    thrusters, plant, prediction, log row: ``control.loop._closed_steps``) allocates nothing,
+    in each mode; the allocating wrapper ``loop.control_step`` (fresh arrays and a fresh work
+    space per call) shows that the probe sees the step's allocations."""
+    env = dict(os.environ, NUMBA_NRT_STATS="1")
+    done = subprocess.run(
+        [sys.executable, "-c", _CLOSED_PROBE, feedback, allocation, mode],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    per_step = json.loads(done.stdout.strip().splitlines()[-1])
+    # the wrapper's copies of xhat, P, cs, its tau6 and the work space's six arrays
+    assert per_step["wrapper"] == 10.0
+    assert per_step["closed"] == 0.0

@@ -546,3 +546,26 @@ def test_the_loops_third_order_step_is_the_array_kernel_to_the_bit() -> None:
         )
         want = np.concatenate([state[0:3] + delta, vel, acc])
         assert np.array_equal(got, want), (state, target, dt)
+
+
+def test_the_loops_first_order_step_is_the_array_kernel_to_the_bit() -> None:
+    """refkernel.first_order_step runs the kernel per axis on scalars (no temporary arrays, as
+    the closed loop's step must allocate nothing): the same bits as the compiled array form of
+    ``first_order_kernel``, on the rate limit, on the exponential approach and across the
+    switch between them, and into the state's own array."""
+    rng = np.random.default_rng(12)
+    packed = refkernel.pack_first_order(FirstOrderParams(**GOOD_FIRST))
+    time_constant = 1.0 / packed[0]
+    for _ in range(500):
+        state = rng.normal(0.0, 1.0, 9) * np.repeat([1.0, 0.05, 0.01], 3)
+        target = state[0:3] + rng.normal(0.0, 1.0, 3) * rng.choice([0.01, 0.25, 3.0])
+        dt = float(rng.choice([0.01, 0.05, 2.0]))
+        got = refkernel.first_order_step(state, target, dt, packed)
+        new_error, rate, accel = refkernel._first_kernel(
+            target - state[0:3], time_constant, packed[3].copy(), dt
+        )
+        want = np.concatenate([target - new_error, rate, accel])
+        assert np.array_equal(got, want), (state, target, dt)
+        in_place = state.copy()
+        refkernel.reference_step_into(in_place, loop.REF_FIRST, in_place, target, dt, packed)
+        assert np.array_equal(in_place, want)
