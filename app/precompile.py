@@ -4,14 +4,52 @@ Every later process loads the compiled code instead of compiling it again (a fir
 otherwise spend half a minute compiling). It also makes runs bit-for-bit repeatable: code
 compiled fresh in a process and the same code loaded from the cache can differ in the last
 bits (about 1e-9 relative after a long run), so set-up puts the cache in place before any run.
+
+The cache is kept per version of the numeric core's sources (``sim.numba_cache``).
+``--if-needed`` (what ``scripts/setup.sh`` runs each time) compiles only when this version's
+folder has not been filled yet, and then removes the folders of earlier versions.
 """
 
 from __future__ import annotations
 
+import argparse
+import os
 import time
+from pathlib import Path
+
+DONE_MARK = "precompiled"
+"""The file written into the cache folder once every kernel is in it."""
 
 
-def main() -> None:
+def cache_dir() -> Path:
+    """numba's cache folder for this process (chosen when ``sim`` is imported)."""
+    import sim  # noqa: F401
+
+    return Path(os.environ["NUMBA_CACHE_DIR"])
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m app.precompile", description=__doc__)
+    parser.add_argument(
+        "--if-needed",
+        action="store_true",
+        help="do nothing when this version of the sources is compiled already",
+    )
+    args = parser.parse_args(argv)
+    folder = cache_dir()
+    mark = folder / DONE_MARK
+    if args.if_needed and mark.is_file():
+        return
+    print(f"precompile: compiling the numeric core into {folder} (a few minutes)", flush=True)
+    compile_all()
+    folder.mkdir(parents=True, exist_ok=True)
+    mark.write_text("every kernel of app.precompile is in this folder\n")
+    from sim import numba_cache
+
+    numba_cache.prune(folder)
+
+
+def compile_all() -> None:
     from control.config import ALLOCATIONS, MODES, ControlSettings
     from control.simulation import Simulation
     from sim import params

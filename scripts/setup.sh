@@ -16,7 +16,9 @@ if [[ ! -f "$stamp" || "$(cat "$stamp")" != "$want" ]]; then
   echo "setup: installing rov-console$extras into .venv" >&2
   .venv/bin/python -m pip install --quiet --disable-pip-version-check --upgrade pip >&2
   .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".$extras" >&2
-  # compile the numeric core into numba's cache now, so every run loads the same machine code
-  .venv/bin/python -m app.precompile >&2
   echo "$want" > "$stamp"
 fi
+# compile the numeric core into numba's cache now, so every run loads the same machine code;
+# the cache is kept per version of the sources (sim/numba_cache.py): after a change to them
+# this compiles again (a few minutes), otherwise it returns at once
+.venv/bin/python -m app.precompile --if-needed >&2

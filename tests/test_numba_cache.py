@@ -1,0 +1,88 @@
+"""numba's cache is kept per version of the numeric core's sources (sim.numba_cache).
+
+Defect: numba checks a cached kernel against its own file only, so the chunk kernels of
+control/loop.py (which inline the plant step of sim/plant.py) went on running the old plant
+after sim/plant.py alone was edited (seen in the third speed pass)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from app import precompile
+from sim import numba_cache
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _copy_sources(dest: Path) -> None:
+    for pkg in numba_cache.PACKAGES:
+        shutil.copytree(ROOT / pkg, dest / pkg, ignore=shutil.ignore_patterns("__pycache__"))
+
+
+def test_digest_changes_with_any_source_of_sim_or_control(tmp_path: Path) -> None:
+    _copy_sources(tmp_path)
+    first = numba_cache.default_cache_dir(tmp_path)
+    assert first.parent == tmp_path / ".numba-cache" and len(first.name) == 16
+    assert numba_cache.default_cache_dir(tmp_path) == first, "same sources, same folder"
+    plant = tmp_path / "sim" / "plant.py"
+    plant.write_text(plant.read_text() + "\n# an edit of the plant alone\n")
+    edited = numba_cache.default_cache_dir(tmp_path)
+    assert edited != first, "an edited sim/plant.py gets a new cache folder"
+    (tmp_path / "control" / "extra.py").write_text("X = 1\n")
+    assert numba_cache.default_cache_dir(tmp_path) not in (first, edited), "a new file too"
+    (tmp_path / "control" / "extra.py").unlink()
+    assert numba_cache.default_cache_dir(tmp_path) == edited
+
+
+def _cache_dir_in_fresh_process(code: str, env_extra: dict[str, str]) -> str:
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env.update(env_extra)
+    out = subprocess.run(
+        [sys.executable, "-c", code + "\nfrom numba.core import config; print(config.CACHE_DIR)"],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=120,
+    )
+    return out.stdout.strip().splitlines()[-1]
+
+
+def test_importing_the_core_points_numba_at_this_versions_folder() -> None:
+    want = str(numba_cache.default_cache_dir())
+    assert _cache_dir_in_fresh_process("import control.pid", {}) == want
+    # numba imported before the core: its settings are read again
+    assert _cache_dir_in_fresh_process("import numba\nimport sim.gnc", {}) == want
+
+
+def test_a_cache_folder_the_user_chose_is_kept(tmp_path: Path) -> None:
+    mine = str(tmp_path / "mine")
+    assert _cache_dir_in_fresh_process("import control.pid", {"NUMBA_CACHE_DIR": mine}) == mine
+
+
+def test_precompile_if_needed_compiles_once_per_version_and_prunes_the_others(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    base = tmp_path / ".numba-cache"
+    old = base / "0123456789abcdef"
+    old.mkdir(parents=True)
+    here = base / "fedcba9876543210"
+    monkeypatch.setattr(precompile, "cache_dir", lambda: here)
+    monkeypatch.setattr(numba_cache, "ROOT", tmp_path)
+    monkeypatch.setattr(numba_cache.prune, "__defaults__", (tmp_path,))
+    calls: list[int] = []
+    monkeypatch.setattr(precompile, "compile_all", lambda: calls.append(1))
+    precompile.main(["--if-needed"])
+    assert calls == [1] and (here / precompile.DONE_MARK).is_file()
+    assert not old.exists(), "the folder of the earlier sources is removed"
+    precompile.main(["--if-needed"])
+    assert calls == [1], "compiled already: nothing to do"
+    precompile.main([])
+    assert calls == [1, 1], "without --if-needed it compiles again"
