@@ -127,6 +127,9 @@ def unlock(pg, token: str) -> None:
 
 
 def wait_for(predicate: Callable[[], bool], timeout_s: float, what: str) -> None:
+    """Poll ``predicate`` every 0.1 s until it holds. Playwright's sync API takes in a page's
+    events (new frames, navigations) only while one of its calls runs, so a predicate must
+    make such a call (``evaluate``, ``inner_text``, ...), not only read ``page.frames``."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if predicate():

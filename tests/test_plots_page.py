@@ -9,6 +9,7 @@ from __future__ import annotations
 import io
 import itertools
 import json
+import re
 import tempfile
 import time
 from pathlib import Path
@@ -19,6 +20,7 @@ import httpx
 import numpy as np
 import pytest
 from PIL import Image
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 from app.api.plots import POINTS_PER_S, WINDOW_S, PlotFeed
 from app.server import RunningServer
@@ -54,23 +56,26 @@ def test_feed_sends_the_window_once_then_only_new_rows() -> None:
     assert rp is not None and rp["type"] == "window" and rp["name"] == "dive"
 
 
-def _plots_shown(page) -> bool:
-    return any("/plots" in f.url for f in page.frames)
-
-
 def _frame(page) -> Any:
-    """The plots page's frame once it has rows. On a timeout, the error names the page's frames
-    and keeps a screenshot of the page."""
+    """The plots page's frame once it has rows.
+
+    The wait is Playwright's own: its sync API takes in the page's events only while one of
+    its calls runs, so polling ``page.frames`` between ``time.sleep``s never saw an iframe that
+    came after the last call (the CI failures: "timed out waiting for the plots iframe", and the
+    frame listed by the error's own next call). On a timeout the error names the page's frames
+    and keeps a screenshot."""
     try:
-        # 60 s: at load average 6-8 (two test workers beside other jobs) the iframe once
-        # showed up between 30 s and the screenshot taken at the timeout
-        wait_for(lambda: _plots_shown(page), 60.0, "the plots iframe")
-    except AssertionError as err:
+        iframe = page.wait_for_selector('iframe[title="plots"]', timeout=60_000)
+        frame = iframe.content_frame()
+        assert frame is not None, "the plots iframe has no frame"
+        frame.wait_for_url(re.compile(r"/plots\?viewer="), timeout=60_000)
+    except PlaywrightTimeout as err:
         shot = Path(tempfile.mkdtemp(prefix="plots-frame-")) / "page.png"
         shot.write_bytes(page.screenshot())
         urls = [f.url for f in page.frames]
-        raise AssertionError(f"{err}; frames {urls}; the page is in {shot}") from None
-    frame = next(f for f in page.frames if "/plots" in f.url)
+        raise AssertionError(
+            f"no plots page: {err}; frames {urls}; the page is in {shot}"
+        ) from None
     wait_for(
         lambda: (frame.evaluate("() => (window.__plots || {}).rows || 0")) > 10,
         30.0,
