@@ -281,3 +281,33 @@ def test_a_handler_that_blocks_the_server_does_not_stop_the_loop(tmp_path: Path)
         # 30 ticks are due in 0.3 s at 100 Hz; a third of them leaves room for a loaded
         # machine, and the defect gave none (the loop waited for the handler)
         assert ticks >= 10, f"{ticks} ticks in 0.3 s while the server's event loop was blocked"
+
+
+def test_a_commands_answer_comes_after_the_state_that_shows_it(tmp_path: Path) -> None:
+    """Defect (seen in CI at load 7): the loop answered a command as it applied it and
+    published the tick's snapshot after, so a client reading /api/state right after a 200
+    could still see the state from before (a replay opened but not in the state)."""
+
+    async def scenario() -> None:
+        eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
+        console = PacedLoop(eng, paused=True)
+        task = asyncio.create_task(console.run())
+        await asyncio.sleep(0.1)
+        seen: list[tuple[bool, float]] = []
+        # a done-callback runs where the future is resolved (the loop), at that moment: what
+        # a reader woken by the answer would find at the earliest
+        resumed = console.submit(cmd.Resume())
+        resumed.add_done_callback(lambda f: seen.append((console.snapshot.paused, 0.0)))
+        await asyncio.wrap_future(resumed)
+        await console.call(cmd.Pause())
+        t_before = console.snapshot.t_s
+        stepped = console.submit(cmd.Step(7))
+        stepped.add_done_callback(lambda f: seen.append((True, console.snapshot.t_s)))
+        result = await asyncio.wrap_future(stepped)
+        console.stop()
+        await task
+        assert seen[0][0] is False, "the answer to Resume found the state still paused"
+        assert result["t_s"] == pytest.approx(t_before + 0.07)
+        assert seen[1][1] == pytest.approx(result["t_s"]), "the state had not the steps yet"
+
+    asyncio.run(scenario())

@@ -73,11 +73,15 @@ class PacedLoop:
         """Errors the loop caught and survived (a step or a publication that failed)."""
         self.last_fault = ""
         self.last_tick_wall = time.monotonic()
+        """Wall-clock time (monotonic) of the last tick: a loop that stops ticking is stale."""
         self._stepping: collections.deque[tuple[int, concurrent.futures.Future]] = (
             collections.deque()
         )
         """Step commands in progress: (steps still to run, the command's future)."""
-        """Wall-clock time (monotonic) of the last tick: a loop that stops ticking is stale."""
+        self._answers: list[tuple[concurrent.futures.Future, object, BaseException | None]] = []
+        """This tick's answers to commands (future, result, error), given once the tick's
+        snapshot is published: a client that reads the state after its command's answer
+        sees the command's effect (``_answer``)."""
 
     # --------------------------------------------------------------- for readers
     @property
@@ -164,6 +168,7 @@ class PacedLoop:
                 self._ticks += 1
                 self.last_tick_wall = time.monotonic()
                 self._publish_safely()
+                self._answer()
                 next_t += self.period_s
                 if time.perf_counter() - next_t > MAX_LAG_S:
                     next_t = time.perf_counter()
@@ -171,6 +176,7 @@ class PacedLoop:
                     owed = 0.0
         finally:
             self.running = False
+            self._answer()
             self._fail_pending()
             self.session.close()
 
@@ -194,9 +200,9 @@ class PacedLoop:
             return
         self._stepping.popleft()
         if self.session.error is not None:
-            future.set_exception(ConsoleError(self.session.error))
+            self._answers.append((future, None, ConsoleError(self.session.error)))
         else:
-            future.set_result({"t_s": self.session.sim.t_s})
+            self._answers.append((future, {"t_s": self.session.sim.t_s}, None))
 
     def cancel_steps(self, why: str) -> None:
         while self._stepping:
@@ -237,9 +243,9 @@ class PacedLoop:
                 if isinstance(result, concurrent.futures.Future):
                     _chain(result, future)
                 else:
-                    future.set_result(result)
+                    self._answers.append((future, result, None))
             except Exception as err:
-                future.set_exception(err)
+                self._answers.append((future, None, err))
                 if not getattr(command, "quiet", False):  # e.g. the pilot's stick, 20 a second
                     self._log_operation(who, action, f"refused: {err}", False, instructor)
             else:
@@ -248,6 +254,15 @@ class PacedLoop:
                     self._log_operation(who, action, "done", noted, instructor)
             finally:
                 self.session.actor = None
+
+    def _answer(self) -> None:
+        """Resolve the futures of the commands this tick applied (after its publication)."""
+        answers, self._answers = self._answers, []
+        for future, result, err in answers:
+            if err is not None:
+                future.set_exception(err)
+            else:
+                future.set_result(result)
 
     def _log_operation(
         self, who: str, action: str, outcome: str, noted: bool, instructor: bool = False
