@@ -46,7 +46,8 @@ def main(argv: list[str] | None = None) -> None:
     mark.write_text("every kernel of app.precompile is in this folder\n")
     from sim import numba_cache
 
-    numba_cache.prune(folder)
+    if folder == numba_cache.CHOSEN:  # our folder, not one the user chose: drop older ones
+        numba_cache.prune(folder)
 
 
 def compile_all() -> None:

@@ -211,6 +211,9 @@ class Simulation:
         two peak periods of the sea; 0: no vessel motion or no ramp)."""
         self.mdwire: dwire.CoupledWire | None = None
         """The MoorDyn wire (``wire = "moordyn"``), else None."""
+        self._wire_current_n = np.zeros(3)
+        """The current the MoorDyn wire feels over the present chunk, NED [m/s] (set with the
+        chunk's environment rows)."""
         if wire == "moordyn":
             self._init_moordyn_wire()
         self.settings = settings or ControlSettings()

@@ -26,6 +26,8 @@ ROOT = Path(__file__).resolve().parent.parent
 """The folder holding the packages (the repository root in a development install)."""
 FOLDER = ".numba-cache"
 """The cache's folder under ``ROOT``."""
+CHOSEN: Path | None = None
+"""The folder ``configure`` chose (None: the user set ``NUMBA_CACHE_DIR``)."""
 
 
 def source_files(root: Path = ROOT) -> list[Path]:
@@ -54,10 +56,12 @@ def configure() -> Path | None:
     """Point numba at ``default_cache_dir()`` unless ``NUMBA_CACHE_DIR`` is set already.
     Returns the folder chosen (None: the user's own). Runs when ``sim`` is imported, before
     any kernel is compiled or loaded."""
+    global CHOSEN
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
     path = default_cache_dir()
     os.environ["NUMBA_CACHE_DIR"] = str(path)
+    CHOSEN = path
     if "numba" in sys.modules:  # imported before us: numba read its settings then
         from numba.core import config
 
@@ -65,14 +69,10 @@ def configure() -> Path | None:
     return path
 
 
-def prune(keep: Path, root: Path = ROOT) -> list[Path]:
-    """Remove the cache folders of other source versions under ``root/.numba-cache``
-    (only the default location; a user's own ``NUMBA_CACHE_DIR`` is left alone). Returns
-    those removed."""
-    base = root / FOLDER
-    if keep.parent != base or not base.is_dir():
-        return []
-    gone = [p for p in base.iterdir() if p.is_dir() and p != keep]
+def prune(keep: Path) -> list[Path]:
+    """Remove the other source versions' folders beside ``keep`` (the folders of earlier
+    sources). Returns those removed."""
+    gone = [p for p in keep.parent.iterdir() if p.is_dir() and p != keep]
     for p in gone:
         shutil.rmtree(p, ignore_errors=True)
     return gone

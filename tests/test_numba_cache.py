@@ -75,8 +75,7 @@ def test_precompile_if_needed_compiles_once_per_version_and_prunes_the_others(
     old.mkdir(parents=True)
     here = base / "fedcba9876543210"
     monkeypatch.setattr(precompile, "cache_dir", lambda: here)
-    monkeypatch.setattr(numba_cache, "ROOT", tmp_path)
-    monkeypatch.setattr(numba_cache.prune, "__defaults__", (tmp_path,))
+    monkeypatch.setattr(numba_cache, "CHOSEN", here)
     calls: list[int] = []
     monkeypatch.setattr(precompile, "compile_all", lambda: calls.append(1))
     precompile.main(["--if-needed"])
@@ -86,3 +85,16 @@ def test_precompile_if_needed_compiles_once_per_version_and_prunes_the_others(
     assert calls == [1], "compiled already: nothing to do"
     precompile.main([])
     assert calls == [1, 1], "without --if-needed it compiles again"
+
+
+def test_precompile_leaves_the_folders_beside_a_users_cache_alone(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    theirs = tmp_path / "other-project-cache"
+    theirs.mkdir()
+    mine = tmp_path / "my-cache"
+    monkeypatch.setattr(precompile, "cache_dir", lambda: mine)
+    monkeypatch.setattr(numba_cache, "CHOSEN", None)  # NUMBA_CACHE_DIR set by the user
+    monkeypatch.setattr(precompile, "compile_all", lambda: None)
+    precompile.main([])
+    assert theirs.is_dir() and (mine / precompile.DONE_MARK).is_file()

@@ -72,11 +72,12 @@ print(json.dumps(out))
 """
 
 
-@pytest.mark.parametrize("scale", ["full-scale", "model-scale"])
-def test_plant_step_sensors_and_log_row_allocate_nothing(scale: str) -> None:
+def _allocations_per_step(probe: str, *args: str) -> dict[str, float]:
+    """Run a probe script in a fresh interpreter with numba's allocation counter on; its last
+    line: the allocations per step of each kernel it measured."""
     env = dict(os.environ, NUMBA_NRT_STATS="1")
     done = subprocess.run(
-        [sys.executable, "-c", _PROBE, scale],
+        [sys.executable, "-c", probe, *args],
         cwd=ROOT,
         env=env,
         capture_output=True,
@@ -85,7 +86,12 @@ def test_plant_step_sensors_and_log_row_allocate_nothing(scale: str) -> None:
         check=False,
     )
     assert done.returncode == 0, done.stderr[-2000:]
-    per_step = json.loads(done.stdout.strip().splitlines()[-1])
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize("scale", ["full-scale", "model-scale"])
+def test_plant_step_sensors_and_log_row_allocate_nothing(scale: str) -> None:
+    per_step = _allocations_per_step(_PROBE, scale)
     # the allocating wrapper: its state, and the work space's two arrays, every step
     assert per_step["wrapper"] == 3.0
     assert per_step["into"] == 0.0
@@ -204,18 +210,7 @@ def test_closed_loop_step_allocates_nothing(feedback: str, allocation: str, mode
     thrusters, plant, prediction, log row: ``control.loop._closed_steps``) allocates nothing,
     in each mode; the allocating wrapper ``loop.control_step`` (fresh arrays and a fresh work
     space per call) shows that the probe sees the step's allocations."""
-    env = dict(os.environ, NUMBA_NRT_STATS="1")
-    done = subprocess.run(
-        [sys.executable, "-c", _CLOSED_PROBE, feedback, allocation, mode],
-        cwd=ROOT,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=600,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr[-2000:]
-    per_step = json.loads(done.stdout.strip().splitlines()[-1])
+    per_step = _allocations_per_step(_CLOSED_PROBE, feedback, allocation, mode)
     # the wrapper's copies of xhat, P, cs, its tau6 and the work space's six arrays
     assert per_step["wrapper"] == 10.0
     assert per_step["closed"] == 0.0

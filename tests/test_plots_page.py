@@ -102,10 +102,9 @@ def test_plots_draw_and_keep_their_window_after_folding(page, api: httpx.Client)
         blue, red = _ink(shot)
         assert blue > 40 and red > 40, f"traces drawn: {blue} blue, {red} red pixels"
         folder = page.locator("xpath=//*[normalize-space(.)='Plots']").first
-        folder.click()  # fold
-        time.sleep(2.0)
-        folder.click()  # and unfold
-        time.sleep(2.0)
+        folder.click()  # fold: the plots go out of sight
+        page.wait_for_selector('iframe[title="plots"]', state="hidden", timeout=30_000)
+        folder.click()  # and unfold: ``_frame`` waits for them to be shown again
         frame = _frame(page)
         stats = frame.evaluate("() => window.__plots")
         assert len(stats["ticks"]) == 3
