@@ -162,8 +162,13 @@ def pilot_capacity(ps: ParameterSet) -> FloatArray:
     Several axes at full stick together ask for more than the thrusters give: the allocation
     saturates them in its priority order."""
     thr = ps.rov.thrusters
-    rows = thr.T[[0, 1, 2, 5]]
-    bounds = list(zip(-thr.f_max_neg, thr.f_max_pos, strict=True))
+    return _pilot_capacity(thr.T, thr.f_max_neg, thr.f_max_pos)
+
+
+@model.memo_by_arrays
+def _pilot_capacity(T: FloatArray, f_max_neg: FloatArray, f_max_pos: FloatArray) -> FloatArray:
+    rows = T[[0, 1, 2, 5]]
+    bounds = list(zip(-f_max_neg, f_max_pos, strict=True))
     out = np.zeros((2, 4))
     for k in range(4):
         others = [i for i in range(4) if i != k]

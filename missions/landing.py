@@ -86,16 +86,71 @@ class LandingPlan:
 
 
 class Thrusters:
-    """The ROV's thrusters in surge, sway and yaw, with their force limits."""
+    """The ROV's thrusters in surge, sway and yaw, with their force limits.
+
+    ``reach(direction)`` is the linear programme max s such that T3 u = s d with
+    u_min <= u <= u_max. Thrusters that give no surge, sway or yaw (the vertical ones) drop
+    out: zero thrust on them is inside their limits. With as many of the others as the three
+    equations (both ROVs here) the thrust that gives s d is u = s p, p = T3^-1 d, and s is
+    the first limit it meets; with one more, u = s p + t n (n spanning T3's null space), the
+    programme has two unknowns (s, t) and its optimum is a vertex of a polygon (two thrusters
+    at a limit, or one and s = 0), found by enumerating the vertices. Both in closed form, a
+    few microseconds where scipy's HiGHS took about a millisecond (a third of a docking
+    run's time); any other layout goes to HiGHS. They agree to rounding
+    (``tests/test_landing.py``)."""
+
+    FEASIBLE_TOL = 1e-9
+    """Relative slack a vertex may have on a force limit and still count as inside (the
+    rounding of a 2x2 solve on forces of 1e4 N is some 1e-12 relative)."""
 
     def __init__(self, sim: Simulation) -> None:
         arr = sim.arrays
         self.T3 = np.asarray(arr.thr_T, float)[[0, 1, 5], :]
-        self.u_max = arr.thr_k_pos * arr.thr_n_max**2
-        self.u_min = -arr.thr_k_neg * arr.thr_n_max**2
+        self.u_max = np.asarray(arr.thr_k_pos * arr.thr_n_max**2, float)
+        self.u_min = np.asarray(-arr.thr_k_neg * arr.thr_n_max**2, float)
+        used = np.any(self.T3 != 0.0, axis=0)
+        t_used = self.T3[:, used]
+        sv = np.linalg.svd(t_used, compute_uv=False) if t_used.size else np.zeros(0)
+        rank = int(np.sum(sv > 1e-12 * sv[0])) if sv.size else 0
+        self._nullity = t_used.shape[1] - 3 if rank == 3 else -1
+        """0 or 1: closed form; else (-1 or more) HiGHS."""
+        self._T = t_used
+        self._pinv = np.linalg.pinv(t_used) if t_used.size else t_used.T
+        self._hi = self.u_max[used]
+        self._lo = self.u_min[used]
+        if self._nullity == 1:
+            null = np.linalg.svd(t_used)[2][-1]
+            # the polygon's edges a_j s + b_j t <= c_j: each thruster's upper and lower
+            # limit, then s >= 0; a_j depends on the direction, b_j and c_j do not
+            self._b = np.concatenate([null, -null, [0.0]])
+            self._c = np.concatenate([self._hi, -self._lo, [0.0]])
+            self._pairs = np.triu_indices(self._b.size, 1)
+        self._tol = self.FEASIBLE_TOL * float(np.max(np.abs(self._hi), initial=0.0))
 
     def reach(self, direction: FloatArray) -> float:
         """Largest s with s * direction = T3 u inside the force limits."""
+        if self._nullity not in (0, 1):
+            return self._reach_highs(direction)
+        p = self._pinv @ direction
+        if np.linalg.norm(self._T @ p - direction) > 1e-9 * np.linalg.norm(direction):
+            return 0.0  # no thrust gives this direction
+        if self._nullity == 0:
+            # s p_i within [lo_i, hi_i] for every thruster; s = 0 always is (lo <= 0 <= hi)
+            with np.errstate(divide="ignore"):
+                limit = np.where(p > 0.0, self._hi / p, np.where(p < 0.0, self._lo / p, np.inf))
+            return float(max(np.min(limit), 0.0))
+        a = np.concatenate([p, -p, [-1.0]])
+        b, c = self._b, self._c
+        j, k = self._pairs
+        det = a[j] * b[k] - a[k] * b[j]
+        ok = np.abs(det) > 1e-12 * (np.abs(a[j] * b[k]) + np.abs(a[k] * b[j]) + 1e-300)
+        j, k, det = j[ok], k[ok], det[ok]
+        s = (c[j] * b[k] - c[k] * b[j]) / det
+        t = (a[j] * c[k] - a[k] * c[j]) / det
+        inside = np.all(a[:, None] * s + b[:, None] * t <= c[:, None] + self._tol, axis=0)
+        return float(max(np.max(s[inside], initial=0.0), 0.0))
+
+    def _reach_highs(self, direction: FloatArray) -> float:
         m = self.T3.shape[1]
         c = np.zeros(m + 1)
         c[-1] = -1.0

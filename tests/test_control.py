@@ -44,6 +44,21 @@ def test_capacity_matches_the_thrusters():
     assert cap[0] == pytest.approx(2 * 0.9063 * thr.f_max_pos[2], rel=1e-3)
 
 
+def test_capacity_is_remembered_per_thruster_set_and_handed_out_as_a_copy():
+    """The capacities' linear programs are solved once per thruster set (a campaign's runs
+    share one ROV): the same arguments give equal answers that are not one array (a caller
+    that writes into its answer cannot change the next caller's), and weaker thrusters give
+    a proportionally smaller answer (the memo is keyed on the values, not on the call)."""
+    thr = FULL.rov.thrusters
+    first = model.dof_capacity(thr.T, thr.f_max_neg, thr.f_max_pos)
+    first[:] = -1.0
+    again = model.dof_capacity(thr.T, thr.f_max_neg, thr.f_max_pos)
+    assert np.all(again > 0.0)
+    half = model.dof_capacity(thr.T, 0.5 * thr.f_max_neg, 0.5 * thr.f_max_pos)
+    # rel 1e-6: the two programmes are the same up to scale; HiGHS's tolerance is 1e-7 N
+    np.testing.assert_allclose(half, 0.5 * again, rtol=1e-6)
+
+
 def test_gain_change_is_bumpless():
     sim = Simulation(MODEL, tree_depth_m=100.0, current=steady_current())
     sim.run_for(60.0)
