@@ -353,8 +353,10 @@ class LogRows:
 
     @staticmethod
     def join(parts: Sequence[LogRows], n_thrusters: int) -> LogRows:
+        """The parts' rows one after the other. A single part's rows are shared, not copied
+        (rows are never written once made: a mission's requests are mostly one part, and
+        copying 115 columns per step again cost a docking run some 5 % of its time)."""
         if not parts:
             return LogRows.empty(n_thrusters)
-        return LogRows(
-            np.vstack([p.data for p in parts]), n_thrusters, parts[-1].quality_counters.copy()
-        )
+        data = parts[0].data if len(parts) == 1 else np.vstack([p.data for p in parts])
+        return LogRows(data, n_thrusters, parts[-1].quality_counters.copy())

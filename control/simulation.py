@@ -708,14 +708,19 @@ class Simulation:
         """Advance ``n`` plant steps (commands held) and return their log rows."""
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 0:
             raise ValueError(f"steps must be a whole number >= 0, got {n!r}")
-        out = np.empty((int(n), N_LOG))
+        parts: list[FloatArray] = []
         done = 0
         while done < n:
             k = min(self.chunk_steps, int(n) - done, self._steps_to_fault_edge())
             if self.mdwire is not None:
                 k = 1  # MoorDyn and the plant take turns, one step each
-            out[done : done + k] = self._chunk(k)
+            parts.append(self._chunk(k))
             done += k
+        # one chunk (most requests): its own fresh rows, without copying them again
+        out = parts[0] if len(parts) == 1 else np.concatenate(parts) if parts else None
+        if out is None:
+            out = np.empty((0, N_LOG))
+        out.flags.writeable = False  # shared by the joins of whoever reads them (LogRows.join)
         return LogRows(out, self.n_thrusters, self.Q.counters.copy())
 
     def _sync_site(self) -> None:
@@ -1090,11 +1095,15 @@ class Simulation:
         )
         if self.faults:
             speeds, dirs = self._faulted_current(speeds, dirs)
+        # the chunk's mean speed and direction: np.mean's own sum and division (numpy's
+        # pairwise add.reduce, then / n), without its per-call checks
+        mean_speed = float(np.add.reduce(speeds) / n)
+        mean_dir = float(np.add.reduce(dirs) / n)
         if self.mdwire is not None:
             # the current the MoorDyn wire sees over this chunk: uniform over depth, the mean
             # speed and direction the quasi-static wire's drag offset takes (no waves)
-            self._wire_current_n = envmod.current_velocity_n(np.mean(speeds), np.mean(dirs))
-        base = self._wire_environment(float(np.mean(speeds)), float(np.mean(dirs)))
+            self._wire_current_n = envmod.current_velocity_n(mean_speed, mean_dir)
+        base = self._wire_environment(mean_speed, mean_dir)
         base[plant.E_PUSH : plant.E_PUSH + 3] = self.push_newton
         base[plant.E_GRIP] = 1.0 if self.gripping else 0.0
         if self.docking_frame is not None:

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 from numba import njit
@@ -47,6 +47,13 @@ class SensorConfig:
     """1-sigma noise per entry of y (11,) [m, m, rad, m/s, rad/s]."""
     dropout_probability: NDArray[np.float64]
     """Probability that a due sample is lost, per sensor (5,)."""
+
+    @cached_property
+    def pattern_key(self) -> tuple[tuple[int, ...], int]:
+        """(decimations, their common period): ``draw_noise``'s key for the sampling pattern,
+        worked out once instead of every chunk."""
+        decimation = tuple(int(d) for d in self.decimation)
+        return decimation, math.lcm(*decimation)
 
 
 def sensor_config(spec: SensorsSpec, dt: float) -> SensorConfig:
@@ -91,8 +98,8 @@ def _due_pattern(decimation: tuple[int, ...], phase: int, n: int) -> NDArray[np.
 
 def draw_noise(cfg: SensorConfig, rng: np.random.Generator, first_step: int, n: int) -> NoiseChunk:
     """Draw the noise and the sample/dropout pattern for n steps."""
-    period = math.lcm(*(int(d) for d in cfg.decimation))
-    due = _due_pattern(tuple(int(d) for d in cfg.decimation), first_step % period, n)
+    decimation, period = cfg.pattern_key
+    due = _due_pattern(decimation, first_step % period, n)
     kept = rng.random((n, N_SENSORS)) >= cfg.dropout_probability[None, :]
     noise = rng.standard_normal((n, N_Y)) * cfg.noise_std[None, :]
     return NoiseChunk(noise=noise, fresh=due & kept)
