@@ -436,19 +436,23 @@ def test_local_cluster_of_two_processes_interrupt_and_resume(tmp_path, local_clu
 
 
 def test_a_killed_workers_runs_are_retried_and_counted_once(tmp_path, local_cluster):
-    path = write_campaign(tmp_path, "runs_per_point = 4\nseed = 9\n", duration=60.0)
+    # runs of 600 simulated s (some 0.2 s each): a 60 s run took 20 ms once the loop got
+    # fast, and the other worker had often finished by the time the first row came back
+    path = write_campaign(tmp_path, "runs_per_point = 4\nseed = 9\n", duration=600.0)
     c, base, text = cm.load_campaign(path)
     killed: dict[str, object] = {}
 
     def kill_a_busy_worker(row, client):
         if killed:
             return
-        for address, keys in client.processing().items():
-            if keys:
-                pid = client.run(os.getpid, workers=[address])[address]
-                killed.update(pid=pid, keys=list(keys))
-                os.kill(pid, signal.SIGKILL)
-                return
+        for _ in range(100):  # the scheduler may not have handed out the next run yet
+            for address, keys in client.processing().items():
+                if keys:
+                    pid = client.run(os.getpid, workers=[address])[address]
+                    killed.update(pid=pid, keys=list(keys))
+                    os.kill(pid, signal.SIGKILL)
+                    return
+            time.sleep(0.01)
 
     p = runner.run_campaign(
         c,
