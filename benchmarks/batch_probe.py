@@ -1,0 +1,206 @@
+"""Does laying N runs out with the run index innermost pay on this machine? A probe for the
+batch stepper (docs/speed.md, "Batch stepper"), measured on two pieces of the step:
+
+1. **Sine and cosine.** numba finds no SVML here, so a loop over runs that calls ``math.sin``
+   stays scalar (one libm call per element). ``sincos_poly`` is a sine and cosine the compiler
+   can vectorise: Cody-Waite reduction by pi/2 in three parts, then the minimax polynomials
+   of fdlibm's ``__kernel_sin`` and ``__kernel_cos`` on [-pi/4, pi/4], the quadrant chosen
+   by selects instead of branches. The probe reports its error against libm in units in the
+   last place (over angles in [-100, 100] rad) and the time per element, both ways.
+2. **One body's kinematics** (``gnc.Rzyx`` and the body-to-NED velocity for each run):
+   ``eta_dot = R(phi, theta, psi) nu`` for N runs, once as N calls of the scalar code over an
+   array of structures, once with every row a length-N vector and the loops over runs
+   innermost.
+
+    .venv/bin/python benchmarks/batch_probe.py [--runs 64] [--json]
+
+Nothing in the product uses this yet: it sizes the batch stepper before it is written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from sim.gnc import JIT_NOALLOC
+
+# pi/2 in three parts (the first two with their low bits zero, so n * part is exact for
+# |n| < 2^20) and 2/pi: the constants of fdlibm's medium-size argument reduction
+PIO2_1 = 1.57079632673412561417e00
+PIO2_2 = 6.07710050630396597660e-11
+PIO2_3 = 2.02226624871116645580e-21
+INV_PIO2 = 6.36619772367581382433e-01
+TO_INT = 1.5 * 2.0**52
+"""Adding and subtracting it rounds a double below 2^51 to the nearest integer (ties to even)."""
+
+# fdlibm's minimax polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c)
+S1, S2, S3 = -1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04
+S4, S5, S6 = 2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10
+C1, C2, C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05
+C4, C5, C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def sincos_poly(x: float) -> tuple[float, float]:
+    """(sin x, cos x) without branches, for |x| < 1e5 rad."""
+    n = (x * INV_PIO2 + TO_INT) - TO_INT
+    y = ((x - n * PIO2_1) - n * PIO2_2) - n * PIO2_3
+    z = y * y
+    s = y + y * z * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))))
+    r = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))))
+    hz = 0.5 * z
+    w = 1.0 - hz
+    c = w + (((1.0 - w) - hz) + z * r)
+    # quadrant q = n mod 4: odd quadrants swap sine and cosine; the sine is negative in
+    # quadrants 2 and 3, the cosine in 1 and 2 (two-way selects, which the compiler turns
+    # into blends; a four-way chain of them stayed a branch and kept the loop scalar)
+    q = int(n)
+    odd = (q & 1) != 0
+    sin_x = c if odd else s
+    cos_x = s if odd else c
+    sin_x = -sin_x if (q & 2) != 0 else sin_x
+    cos_x = -cos_x if ((q + 1) & 2) != 0 else cos_x
+    return sin_x, cos_x
+
+
+@njit(**JIT_NOALLOC)
+def _sincos_libm(x: np.ndarray, s: np.ndarray, c: np.ndarray, reps: int) -> None:
+    for _ in range(reps):
+        for r in range(x.shape[0]):
+            s[r] = math.sin(x[r])
+            c[r] = math.cos(x[r])
+
+
+@njit(**JIT_NOALLOC)
+def _sincos_vec(x: np.ndarray, s: np.ndarray, c: np.ndarray, reps: int) -> None:
+    for _ in range(reps):
+        for r in range(x.shape[0]):
+            s[r], c[r] = sincos_poly(x[r])
+
+
+@njit(**JIT_NOALLOC)
+def _kinematics_aos(eta: np.ndarray, nu: np.ndarray, out: np.ndarray, reps: int) -> None:
+    """Per run: eta_dot[0:3] = R(phi, theta, psi) nu[0:3] (the runs one after the other)."""
+    for _ in range(reps):
+        for r in range(eta.shape[0]):
+            cphi, sphi = math.cos(eta[r, 3]), math.sin(eta[r, 3])
+            cth, sth = math.cos(eta[r, 4]), math.sin(eta[r, 4])
+            cpsi, spsi = math.cos(eta[r, 5]), math.sin(eta[r, 5])
+            u, v, w = nu[r, 0], nu[r, 1], nu[r, 2]
+            out[r, 0] = (
+                cpsi * cth * u
+                + (-spsi * cphi + cpsi * sth * sphi) * v
+                + (spsi * sphi + cpsi * cphi * sth) * w
+            )
+            out[r, 1] = (
+                spsi * cth * u
+                + (cpsi * cphi + sphi * sth * spsi) * v
+                + (-cpsi * sphi + sth * spsi * cphi) * w
+            )
+            out[r, 2] = -sth * u + cth * sphi * v + cth * cphi * w
+
+
+@njit(**JIT_NOALLOC)
+def _kinematics_soa(eta: np.ndarray, nu: np.ndarray, out: np.ndarray, reps: int) -> None:
+    """The same with every quantity a row of N runs, the loop over runs innermost."""
+    for _ in range(reps):
+        for r in range(eta.shape[1]):
+            sphi, cphi = sincos_poly(eta[3, r])
+            sth, cth = sincos_poly(eta[4, r])
+            spsi, cpsi = sincos_poly(eta[5, r])
+            u, v, w = nu[0, r], nu[1, r], nu[2, r]
+            out[0, r] = (
+                cpsi * cth * u
+                + (-spsi * cphi + cpsi * sth * sphi) * v
+                + (spsi * sphi + cpsi * cphi * sth) * w
+            )
+            out[1, r] = (
+                spsi * cth * u
+                + (cpsi * cphi + sphi * sth * spsi) * v
+                + (-cpsi * sphi + sth * spsi * cphi) * w
+            )
+            out[2, r] = -sth * u + cth * sphi * v + cth * cphi * w
+
+
+def ulp_error(x: np.ndarray) -> tuple[float, float]:
+    """Largest error of ``sincos_poly`` against libm (numpy's sin and cos are not libm's on
+    every machine, so ``math``'s), in units in the last place of libm's answer."""
+    s = np.empty_like(x)
+    c = np.empty_like(x)
+    _sincos_vec(x, s, c, 1)
+    ref_s = np.array([math.sin(v) for v in x])
+    ref_c = np.array([math.cos(v) for v in x])
+    return (
+        float(np.max(np.abs(s - ref_s) / np.spacing(np.abs(ref_s)))),
+        float(np.max(np.abs(c - ref_c) / np.spacing(np.abs(ref_c)))),
+    )
+
+
+def _best_ns(fn, args, reps: int, elements: int) -> float:
+    fn(*args, 1)  # compile or load
+    best = math.inf
+    for _ in range(5):
+        t0 = time.perf_counter()
+        fn(*args, reps)
+        best = min(best, time.perf_counter() - t0)
+    return best / (reps * elements) * 1e9
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=64, help="runs in the batch")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    args = parser.parse_args()
+    n = args.runs
+    rng = np.random.default_rng(1)
+    x = rng.uniform(-100.0, 100.0, 200_000)
+    err_s, err_c = ulp_error(x)
+    angles = rng.uniform(-math.pi, math.pi, n)
+    s, c = np.empty(n), np.empty(n)
+    reps = max(1, 2_000_000 // n)
+    libm_ns = _best_ns(_sincos_libm, (angles, s, c), reps, n)
+    vec_ns = _best_ns(_sincos_vec, (angles, s, c), reps, n)
+    eta = rng.uniform(-0.3, 0.3, (n, 6))
+    eta[:, 5] = rng.uniform(-math.pi, math.pi, n)
+    nu = rng.normal(size=(n, 6))
+    out_aos = np.empty((n, 3))
+    out_soa = np.empty((3, n))
+    eta_t, nu_t = np.ascontiguousarray(eta.T), np.ascontiguousarray(nu.T)
+    aos_ns = _best_ns(_kinematics_aos, (eta, nu, out_aos), reps, n)
+    soa_ns = _best_ns(_kinematics_soa, (eta_t, nu_t, out_soa), reps, n)
+    agree = float(np.max(np.abs(out_aos - out_soa.T)))
+    res = {
+        "runs": n,
+        "sin_max_ulp": err_s,
+        "cos_max_ulp": err_c,
+        "sincos_libm_ns": libm_ns,
+        "sincos_vectorised_ns": vec_ns,
+        "kinematics_runs_outer_ns": aos_ns,
+        "kinematics_runs_inner_ns": soa_ns,
+        "kinematics_largest_difference": agree,
+        "load_average": list(os.getloadavg()),
+    }
+    if args.json:
+        print(json.dumps(res))
+        return
+    print(f"{n} runs, load average {res['load_average']}")
+    print(f"sin, cos against libm over [-100, 100] rad: at most {err_s:.2f}, {err_c:.2f} ulp")
+    print(f"sine and cosine of one angle: libm {libm_ns:.1f} ns, vectorised {vec_ns:.1f} ns")
+    print(
+        f"one body's velocity to NED (3 sine-cosine pairs, 3x3 product) per run: runs outer "
+        f"{aos_ns:.1f} ns, runs inner {soa_ns:.1f} ns (largest difference {agree:.1e} m/s)"
+    )
+
+
+if __name__ == "__main__":
+    main()
