@@ -808,7 +808,7 @@ def _mission_landing_limit(
         _fail(f"--hs-step must be at most --hs-max ({hs_max:g}), got {hs_step:g}")
     try:
         spec = schema.load_mission(mission)
-        scenario = seaway.LandingScenario.from_setup(spec.setup, spec.name)
+        scenario = seaway.LandingScenario.from_mission(spec)
         hs, landings = scenario.limit(hs_step, hs_max, seed=seed)
     except ValueError as err:
         _fail(str(err))

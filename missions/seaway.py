@@ -30,22 +30,19 @@ from __future__ import annotations
 import math
 import textwrap
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from control.columns import LogRows
 from control.simulation import Simulation
+from missions import schema
 from missions.setup import current_params, vary_tree
 from sim import environment as envmod
 from sim import params as params_mod
 from sim import site
 from sim import vessel as vesselmod
 from sim.docking import DockingFrame
-
-if TYPE_CHECKING:
-    from missions import schema
 
 FloatArray = NDArray[np.float64]
 
@@ -189,10 +186,17 @@ class SeawayLanding:
     def words(self) -> str:
         comp = "on" if self.heave_compensation else "off"
         verdict = "within limits" if self.within_limits else "NOT within limits"
+        dynamic = self.snap_peak_newton - self.static_newton
+        # a wire taking up the load again after a slack need not reach the static tension
+        # (the tree partly on the frame): then the peak is under it, not "static + -274 kN"
+        over = (
+            f"static + {dynamic / 1e3:.0f} kN"
+            if dynamic >= 0.0
+            else f"{-dynamic / 1e3:.0f} kN under the static"
+        )
         snap = (
             f"{self.snap_events} snap loads, peak {self.snap_peak_newton / 1e3:.0f} kN "
-            f"(static + {(self.snap_peak_newton - self.static_newton) / 1e3:.0f} kN; "
-            f"estimate + {self.snap_estimate_newton / 1e3:.0f} kN)"
+            f"({over}; estimate + {self.snap_estimate_newton / 1e3:.0f} kN)"
             if self.snap_events
             else "no snap loads"
         )
@@ -240,7 +244,7 @@ def land_in_seaway(
     the crane tip's heave, then the snap); the last one, the set-down the winch pays out for,
     never ends and is not a slack event.
 
-    The installation (``LandingScenario.from_setup`` takes it from a mission): the frame's
+    The installation (``LandingScenario.from_mission`` takes it from a mission): the frame's
     heading (the tree hangs turned to it), the waves' direction (towards, from north), load
     and water depth (None: the landing depth), the vessel (``moving_vessel`` False: the crane
     tip stands still; its heading, None: bow into the waves; the compensation's efficiency,
@@ -411,6 +415,22 @@ class LandingScenario:
     current: envmod.CurrentParams
     wire: str
     seed: int
+    hover_m: float = HOVER_M
+    """Clearance of the tree's bottom over the post tops where it hovers, then is lowered
+    from [m]: the mission's dock leg's (``from_mission``), else the study's own."""
+    lower_rate_mps: float = 0.05
+    """The winch's speed down [m/s]: the mission's dock leg's, else the study's own."""
+
+    @classmethod
+    def from_mission(cls, mission: schema.Mission) -> LandingScenario:
+        """``from_setup`` for the mission's ``[setup]``, flown as its first dock leg flies the
+        landing (its hover height and lowering rate); the study's own procedure when the
+        mission has no dock leg."""
+        scenario = cls.from_setup(mission.setup, mission.name)
+        dock = next((leg for leg in mission.legs if isinstance(leg, schema.DockLeg)), None)
+        if dock is None:
+            return scenario
+        return replace(scenario, hover_m=dock.hover_m, lower_rate_mps=dock.lower_rate_mps)
 
     @classmethod
     def from_setup(cls, setup: schema.Setup, source: str = "the mission") -> LandingScenario:
@@ -481,7 +501,7 @@ class LandingScenario:
             raise ValueError(
                 f"{self.source}: cannot land on the frame at setup.docking_frame."
                 f"landing_depth_m = {self.landing_depth_m:g} m with the {self.wire} wire "
-                f"(the tree starts {HOVER_M:g} m above the post tops): {err}"
+                f"(the tree starts {self.hover_m:g} m above the post tops): {err}"
             ) from None
 
     def words(self, seed: int | None = None) -> str:
@@ -509,7 +529,8 @@ class LandingScenario:
             f"{deg(self.frame_heading_rad):g} deg; sea Tp {self.peak_period_s:g} s towards "
             f"{deg(self.wave_direction_rad):g} deg ({self.wave_load} load); {vessel}; "
             f"{self.wire} wire; current {c.speed_mps:g} m/s towards "
-            f"{deg(c.direction_rad):g} deg; seed {self.seed if seed is None else seed}"
+            f"{deg(c.direction_rad):g} deg; lowered from {self.hover_m:g} m over the post "
+            f"tops at {self.lower_rate_mps:g} m/s; seed {self.seed if seed is None else seed}"
         )
 
 

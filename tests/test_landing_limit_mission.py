@@ -42,6 +42,8 @@ landing_depth_m = 110.0
 
 [[legs]]
 type = "dock"
+hover_m = 5.0                     # the study's own hover (seaway.HOVER_M) and lowering rate
+lower_rate_mps = 0.05
 """
 
 
@@ -81,6 +83,37 @@ def test_the_default_scenario_as_a_mission_gives_the_same_landings_bit_for_bit()
         assert np.array_equal(a.rows["tree_eta_n"], b.rows["tree_eta_n"])
     assert scenario.significant_height_m == 3.0
     assert seaway.hs_verdict(3.0, hs, landings) == "your mission's Hs 3 m is within the limit 4 m"
+
+
+def test_the_landing_is_flown_as_the_missions_dock_leg_flies_it():
+    """Defect: the study hovered and lowered the tree as its own scenario does (5 m over the
+    post tops, 0.05 m/s) whatever the mission's dock leg said. It now takes the first dock
+    leg's hover height and lowering rate: with 2 m and 0.1 m/s in calm water the tree starts
+    2 m over the posts and meets them 2 m / 0.1 m/s = 20 s after the lowering starts (the
+    wire's stretch under the slowing winch adds a little: within 2 s), where the study's own
+    takes 5 m / 0.05 m/s = 100 s. The procedure is named in the installation's words."""
+    data = _mission().model_dump(mode="json", exclude_none=True)
+    data["legs"] = [{"type": "dock", "hover_m": 2.0, "lower_rate_mps": 0.1}]
+    m = schema.parse_mission(data)
+    scenario = seaway.LandingScenario.from_mission(m)
+    assert (scenario.hover_m, scenario.lower_rate_mps) == (2.0, 0.1)
+    assert "lowered from 2 m over the post tops at 0.1 m/s" in scenario.words()
+    calm = seaway.land_in_seaway(0.0, 10.0, True, **scenario.keywords())  # type: ignore[arg-type]
+    assert calm.contact_s - calm.lowering_s == pytest.approx(20.0, abs=2.0)
+    own = seaway.LandingScenario.from_setup(m.setup, m.name)
+    assert (own.hover_m, own.lower_rate_mps) == (seaway.HOVER_M, 0.05)
+    no_dock = dict(data, legs=[{"type": "hold", "duration_s": 10.0}])
+    assert seaway.LandingScenario.from_mission(schema.parse_mission(no_dock)) == own
+
+
+def test_the_cli_flies_the_missions_dock_leg(tmp_path):
+    """The command line's study flies the dock leg's procedure too, and says so."""
+    data = _mission().model_dump(mode="json", exclude_none=True)
+    data["legs"] = [{"type": "dock", "hover_m": 2.0, "lower_rate_mps": 0.1}]
+    path = _write(tmp_path, schema.parse_mission(data))
+    result = _cli("--mission", str(path), "--hs-step", "2", "--hs-max", "2")
+    assert result.exit_code == 0, result.output
+    assert "lowered from 2 m over the post tops at 0.1 m/s" in result.stdout
 
 
 def test_a_less_efficient_heave_compensation_lowers_the_limit_in_proportion():
@@ -224,9 +257,10 @@ def test_mission_is_only_for_the_landing_limit_study():
 
 
 def test_the_library_example_of_the_readme():
-    """``full-landing-seaway`` (frame at 400 m, Tp 8 s, 80 % compensation, 0.3 m/s current):
-    the README's limit is 5 m in 0.5 m steps; in 2.5 m steps Hs 2.5 and 5 m are both within
-    the limits, and the mission's own Hs 2.5 m is within the limit."""
+    """``full-landing-seaway`` (frame at 400 m, Tp 8 s, 80 % compensation, 0.3 m/s current,
+    its dock leg lowering from 1 m at 0.05 m/s): the README's limit is 5.5 m in 0.5 m steps;
+    in 2.5 m steps Hs 2.5 and 5 m are both within the limits, and the mission's own Hs 2.5 m
+    is within the limit."""
     result = _cli("--mission", "full-landing-seaway", "--hs-step", "2.5", "--hs-max", "5")
     assert result.exit_code == 0, result.output
     assert "frame at 400 m heading 30 deg" in result.stdout

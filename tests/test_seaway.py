@@ -137,3 +137,38 @@ def test_docking_mission_from_a_heaving_vessel_logs_wire_events(tmp_path):
     paths = mission_figures(r, tmp_path)
     wire_png = [p for p in paths if p.name.endswith("-wire.png")]
     assert wire_png and wire_png[0].stat().st_size > 10_000
+
+
+def _landing_with_snap(peak_newton: float) -> seaway.SeawayLanding:
+    from control.columns import LogRows
+
+    return seaway.SeawayLanding(
+        significant_height_m=6.0,
+        peak_period_s=8.0,
+        heave_compensation=True,
+        static_newton=307e3,
+        min_tension_newton=294e3,
+        max_tension_newton=318e3,
+        slack_events=1,
+        snap_events=1,
+        snap_peak_newton=peak_newton,
+        snap_estimate_newton=4e3,
+        contact_speed_mps=0.084,
+        max_contact_speed_mps=0.1,
+        events=(),
+        lowering_s=40.0,
+        contact_s=140.0,
+        rows=LogRows.empty(),
+    )
+
+
+def test_a_snap_peak_under_the_static_tension_is_worded_as_such():
+    """Defect (seen in `study landing-limit --mission full-landing-seaway` at Hs 6 m): a wire
+    taking up the load again after a slack at set-down peaked at 33 kN, and the words said
+    "static + -274 kN". Under the static tension they now say how far under; over it, as
+    before."""
+    under = _landing_with_snap(33e3).words()
+    assert "peak 33 kN (274 kN under the static; estimate + 4 kN)" in under
+    assert "+ -" not in under
+    over = _landing_with_snap(400e3).words()
+    assert "peak 400 kN (static + 93 kN; estimate + 4 kN)" in over
