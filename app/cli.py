@@ -822,6 +822,8 @@ def _mission_landing_limit(
             "installation": scenario.words(seed),
             "peak_period_s": scenario.peak_period_s,
             "heave_compensation": scenario.heave_compensation,
+            "hover_m": scenario.hover_m,
+            "lower_rate_mps": scenario.lower_rate_mps,
             "seed": scenario.seed if seed is None else seed,
             "mission_hs_m": scenario.significant_height_m,
             "mission_hs_within_limit": scenario.significant_height_m <= hs,

@@ -114,6 +114,10 @@ def test_the_cli_flies_the_missions_dock_leg(tmp_path):
     result = _cli("--mission", str(path), "--hs-step", "2", "--hs-max", "2")
     assert result.exit_code == 0, result.output
     assert "lowered from 2 m over the post tops at 0.1 m/s" in result.stdout
+    js = _cli("--mission", str(path), "--hs-step", "2", "--hs-max", "2", "--json")
+    assert js.exit_code == 0, js.output
+    out = json.loads(js.stdout)
+    assert (out["hover_m"], out["lower_rate_mps"]) == (2.0, 0.1)
 
 
 def test_a_less_efficient_heave_compensation_lowers_the_limit_in_proportion():
@@ -168,6 +172,7 @@ def test_the_cli_with_a_mission_prints_the_limit_and_the_rows_as_json(tmp_path):
     out = json.loads(result.stdout)
     assert out["mission"] == "landing-default"
     assert out["peak_period_s"] == 10.0 and out["heave_compensation"] is True
+    assert (out["hover_m"], out["lower_rate_mps"]) == (5.0, 0.05)  # the mission's dock leg
     assert out["last_hs_within_limits_m"] == 4.0
     assert [r["hs_m"] for r in out["landings"]] == [2.0, 4.0]
     assert all(r["within_limits"] and r["slack_events"] == 0 for r in out["landings"])
