@@ -330,11 +330,25 @@ class CameraEchoes:
 
     def is_echo(self, position_n: np.ndarray, look_at_n: np.ndarray) -> bool:
         """Whether a reported camera is one of the poses sent (to 1 mm per metre of
-        distance from the origin, the browser's float32 round trip)."""
+        distance from the origin, the browser's float32 round trip).
+
+        The position must be one sent. The look-at point may be one sent, or the browser's
+        in-between pose: setting the position carries its look-at point along, so between
+        two poses it reports the new position with the old pose's offset from position to
+        look-at. That offset is matched against the offsets sent, not against an in-between
+        point worked out on the server from the camera it last heard of: under load that
+        report is stale, the point differs from the browser's, and the follow camera was
+        taken for a hand on it (CI, load 6-8). A user cannot move the look-at point without
+        moving the camera, so the position alone tells a hand move."""
         if not self._sent:
             return False
         pos, look = np.asarray(position_n, float), np.asarray(look_at_n, float)
         scale = 1e-3 * (1.0 + float(np.linalg.norm(self._sent[-1][1])))
         ours_pos = any(np.linalg.norm(pos - p) < scale for _, p, _ in self._sent)
-        ours_look = any(np.linalg.norm(look - q) < scale for _, _, q in self._sent)
-        return ours_pos and ours_look
+        if not ours_pos:
+            return False
+        offset = look - pos
+        return any(
+            np.linalg.norm(look - q) < scale or np.linalg.norm(offset - (q - p)) < scale
+            for _, p, q in self._sent
+        )
