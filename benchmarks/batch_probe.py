@@ -7,10 +7,10 @@ batch stepper (docs/speed.md, "Batch stepper"), measured on two pieces of the st
    of fdlibm's ``__kernel_sin`` and ``__kernel_cos`` on [-pi/4, pi/4], the quadrant chosen
    by selects instead of branches. The probe reports its error against libm in units in the
    last place (over angles in [-100, 100] rad) and the time per element, both ways.
-2. **One body's kinematics** (``gnc.Rzyx`` and the body-to-NED velocity for each run):
-   ``eta_dot = R(phi, theta, psi) nu`` for N runs, once as N calls of the scalar code over an
-   array of structures, once with every row a length-N vector and the loops over runs
-   innermost.
+2. **One body's kinematics** (the body-to-NED velocity for each run):
+   ``eta_dot = R(phi, theta, psi) nu`` for N runs, once through the plant's own
+   ``gnc.Rzyx_into`` and ``gnc.mv3_into`` run after run, once with every row a length-N
+   vector and the loops over runs innermost.
 
     .venv/bin/python benchmarks/batch_probe.py [--runs 64] [--json]
 
@@ -32,7 +32,7 @@ from numba import njit
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from sim.gnc import JIT_NOALLOC
+from sim.gnc import JIT_NOALLOC, Rzyx_into, mv3_into
 
 # pi/2 in three parts (the first two with their low bits zero, so n * part is exact for
 # |n| < 2^20) and 2/pi: the constants of fdlibm's medium-size argument reduction
@@ -89,30 +89,30 @@ def _sincos_vec(x: np.ndarray, s: np.ndarray, c: np.ndarray, reps: int) -> None:
 
 
 @njit(**JIT_NOALLOC)
-def _kinematics_aos(eta: np.ndarray, nu: np.ndarray, out: np.ndarray, reps: int) -> None:
-    """Per run: eta_dot[0:3] = R(phi, theta, psi) nu[0:3] (the runs one after the other)."""
+def _kinematics_aos(
+    eta: np.ndarray, nu: np.ndarray, out: np.ndarray, R: np.ndarray, reps: int
+) -> None:
+    """Per run, as the plant does it today: ``gnc.Rzyx_into`` from libm's sines and cosines,
+    then ``gnc.mv3_into`` (eta_dot[0:3] = R nu[0:3]), the runs one after the other."""
     for _ in range(reps):
         for r in range(eta.shape[0]):
-            cphi, sphi = math.cos(eta[r, 3]), math.sin(eta[r, 3])
-            cth, sth = math.cos(eta[r, 4]), math.sin(eta[r, 4])
-            cpsi, spsi = math.cos(eta[r, 5]), math.sin(eta[r, 5])
-            u, v, w = nu[r, 0], nu[r, 1], nu[r, 2]
-            out[r, 0] = (
-                cpsi * cth * u
-                + (-spsi * cphi + cpsi * sth * sphi) * v
-                + (spsi * sphi + cpsi * cphi * sth) * w
+            Rzyx_into(
+                R,
+                math.cos(eta[r, 3]),
+                math.sin(eta[r, 3]),
+                math.cos(eta[r, 4]),
+                math.sin(eta[r, 4]),
+                math.cos(eta[r, 5]),
+                math.sin(eta[r, 5]),
             )
-            out[r, 1] = (
-                spsi * cth * u
-                + (cpsi * cphi + sphi * sth * spsi) * v
-                + (-cpsi * sphi + sth * spsi * cphi) * w
-            )
-            out[r, 2] = -sth * u + cth * sphi * v + cth * cphi * w
+            mv3_into(out[r], R, nu[r, 0:3])
 
 
 @njit(**JIT_NOALLOC)
 def _kinematics_soa(eta: np.ndarray, nu: np.ndarray, out: np.ndarray, reps: int) -> None:
-    """The same with every quantity a row of N runs, the loop over runs innermost."""
+    """The same with every quantity a row of N runs, the loop over runs innermost: Rzyx_into's
+    entries written out (a 3x3 per run would be a strided store the loop does not vectorise)
+    and summed in mv3_into's order (left to right)."""
     for _ in range(reps):
         for r in range(eta.shape[1]):
             sphi, cphi = sincos_poly(eta[3, r])
@@ -176,7 +176,7 @@ def main() -> None:
     out_aos = np.empty((n, 3))
     out_soa = np.empty((3, n))
     eta_t, nu_t = np.ascontiguousarray(eta.T), np.ascontiguousarray(nu.T)
-    aos_ns = _best_ns(_kinematics_aos, (eta, nu, out_aos), reps, n)
+    aos_ns = _best_ns(_kinematics_aos, (eta, nu, out_aos, np.empty((3, 3))), reps, n)
     soa_ns = _best_ns(_kinematics_soa, (eta_t, nu_t, out_soa), reps, n)
     agree = float(np.max(np.abs(out_aos - out_soa.T)))
     res = {

@@ -716,10 +716,12 @@ class Simulation:
                 k = 1  # MoorDyn and the plant take turns, one step each
             parts.append(self._chunk(k))
             done += k
-        # one chunk (most requests): its own fresh rows, without copying them again
-        out = parts[0] if len(parts) == 1 else np.concatenate(parts) if parts else None
-        if out is None:
+        if not parts:
             out = np.empty((0, N_LOG))
+        elif len(parts) == 1:
+            out = parts[0]  # most requests: the chunk's own fresh rows, not copied again
+        else:
+            out = np.concatenate(parts)
         out.flags.writeable = False  # shared by the joins of whoever reads them (LogRows.join)
         return LogRows(out, self.n_thrusters, self.Q.counters.copy())
 

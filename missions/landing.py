@@ -114,10 +114,13 @@ class Thrusters:
         rank = int(np.sum(sv > 1e-12 * sv[0])) if sv.size else 0
         self._nullity = t_used.shape[1] - 3 if rank == 3 else -1
         """0 or 1: closed form; else (-1 or more) HiGHS."""
-        self._T = t_used
-        self._pinv = np.linalg.pinv(t_used) if t_used.size else t_used.T
+        if self._nullity not in (0, 1):
+            return
+        # rank 3: every direction has a thrust, p = T^+ d is one (T T^+ = I)
+        self._pinv = np.linalg.pinv(t_used)
         self._hi = self.u_max[used]
         self._lo = self.u_min[used]
+        self._tol = self.FEASIBLE_TOL * float(np.max(np.abs(self._hi)))
         if self._nullity == 1:
             null = np.linalg.svd(t_used)[2][-1]
             # the polygon's edges a_j s + b_j t <= c_j: each thruster's upper and lower
@@ -125,15 +128,12 @@ class Thrusters:
             self._b = np.concatenate([null, -null, [0.0]])
             self._c = np.concatenate([self._hi, -self._lo, [0.0]])
             self._pairs = np.triu_indices(self._b.size, 1)
-        self._tol = self.FEASIBLE_TOL * float(np.max(np.abs(self._hi), initial=0.0))
 
     def reach(self, direction: FloatArray) -> float:
         """Largest s with s * direction = T3 u inside the force limits."""
         if self._nullity not in (0, 1):
             return self._reach_highs(direction)
         p = self._pinv @ direction
-        if np.linalg.norm(self._T @ p - direction) > 1e-9 * np.linalg.norm(direction):
-            return 0.0  # no thrust gives this direction
         if self._nullity == 0:
             # s p_i within [lo_i, hi_i] for every thruster; s = 0 always is (lo <= 0 <= hi)
             with np.errstate(divide="ignore"):

@@ -89,9 +89,10 @@ def test_the_landing_is_flown_as_the_missions_dock_leg_flies_it():
     """Defect: the study hovered and lowered the tree as its own scenario does (5 m over the
     post tops, 0.05 m/s) whatever the mission's dock leg said. It now takes the first dock
     leg's hover height and lowering rate: with 2 m and 0.1 m/s in calm water the tree starts
-    2 m over the posts and meets them 2 m / 0.1 m/s = 20 s after the lowering starts (the
-    wire's stretch under the slowing winch adds a little: within 2 s), where the study's own
-    takes 5 m / 0.05 m/s = 100 s. The procedure is named in the installation's words."""
+    2 m over the posts and meets them 2 m / 0.1 m/s = 20 s after the lowering starts
+    (measured 19.98 s; 0.1 s leaves room for the contact found to the step, 0.01 s, and the
+    elastic wire's few centimetres of give), where the study's own takes 5 m / 0.05 m/s =
+    100 s. The procedure is named in the installation's words."""
     data = _mission().model_dump(mode="json", exclude_none=True)
     data["legs"] = [{"type": "dock", "hover_m": 2.0, "lower_rate_mps": 0.1}]
     m = schema.parse_mission(data)
@@ -99,7 +100,7 @@ def test_the_landing_is_flown_as_the_missions_dock_leg_flies_it():
     assert (scenario.hover_m, scenario.lower_rate_mps) == (2.0, 0.1)
     assert "lowered from 2 m over the post tops at 0.1 m/s" in scenario.words()
     calm = seaway.land_in_seaway(0.0, 10.0, True, **scenario.keywords())  # type: ignore[arg-type]
-    assert calm.contact_s - calm.lowering_s == pytest.approx(20.0, abs=2.0)
+    assert calm.contact_s - calm.lowering_s == pytest.approx(20.0, abs=0.1)
     own = seaway.LandingScenario.from_setup(m.setup, m.name)
     assert (own.hover_m, own.lower_rate_mps) == (seaway.HOVER_M, 0.05)
     no_dock = dict(data, legs=[{"type": "hold", "duration_s": 10.0}])

@@ -335,11 +335,12 @@ class CameraEchoes:
         The position must be one sent. The look-at point may be one sent, or the browser's
         in-between pose: setting the position carries its look-at point along, so between
         two poses it reports the new position with the old pose's offset from position to
-        look-at. That offset is matched against the offsets sent, not against an in-between
-        point worked out on the server from the camera it last heard of: under load that
-        report is stale, the point differs from the browser's, and the follow camera was
-        taken for a hand on it (CI, load 6-8). A user cannot move the look-at point without
-        moving the camera, so the position alone tells a hand move."""
+        look-at. That offset is matched against the offsets sent. The in-between point the
+        server notes (worked out from the camera it last heard of, as viser's own position
+        setter does) is not enough alone: under load that report is stale, the point differs
+        from the browser's, and the follow camera was taken for a hand on it (CI, load 6-8).
+        A user cannot move the look-at point without moving the camera, so the position
+        alone tells a hand move."""
         if not self._sent:
             return False
         pos, look = np.asarray(position_n, float), np.asarray(look_at_n, float)
