@@ -64,12 +64,14 @@ def main(argv: list[str] | None = None) -> None:
         numba_cache.prune(folder)
 
 
-PARTS = ("closed-loop", "open-loop-and-qp")
+PARTS = ("closed-loop", "open-loop-and-qp", "batch")
 """Two halves of the compile that share no large kernel, so that two processes compile them
 at once: the closed loop's chunk kernel (``loop.run_chunk``, about 90 s), and the open loop's
 (``loop.run_open_chunk``) with the QP allocation's step (``loop.control_step`` and
 ``loop.finish_step``, each inlining a whole plant or control step; about 115 s together).
-One after the other they took 210 s on a quiet machine."""
+One after the other they took 210 s on a quiet machine. The third, the batch kernel of
+campaigns (``control.batchkernel.batch_steps``, the closed loop's step once more), is
+compiled beside them."""
 
 
 def compile_parts_at_once() -> None:
@@ -94,6 +96,11 @@ def compile_all(part: str | None = None) -> None:
     closed = part in (None, "closed-loop")
     other = part in (None, "open-loop-and-qp")
     ps = params.load("model-scale")
+    if part in (None, "batch"):
+        from control.batch import run_together
+
+        runs = [Simulation(ps, tree_depth_m=100.0) for _ in range(2)]
+        run_together([sim.step_jobs(2) for sim in runs])
     if closed:
         for feedback in ("perfect", "ekf"):
             for allocation in ("pinv", "priority"):

@@ -359,4 +359,4 @@ class LogRows:
         if not parts:
             return LogRows.empty(n_thrusters)
         data = parts[0].data if len(parts) == 1 else np.vstack([p.data for p in parts])
-        return LogRows(data, n_thrusters, parts[-1].quality_counters.copy())
+        return LogRows(data, n_thrusters, parts[-1].quality_counters.copy(), parts[0].layout)

@@ -24,6 +24,7 @@ the time and which part went non-finite.
 from __future__ import annotations
 
 import math
+from collections.abc import Generator
 from dataclasses import replace
 
 import numpy as np
@@ -46,6 +47,7 @@ from control.config import (
     system_thruster_config,
 )
 from control.faults import THRUSTER_KINDS, Fault
+from control.jobs import ChunkJob, ChunkResult, run_jobs
 from control.startup import StartupReport, check_mount_vector
 from sim import dynamic_wire as dwire
 from sim import environment as envmod
@@ -706,6 +708,14 @@ class Simulation:
 
     def step(self, n: int) -> LogRows:
         """Advance ``n`` plant steps (commands held) and return their log rows."""
+        return run_jobs(self.step_jobs(n))
+
+    def step_jobs(self, n: int) -> Generator[ChunkJob, ChunkResult, LogRows]:
+        """``step`` as a generator: it yields each compiled closed-loop chunk as a
+        ``ChunkJob`` for whoever drives it to run (``run_jobs`` here, one at a time; or
+        ``control.batch`` beside other runs' chunks, with the same arithmetic) and takes its
+        ``ChunkResult`` back; the chunks no batch takes (open loop, QP allocation, MoorDyn)
+        it runs itself. Returns the rows of the ``n`` steps."""
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 0:
             raise ValueError(f"steps must be a whole number >= 0, got {n!r}")
         parts: list[FloatArray] = []
@@ -714,7 +724,7 @@ class Simulation:
             k = min(self.chunk_steps, int(n) - done, self._steps_to_fault_edge())
             if self.mdwire is not None:
                 k = 1  # MoorDyn and the plant take turns, one step each
-            parts.append(self._chunk(k))
+            parts.append((yield from self._chunk(k)))
             done += k
         if not parts:
             out = np.empty((0, N_LOG))
@@ -961,7 +971,7 @@ class Simulation:
                 self.crane_tip_n = env[-1, plant.E_CT : plant.E_CT + 3].copy()
                 self.crane_target_n = self.crane_tip_n.copy()
 
-    def _chunk(self, n: int) -> FloatArray:
+    def _chunk(self, n: int) -> Generator[ChunkJob, ChunkResult, FloatArray]:
         if self.control_on:
             self._sync_site()
         env, noise = self._chunk_inputs(n)
@@ -980,21 +990,8 @@ class Simulation:
         elif self.C.alloc_kind == loop.ALLOC_EXTERNAL:
             x, held, self.xhat, self.P_cov, self.cs, log, ok = self._chunk_qp(env, noise)
         else:
-            x, held, self.xhat, self.P_cov, self.cs, log, ok = loop.run_chunk(
-                self.step_index,
-                self.x,
-                self.held_y,
-                self.xhat,
-                self.P_cov,
-                self.cs,
-                self.target,
-                env,
-                noise.noise,
-                noise.fresh,
-                self.arrays,
-                self.C,
-                self.Q,
-                self.dt_s,
+            x, held, self.xhat, self.P_cov, self.cs, log, ok = yield ChunkJob(
+                self, env, noise.noise, noise.fresh
             )
         if ok < n:
             self._diverged(x, ok)

@@ -13,12 +13,28 @@ from collections.abc import Generator
 
 import numpy as np
 
-from control.columns import LogRows
+from control.columns import LAYOUT, LOG_COLUMNS, Layout, LogRows
+from control.jobs import ChunkJob, ChunkResult, run_jobs
 from control.simulation import Simulation, SimulationDiverged
 from missions import schema, seaway
 from missions.legs import LEG_EXECUTORS, MissionContext
-from missions.scoring import LegSpan, MissionResult, score
+from missions.scoring import SCORED_COLUMNS, LegSpan, MissionResult, score
 from missions.setup import charted_frame
+
+SCORED_LAYOUT = Layout.of([c for c in LOG_COLUMNS if c.name in SCORED_COLUMNS])
+"""The log's columns that ``missions.scoring.score`` reads, in the log's order."""
+
+
+def _scored_columns(rows: LogRows) -> LogRows:
+    """The scored columns of rows of the whole log (a copy)."""
+    return LogRows(
+        rows.data[:, _SCORED_INDEX], rows.n_thrusters, rows.quality_counters, SCORED_LAYOUT
+    )
+
+
+_SCORED_INDEX = [
+    LAYOUT.starts[name] + k for name in SCORED_LAYOUT.starts for k in range(LAYOUT.widths[name])
+]
 
 
 class MissionDriver:
@@ -28,9 +44,14 @@ class MissionDriver:
     end of the mission's present request) and returns their rows; ``done`` says when the
     mission is over; ``abort()`` ends it early; ``result()`` scores what was run."""
 
-    def __init__(self, mission: schema.Mission, sim: Simulation) -> None:
+    def __init__(self, mission: schema.Mission, sim: Simulation, keep_log: bool = True) -> None:
         self.mission = mission
         self.sim = sim
+        self.keep_log = keep_log
+        """False: keep only the columns the scores read (``SCORED_LAYOUT``) of the rows
+        run, not the whole log: a campaign's runs, many of them alive at once in a batch
+        (the whole log of a 500 s docking is 47 MB). The figures are the same; the result's
+        ``log`` has those columns only."""
         self.ctx = MissionContext(sim)
         self.ctx.charted_frame = charted_frame(mission)
         self.leg_index = -1
@@ -166,7 +187,7 @@ class MissionDriver:
         self._request_parts = []
         if len(self.ctx.last_log):
             self.ctx.previous_row = self.ctx.last_log.data[-1]
-        self.parts.append(data)
+        self.parts.append(data if self.keep_log else _scored_columns(data))
         self.ctx.last_log = data
         self.rows += len(data)
 
@@ -175,6 +196,13 @@ class MissionDriver:
         """Run the mission for up to ``max_steps`` plant steps (None: the rest of the present
         request). Returns the rows run. A divergence ends the mission (``diverged``,
         ``divergence`` says why) and returns the rows before it."""
+        return run_jobs(self.advance_jobs(max_steps))
+
+    def advance_jobs(
+        self, max_steps: int | None = None
+    ) -> Generator[ChunkJob, ChunkResult, LogRows]:
+        """``advance`` as a generator of the simulation's compiled chunks
+        (``Simulation.step_jobs``), for ``control.batch`` to run beside other missions'."""
         out: list[LogRows] = []
         budget = max_steps
         while not self.done and (budget is None or budget > 0):
@@ -185,7 +213,7 @@ class MissionDriver:
                 continue
             k = self._pending if budget is None else min(budget, self._pending)
             try:
-                rows = self.sim.step(k)
+                rows = yield from self.sim.step_jobs(k)
             except SimulationDiverged as err:
                 self._mark_diverged(str(err))
                 break
@@ -211,6 +239,12 @@ class MissionDriver:
     def run_to_end(self) -> MissionResult:
         while not self.done:
             self.advance()
+        return self.result()
+
+    def run_to_end_jobs(self) -> Generator[ChunkJob, ChunkResult, MissionResult]:
+        """``run_to_end`` as a generator of compiled chunks (see ``advance_jobs``)."""
+        while not self.done:
+            yield from self.advance_jobs()
         return self.result()
 
     def _fail_leg(self, err: Exception) -> None:
@@ -245,8 +279,9 @@ class MissionDriver:
     def result(self) -> MissionResult:
         data = LogRows.join(self.parts, self.sim.n_thrusters)
         if not self.parts:
+            layout = LAYOUT if self.keep_log else SCORED_LAYOUT
             data = LogRows(
-                np.zeros((0, data.data.shape[1])), self.sim.n_thrusters, self.sim.quality_counters
+                np.zeros((0, layout.width)), self.sim.n_thrusters, self.sim.quality_counters, layout
             )
         result = score(
             self.mission.name,

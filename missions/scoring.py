@@ -174,8 +174,12 @@ def counters_by_name(counters: NDArray[np.int64]) -> dict[str, dict[str, int]]:
     }
 
 
+SCORED_COLUMNS = ("tree_eta_n", "eta_ref_n", "thruster_utilisation")
+"""The log's column blocks ``score`` reads (all it needs of a run's log)."""
+
+
 def _take(rows: LogRows, start: int, stop: int) -> LogRows:
-    return LogRows(rows.data[start:stop], rows.n_thrusters, rows.quality_counters)
+    return LogRows(rows.data[start:stop], rows.n_thrusters, rows.quality_counters, rows.layout)
 
 
 def score(
@@ -208,7 +212,9 @@ def score(
         )
         if span.score:
             scored.append(part.data)
-    scored_rows = LogRows(np.vstack(scored), rows.n_thrusters) if scored else rows
+    scored_rows = (
+        LogRows(np.vstack(scored), rows.n_thrusters, layout=rows.layout) if scored else rows
+    )
     rms_n, rms_e, rms_psi, _, _ = tracking_figures(scored_rows, dt_s)
     full = tracking_figures(rows, dt_s)
     final = rows["tree_eta_n"][-1] if len(rows) else np.zeros(6)

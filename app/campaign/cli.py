@@ -67,6 +67,15 @@ def run_command(
         bool, typer.Option("--resume", help="continue RESULTS: run only the runs without a row")
     ] = False,
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+    runs_per_task: Annotated[
+        int | None,
+        typer.Option(
+            min=1,
+            max=cm.MAX_RUNS_PER_TASK,
+            help="runs stepped together in one batch per task (default: a quarter of the "
+            f"runs per worker, at most {cm.MAX_RUNS_PER_TASK})",
+        ),
+    ] = None,
 ) -> None:
     """Run every run of a campaign on Dask; rows go to Parquet as they finish; then report."""
     from app.campaign import report, runner, store
@@ -91,6 +100,7 @@ def run_command(
             workers=workers,
             resume=resume,
             show_progress=progress,
+            per_task=runs_per_task,
         )
     except cm.CampaignError as err:
         _fail(str(err))

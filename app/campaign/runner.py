@@ -1,11 +1,14 @@
 """Run a campaign on Dask distributed: an embedded LocalCluster (one single-threaded worker
 process per core) or an existing cluster at a scheduler address.
 
-Each run is one task (``missions.campaign.run_one``); its row is written as it comes back.
-Tasks of a worker that dies are rescheduled by Dask on the others; a task that keeps killing
-workers (Dask's ``KilledWorker``) is submitted again up to ``LOST_RETRIES`` times, then counted
-as a run with an error. The client keeps one row per run whatever happens (a late duplicate is
-dropped), and ``--resume`` submits only the runs without a row.
+Each task is a block of runs stepped together in one batch (``missions.campaign.run_block``,
+``control.batch``: the same figures as each run alone); its rows are written as it comes
+back. Tasks of a worker that dies are rescheduled by Dask on the others; a block that is lost
+is submitted again run by run (one task each, so that a run that kills its worker takes no
+other with it), and a run whose task keeps killing workers (Dask's ``KilledWorker``) is
+submitted again up to ``LOST_RETRIES`` times, then counted as a run with an error. The client
+keeps one row per run whatever happens (a late duplicate is dropped), and ``--resume`` submits
+only the runs without a row.
 """
 
 from __future__ import annotations
@@ -28,6 +31,14 @@ POLL_S = 0.1
 """How often the client looks for finished runs [s]."""
 LOST_RETRIES = 3
 """Times a run whose worker was lost is submitted again before it counts as an error."""
+
+
+def runs_per_task(todo: int, workers: int) -> int:
+    """Runs per task for ``todo`` runs on ``workers`` workers: ``todo / (2 workers)`` rounded
+    up (smaller blocks when there are few runs, so that the workers finish together: a worker
+    left with the last large block would run it alone), at least 1 and at most
+    ``missions.campaign.MAX_RUNS_PER_TASK``."""
+    return max(1, min(cm.MAX_RUNS_PER_TASK, -(-todo // (2 * max(1, workers)))))
 
 
 @dataclass
@@ -64,6 +75,14 @@ def task_key(text: str, index: int) -> str:
     return f"campaign-run-{digest}-{index}"
 
 
+def block_key(text: str, indices: list[int]) -> str:
+    """The Dask key of a block of runs (one run: its ``task_key``)."""
+    if len(indices) == 1:
+        return task_key(text, indices[0])
+    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
+    return f"campaign-block-{digest}-{indices[0]}-{len(indices)}"
+
+
 def run_campaign(
     campaign: cm.Campaign,
     base: schema.Mission,
@@ -76,9 +95,11 @@ def run_campaign(
     on_row: Callable[[dict, Any], None] | None = None,
     batch: int = 50,
     flush_s: float = 5.0,
+    per_task: int | None = None,
 ) -> CampaignProgress:
     """Run every run of the campaign that has no row in ``out`` yet; rows go to Parquet parts
-    as they finish. ``on_row(row, client)`` is called after each row (tests use it)."""
+    as they finish. ``on_row(row, client)`` is called after each row (tests use it).
+    ``per_task``: runs per task (None: ``runs_per_task`` for the cluster's workers)."""
     from distributed import as_completed
 
     store.create(out, text, base, resume)
@@ -97,10 +118,15 @@ def run_campaign(
     lost: dict[int, int] = {}
     t0 = time.perf_counter()
     try:
+        n_workers = len(client.scheduler_info().get("workers", {})) or workers or 1
+        size = per_task or runs_per_task(len(todo), n_workers)
+        blocks = [todo[k : k + size] for k in range(0, len(todo), size)]
         with _progress_bar(show_progress, campaign.name, progress) as bar:
             futures = {
-                client.submit(cm.run_one, campaign, base, i, key=task_key(text, i), pure=False): i
-                for i in todo
+                client.submit(
+                    cm.run_block, campaign, base, block, key=block_key(text, block), pure=False
+                ): block
+                for block in blocks
             }
             pending = as_completed(list(futures))
             while not pending.is_empty():
@@ -110,41 +136,47 @@ def run_campaign(
                     time.sleep(POLL_S)
                     continue
                 for future in finished:
-                    index = futures[future]
+                    block = futures[future]
                     try:
-                        row = future.result()
+                        rows = future.result()
                     except Exception as err:  # the task itself never raises: a worker was lost
-                        lost[index] = lost.get(index, 0) + 1
                         future.release()
-                        if lost[index] <= LOST_RETRIES:
-                            retry = client.submit(
-                                cm.run_one,
-                                campaign,
-                                base,
-                                index,
-                                key=f"{task_key(text, index)}-retry{lost[index]}",
-                                pure=False,
+                        rows = []
+                        for index in block:
+                            lost[index] = lost.get(index, 0) + 1
+                            if lost[index] <= LOST_RETRIES:
+                                retry = client.submit(
+                                    cm.run_block,
+                                    campaign,
+                                    base,
+                                    [index],
+                                    key=f"{task_key(text, index)}-retry{lost[index]}",
+                                    pure=False,
+                                )
+                                futures[retry] = [index]
+                                pending.add(retry)
+                                progress.resubmitted += 1
+                                continue
+                            rows.append(
+                                cm.failed_row(
+                                    cm.run_inputs(campaign, base, index),
+                                    f"lost {lost[index]} workers: {type(err).__name__}: {err}",
+                                )
                             )
-                            futures[retry] = index
-                            pending.add(retry)
-                            progress.resubmitted += 1
-                            continue
-                        row = cm.failed_row(
-                            cm.run_inputs(campaign, base, index),
-                            f"lost {lost[index]} workers: {type(err).__name__}: {err}",
-                        )
                     future.release()
-                    if index in written:
-                        continue  # a run counts once
-                    written.add(index)
-                    writer.add(row)
-                    progress.done += 1
-                    progress.failed += not row["success"]
-                    progress.errors += row["simulated_s"] is None
-                    progress.simulated_s += row["simulated_s"] or 0.0
-                    bar(progress)
-                    if on_row is not None:
-                        on_row(row, client)
+                    for row in rows:
+                        index = int(row["run"])
+                        if index in written:
+                            continue  # a run counts once
+                        written.add(index)
+                        writer.add(row)
+                        progress.done += 1
+                        progress.failed += not row["success"]
+                        progress.errors += row["simulated_s"] is None
+                        progress.simulated_s += row["simulated_s"] or 0.0
+                        bar(progress)
+                        if on_row is not None:
+                            on_row(row, client)
     finally:
         writer.close()
         progress.wall_s = time.perf_counter() - t0

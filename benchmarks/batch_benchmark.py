@@ -1,0 +1,101 @@
+"""The batch stepper against runs alone: full-scale docking runs (the campaign benchmark's
+``full-docking-current-0.3``, current at random in 0.1-0.5 m/s), simulated seconds of all runs
+per wall second.
+
+    .venv/bin/python benchmarks/batch_benchmark.py [--runs 64] [--json]
+
+Three ways over the same runs: one after the other alone in this process (one core), all in
+one batch in this process (``control.batch.run_together``, one core), and split over two
+processes each running its half as one batch (two cores: the issue's configuration of 64 runs
+at once). The compiled kernels are loaded before timing (a warm-up run of each kind).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from benchmarks.campaign_benchmark import CAMPAIGN
+from control.batch import run_together
+from missions import campaign as cm
+from missions.driver import MissionDriver
+
+
+def _drivers(runs: int, indices: list[int]) -> list[MissionDriver]:
+    c, base = cm.parse_text(CAMPAIGN.format(runs=runs), "<batch benchmark>")
+    return [MissionDriver(*cm.prepare_run(c, base, i)[1:], keep_log=False) for i in indices]
+
+
+def alone(runs: int, indices: list[int]) -> tuple[float, float]:
+    """(simulated s, wall s) of the runs one after the other."""
+    drivers = _drivers(runs, indices)
+    t0 = time.perf_counter()
+    for d in drivers:
+        d.run_to_end()
+    return sum(d.sim.t_s for d in drivers), time.perf_counter() - t0
+
+
+def together(runs: int, indices: list[int]) -> tuple[float, float]:
+    """(simulated s, wall s) of the runs in one batch."""
+    drivers = _drivers(runs, indices)
+    t0 = time.perf_counter()
+    outcomes = run_together([d.run_to_end_jobs() for d in drivers])
+    wall = time.perf_counter() - t0
+    bad = [o.error for o in outcomes if o.error is not None]
+    if bad:
+        raise RuntimeError(f"{len(bad)} runs failed: {bad[0]}")
+    return sum(d.sim.t_s for d in drivers), wall
+
+
+def _warm(runs: int) -> None:
+    alone(runs, [0])
+    together(runs, [0, 1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=64, help="docking runs")
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    args = parser.parse_args()
+    runs = args.runs
+    indices = list(range(runs))
+    load = os.getloadavg()
+    _warm(runs)
+    sim_a, wall_a = alone(runs, indices)
+    sim_b, wall_b = together(runs, indices)
+    halves = [indices[: runs // 2], indices[runs // 2 :]]
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        list(pool.map(_warm, [runs, runs]))
+        t0 = time.perf_counter()
+        parts = list(pool.map(together, [runs, runs], halves))
+        wall_2 = time.perf_counter() - t0
+    sim_2 = sum(s for s, _ in parts)
+    figures = {
+        "runs": runs,
+        "cores": os.cpu_count(),
+        "load_before": load,
+        "alone_one_core": {"simulated_s": sim_a, "wall_s": wall_a, "rate": sim_a / wall_a},
+        "batch_one_core": {"simulated_s": sim_b, "wall_s": wall_b, "rate": sim_b / wall_b},
+        "batch_two_processes": {"simulated_s": sim_2, "wall_s": wall_2, "rate": sim_2 / wall_2},
+    }
+    if args.json:
+        print(json.dumps(figures))
+        return
+    print(f"{runs} full-scale docking runs, {os.cpu_count()} cores, load before {load}")
+    for name in ("alone_one_core", "batch_one_core", "batch_two_processes"):
+        f = figures[name]
+        print(
+            f"  {name:20s} {f['simulated_s']:9.0f} simulated s in {f['wall_s']:6.2f} wall s: "
+            f"{f['rate']:7,.0f}x"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,248 @@
+"""Many runs stepped together: ``run_together`` drives the chunk-job generators of several
+runs (``Simulation.step_jobs``, ``MissionDriver.run_to_end_jobs``) and runs their compiled
+closed-loop chunks in one compiled program (``control.batchkernel.batch_steps``).
+
+Each run keeps everything outside the compiled step to itself, as it does alone: its
+missions' legs, targets and commands between chunks, its faults, its own environment and
+sensor noise drawn from its own seed, its log. Only the compiled chunks go together: when a
+run yields a ``ChunkJob``, its state, its chunk's inputs and its configuration are copied
+into its slot of arrays stacked over the runs; the kernel advances every run with a chunk
+under way, step by step, until one of them ends its chunk; that run's state and rows are
+copied back into its ``Simulation`` and its generator goes on to its next chunk. A run's
+step is the same arithmetic on the same numbers as alone (``control.loop._closed_steps``),
+so each run gives the same figures in a batch as alone (``tests/test_batch.py``).
+
+Runs go into one batch when their arrays have the same shapes (the same mission family: the
+same thrusters, docking frame, chunk length and step). A chunk that does not fit the batch
+(a run whose configuration changed shape) runs alone, at once, in its generator's place.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Generator, Sequence
+from typing import Any, NamedTuple, TypeVar
+
+import numpy as np
+
+from control import loop
+from control.batchkernel import batch_steps
+from control.jobs import ChunkJob, ChunkResult
+from sim import plant
+
+T = TypeVar("T")
+
+
+def _stacked(template: Any, n_runs: int) -> Any:
+    """A NamedTuple like ``template`` with every field stacked over ``n_runs`` runs (zeros)."""
+    fields = []
+    for value in template:
+        a = np.asarray(value)
+        fields.append(np.zeros((n_runs, *a.shape), dtype=a.dtype))
+    return type(template)(*fields)
+
+
+class _Slots:
+    """The stacked arrays of a batch of ``n_runs`` runs shaped like the first job's run."""
+
+    env: np.ndarray  # (runs, steps, N_ENV) the chunks' environment rows
+    noise: np.ndarray  # (runs, steps, ...) their sensor noise
+    fresh: np.ndarray  # (runs, steps, ...) their fresh-sample flags
+    log: np.ndarray  # (runs, steps, N_LOG) their log rows
+
+    def __init__(self, first: ChunkJob, n_runs: int, length: int) -> None:
+        s = first.sim
+        self.n_runs = n_runs
+        self.dt_s = s.dt_s
+        self.key = self.key_of(first)
+        self.PS = _stacked(s.arrays, n_runs)
+        self.CS = _stacked(s.C, n_runs)
+        self.QS = _stacked(s.Q, n_runs)
+        self.seen_P: list[Any] = [None] * n_runs
+        self.seen_C: list[Any] = [None] * n_runs
+        self.pos = np.zeros(n_runs, np.int64)
+        self.length = np.zeros(n_runs, np.int64)
+        self.ok = np.zeros(n_runs, np.int64)
+        self.k0 = np.zeros(n_runs, np.int64)
+        self.x = np.zeros((n_runs, *s.x.shape))
+        self.held_y = np.zeros((n_runs, *s.held_y.shape))
+        self.xhat = np.zeros((n_runs, *s.xhat.shape))
+        self.Pc = np.zeros((n_runs, *np.shape(s.P_cov)))
+        self.cs = np.zeros((n_runs, *s.cs.shape))
+        self.target = np.zeros((n_runs, *s.target.shape))
+        self._inputs(first, length)
+        self.work = plant.make_work(s.arrays.thr_T.shape[1])
+        self.W = loop.make_control_work()
+
+    def _inputs(self, job: ChunkJob, length: int) -> None:
+        """(Re)make the chunk buffers for chunks of up to ``length`` steps, keeping what the
+        runs under way have in them."""
+        n = self.n_runs
+        bufs = (
+            np.zeros((n, length, job.env.shape[1])),
+            np.zeros((n, length, *job.noise.shape[1:])),
+            np.zeros((n, length, *job.fresh.shape[1:]), dtype=job.fresh.dtype),
+            np.zeros((n, length, loop.N_LOG)),
+        )
+        if hasattr(self, "env"):
+            for new, old in zip(bufs, (self.env, self.noise, self.fresh, self.log), strict=True):
+                new[:, : old.shape[1]] = old
+        self.env, self.noise, self.fresh, self.log = bufs
+
+    @staticmethod
+    def key_of(job: ChunkJob) -> tuple:
+        """What runs of one batch must share besides their configuration's shapes: the
+        shapes of the states and of the chunk's inputs, and the step."""
+        s = job.sim
+        return (
+            s.dt_s,
+            s.x.shape,
+            s.held_y.shape,
+            s.xhat.shape,
+            np.shape(s.P_cov),
+            s.cs.shape,
+            s.target.shape,
+            job.env.shape[1:],
+            job.noise.shape[1:],
+            job.fresh.shape[1:],
+            job.fresh.dtype.str,
+        )
+
+    @staticmethod
+    def _changed(stack: Any, seen: Any, value: Any) -> list[int] | None:
+        """The fields of a run's configuration that are new objects since its last chunk
+        (``_replace`` keeps the others), or None when one of them does not fit its stacked
+        field (another shape or type: the chunk runs alone)."""
+        if seen is value:
+            return []
+        changed = []
+        for i, v in enumerate(value):
+            if seen is None or seen[i] is not v:
+                a = np.asarray(v)
+                if a.shape != stack[i].shape[1:] or a.dtype != stack[i].dtype:
+                    return None
+                changed.append(i)
+        return changed
+
+    def put(self, r: int, job: ChunkJob) -> bool:
+        """Start run r's chunk (its state, configuration and inputs into slot r) and say so;
+        False, and nothing started, when the run's arrays do not fit the batch."""
+        s = job.sim
+        n = job.n
+        p_new = self._changed(self.PS, self.seen_P[r], s.arrays)
+        c_new = self._changed(self.CS, self.seen_C[r], s.C)
+        if p_new is None or c_new is None:
+            return False
+        if (self.seen_P[r] is None or p_new or c_new) and self.key_of(job) != self.key:
+            return False
+        if n > self.env.shape[1]:
+            self._inputs(job, n)
+        for i in p_new:
+            self.PS[i][r] = s.arrays[i]
+        for i in c_new:
+            self.CS[i][r] = s.C[i]
+        self.seen_P[r], self.seen_C[r] = s.arrays, s.C
+        for stack, value in zip(self.QS, s.Q, strict=True):
+            stack[r] = value
+        self.x[r] = s.x
+        self.held_y[r] = s.held_y
+        self.xhat[r] = s.xhat
+        self.Pc[r] = s.P_cov
+        self.cs[r] = s.cs
+        self.target[r] = s.target
+        self.env[r, :n] = job.env
+        self.noise[r, :n] = job.noise
+        self.fresh[r, :n] = job.fresh
+        self.log[r, :n] = 0.0
+        self.k0[r] = s.step_index
+        self.pos[r] = 0
+        self.length[r] = n
+        self.ok[r] = n
+        return True
+
+    def take(self, r: int, job: ChunkJob) -> ChunkResult:
+        """End run r's chunk: its signal checks' state back into its own arrays (as the
+        kernel alone updates them in place), and the chunk's result."""
+        n = job.n
+        for stack, value in zip(self.QS, job.sim.Q, strict=True):
+            value[...] = stack[r]
+        self.length[r] = 0
+        self.pos[r] = 0
+        return (
+            self.x[r].copy(),
+            self.held_y[r].copy(),
+            self.xhat[r].copy(),
+            self.Pc[r].copy(),
+            self.cs[r].copy(),
+            self.log[r, :n].copy(),
+            int(self.ok[r]),
+        )
+
+    def steps(self) -> int:
+        return batch_steps(
+            self.pos,
+            self.length,
+            self.ok,
+            self.k0,
+            self.x,
+            self.held_y,
+            self.xhat,
+            self.Pc,
+            self.cs,
+            self.target,
+            self.env,
+            self.noise,
+            self.fresh,
+            self.PS,
+            self.CS,
+            self.QS,
+            self.dt_s,
+            self.log,
+            self.work,
+            self.W,
+        )
+
+
+class Outcome(NamedTuple):
+    """What one run's generator ended with: its return value, or the exception it raised."""
+
+    value: Any
+    error: BaseException | None
+
+
+def run_together(gens: Sequence[Generator[ChunkJob, ChunkResult, T]]) -> list[Outcome]:
+    """Drive the runs' generators to their ends, their compiled chunks in one batch. Returns
+    one ``Outcome`` per generator, in order; one run raising ends that run only."""
+    n_runs = len(gens)
+    outcomes: list[Outcome | None] = [None] * n_runs
+    jobs: list[ChunkJob | None] = [None] * n_runs
+    slots: _Slots | None = None
+
+    def advance(r: int, result: ChunkResult | None) -> None:
+        """Send run r its chunk's result (None: start it) and place its next job."""
+        nonlocal slots
+        gen = gens[r]
+        try:
+            job = next(gen) if result is None else gen.send(result)
+            if slots is None:
+                slots = _Slots(job, n_runs, max(job.n, job.sim.chunk_steps))
+            while not slots.put(r, job):
+                job = gen.send(job.run())  # a chunk of another shape: alone, now
+        except StopIteration as stop:
+            outcomes[r] = Outcome(stop.value, None)
+            jobs[r] = None
+            return
+        except Exception as err:  # the run's own failure ends that run only
+            outcomes[r] = Outcome(None, err)
+            jobs[r] = None
+            return
+        jobs[r] = job
+
+    for r in range(n_runs):
+        advance(r, None)
+    while slots is not None and any(j is not None for j in jobs):
+        slots.steps()
+        for r in range(n_runs):
+            job = jobs[r]
+            if job is not None and slots.pos[r] >= slots.length[r]:
+                advance(r, slots.take(r, job))
+    return [o if o is not None else Outcome(None, None) for o in outcomes]

@@ -1,0 +1,197 @@
+"""The compiled kernel of ``control.batch``: the closed loop of many runs advanced together.
+
+Each run keeps its own state, inputs and configuration as one slice of arrays stacked over
+the runs (run index first): the states ``x[r]``, ``held_y[r]``, ``xhat[r]`` ...; its chunk's
+environment rows, sensor noise and log rows ``env[r, j]``, ``noise[r, j]``, ``log[r, j]``;
+and its configuration as ``PlantArrays``, ``ControlArrays`` and ``QualityState`` whose every
+field has a leading run axis (``plant_view`` and friends give run r's own, as views). Run r's
+step is ``control.loop._closed_steps``' step, the same calls on the same numbers, so a run in
+a batch gives the same figures as the run alone.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from control import loop
+from control.loop import ControlArrays, ControlWork, QualityState
+from sim import plant, sensors
+from sim.gnc import JIT_NOALLOC
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def plant_view(S: Any, r: int) -> plant.PlantArrays:
+    """Run r's ``PlantArrays`` out of the stacked ones (every field with a run axis first)."""
+    return plant.PlantArrays(
+        S.tree_M_rb[r],
+        S.tree_M_a[r],
+        S.tree_M_inv[r],
+        S.tree_D_l[r],
+        S.tree_D_nl[r],
+        S.tree_W0[r],
+        S.tree_r_att[r],
+        S.rov_M_rb[r],
+        S.rov_M_a[r],
+        S.rov_M_inv[r],
+        S.rov_D_l[r],
+        S.rov_D_nl[r],
+        S.rov_W[r],
+        S.rov_B[r],
+        S.rov_r_cg[r],
+        S.rov_r_cb[r],
+        S.thr_T[r],
+        S.thr_k_pos[r],
+        S.thr_k_neg[r],
+        S.thr_n_max[r],
+        S.mount_r[r],
+        S.mount_R[r],
+        S.coupling_K[r],
+        S.coupling_C[r],
+        S.has_rov[r],
+        S.dock_xy[r],
+        S.dock_post_height[r],
+        S.dock_post_radius[r],
+        S.dock_mouth_radius[r],
+        S.dock_bore_radius[r],
+        S.dock_cone_height[r],
+        S.tree_half_height[r],
+        S.tree_footprint[r],
+        S.contact_k[r],
+        S.contact_c[r],
+        S.post_k[r],
+        S.post_c[r],
+        S.friction_mu[r],
+        S.tree_fk_mass[r],
+        S.rov_fk_mass[r],
+    )
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def control_view(S: Any, r: int) -> ControlArrays:
+    """Run r's ``ControlArrays`` out of the stacked ones."""
+    return ControlArrays(
+        S.feedback_ekf[r],
+        S.use_ff[r],
+        S.ref_kind[r],
+        S.ref_params[r],
+        S.Kp[r],
+        S.Ki[r],
+        S.Kd[r],
+        S.M[r],
+        S.M_inv[r],
+        S.D_l[r],
+        S.D_nl[r],
+        S.k_h[r],
+        S.p_eq[r],
+        S.A[r],
+        S.A_inv[r],
+        S.i_limit[r],
+        S.heave_newton[r],
+        S.r_mount[r],
+        S.psi_rel[r],
+        S.alloc_kind[r],
+        S.pinv_T[r],
+        S.pinv_rows[r],
+        S.prio_A[r],
+        S.prio_D[r],
+        S.prio_R[r],
+        S.prio_rows[r],
+        S.f_lo[r],
+        S.f_hi[r],
+        S.alloc_tol[r],
+        S.k_pos[r],
+        S.k_neg[r],
+        S.n_max[r],
+        S.T6[r],
+        S.rov_to_tree[r],
+        S.GQG[r],
+        S.T_b[r],
+        S.r_pos[r],
+        S.r_psi[r],
+        S.r_dvl[r],
+        S.r_gyro[r],
+        S.q_lo[r],
+        S.q_hi[r],
+        S.q_wild[r],
+        S.q_rate[r],
+        S.q_frozen[r],
+        S.q_var[r],
+        S.free_Kp[r],
+        S.free_Ki[r],
+        S.free_Kd[r],
+    )
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def quality_view(S: Any, r: int) -> QualityState:
+    """Run r's ``QualityState`` out of the stacked ones (views: the checks update it)."""
+    return QualityState(
+        S.last[r],
+        S.last_t[r],
+        S.repeat[r],
+        S.hist[r],
+        S.counters[r],
+    )
+
+
+@njit(**JIT_NOALLOC)
+def batch_steps(
+    pos: np.ndarray,
+    length: np.ndarray,
+    ok: np.ndarray,
+    k0: np.ndarray,
+    x: np.ndarray,
+    held_y: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    cs: np.ndarray,
+    target: np.ndarray,
+    env: np.ndarray,
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    PS: Any,
+    CS: Any,
+    QS: Any,
+    dt: float,
+    log: np.ndarray,
+    work: plant.PlantWork,
+    W: ControlWork,
+) -> int:
+    """Advance every run with a chunk under way (``pos[r] < length[r]``) step by step, all of
+    them one step before any takes the next, until the first of them reaches the end of its
+    chunk. Run r's step j (``pos[r]``) is its chunk's step, at time ``(k0[r] + j) dt``, and
+    writes ``log[r, j]``. A run whose plant state stops being finite at step j ends its
+    chunk there: ``ok[r] = j``, ``pos[r] = length[r]``. Returns the steps taken."""
+    n_runs = pos.shape[0]
+    m = CS.f_lo.shape[1]
+    tau6 = W.vec[loop.W_TAU6, 0:6]
+    f = W.vec[loop.W_F, 0:m]
+    h = 0
+    for r in range(n_runs):
+        if pos[r] < length[r] and (h == 0 or length[r] - pos[r] < h):
+            h = length[r] - pos[r]
+    for _ in range(h):
+        for r in range(n_runs):
+            if pos[r] >= length[r]:
+                continue
+            j = pos[r]
+            P = plant_view(PS, r)
+            C = control_view(CS, r)
+            Q = quality_view(QS, r)
+            t = (k0[r] + j) * dt
+            row = log[r, j]
+            xr, hr, er, Pr = x[r], held_y[r], xhat[r], Pc[r]
+            sensors.sample_into(hr, xr, hr, noise[r, j], fresh[r, j], sensors.Y_SENSOR)
+            loop.control_step_into(
+                tau6, t, xr, hr, fresh[r, j], er, Pr, cs[r], target[r], C, Q, dt, row, W
+            )
+            loop.allocate_into(f, tau6, C, W)
+            loop.finish_step_into(xr, f, env[r, j], er, Pr, C, P, dt, t + dt, hr, row, work, W)
+            pos[r] = j + 1
+            if not plant.all_finite(xr):
+                ok[r] = j
+                pos[r] = length[r]
+    return h

@@ -1,0 +1,153 @@
+"""Runs stepped together (``control.batch``) give what each gives alone: every log row and
+every figure, bit for bit (the same arithmetic on the same numbers), whatever else is in the
+batch: runs of other missions, of other shapes, a run that diverges or raises."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from app.campaign import runner
+from control.batch import run_together
+from control.simulation import Simulation, SimulationDiverged
+from missions import campaign as cm
+from missions.driver import MissionDriver
+from sim import params
+from tests.test_same_figures import _short, cases
+
+DOCKING = """format_version = 1
+name = "batch-docking"
+mission = "full-docking-current-0.3"
+seed = 3
+runs_per_point = 4
+
+[random.current_speed_mps]
+distribution = "uniform"
+low = 0.1
+high = 0.5
+
+[random.current_direction_deg]
+distribution = "uniform"
+low = 0.0
+high = 360.0
+"""
+
+
+def _drivers(c: cm.Campaign, base, indices) -> list[MissionDriver]:
+    return [MissionDriver(*cm.prepare_run(c, base, i)[1:]) for i in indices]
+
+
+def _same_result(alone, together) -> None:
+    assert together.failed == alone.failed
+    assert np.array_equal(together.log.data, alone.log.data)
+    for name in ("rms_north_m", "rms_east_m", "rms_heading_deg", "max_thruster_utilisation"):
+        assert getattr(together, name) == getattr(alone, name), name
+    assert [x.miss_m for x in together.landings] == [x.miss_m for x in alone.landings]
+
+
+def test_docking_runs_in_one_batch_log_every_row_as_alone():
+    c, base = cm.parse_text(DOCKING, "<test>")
+    solo = _drivers(c, base, range(4))
+    alone = [d.run_to_end() for d in solo]
+    drivers = _drivers(c, base, range(4))
+    outcomes = run_together([d.run_to_end_jobs() for d in drivers])
+    assert all(o.error is None for o in outcomes)
+    # the runs differ (their currents; run 0's strong current ends it early, the others
+    # land), so a mix-up of slots, or a run held up by another's end, would show
+    assert len({a.rms_north_m for a in alone}) == 4
+    assert sum(len(a.landings) for a in alone) == 3 and sum(a.failed for a in alone) == 1
+    for a, o in zip(alone, outcomes, strict=True):
+        _same_result(a, o.value)
+    for a, b in zip(solo, drivers, strict=True):  # each simulation is left as alone
+        assert b.sim.t_s == a.sim.t_s
+        assert np.array_equal(b.sim.plant_state, a.sim.plant_state)
+        assert np.array_equal(b.sim.xhat, a.sim.xhat)
+        assert np.array_equal(b.sim.Q.counters, a.sim.Q.counters)
+
+
+def test_a_block_of_a_campaign_gives_the_rows_of_its_runs_alone():
+    c, base = cm.parse_text(DOCKING, "<test>")
+    rows = cm.run_block(c, base, [2, 0, 3])
+    assert [r["run"] for r in rows] == [2, 0, 3]
+    for row in rows:
+        alone = cm.run_one(c, base, row["run"])
+        assert cm.same_figures(row, alone), row["run"]
+        assert row["wall_s"] > 0.0
+    assert not cm.same_figures(rows[0], {**rows[0], "miss_m": rows[0]["miss_m"] * 1.01})
+
+
+def test_missions_of_other_shapes_and_allocations_share_a_batch_and_stay_as_alone():
+    # model scale and full scale (other thruster sets and frames: their chunks run alone in
+    # the first run's batch), the QP allocation (never compiled: run in its generator)
+    missions = cases()
+    qp = _short("model-step-qp", [10.0, 20.0])
+    assert qp.setup.allocation == "qp"
+    chosen = [missions["full-docking-current-0.3"], missions["model-step-priority-ekf"], qp]
+
+    def drivers():
+        from missions.setup import build_simulation
+
+        return [MissionDriver(m, build_simulation(m)) for m in chosen]
+
+    alone = [d.run_to_end() for d in drivers()]
+    outcomes = run_together([d.run_to_end_jobs() for d in drivers()])
+    for a, o in zip(alone, outcomes, strict=True):
+        assert o.error is None
+        _same_result(a, o.value)
+
+
+def test_a_run_that_diverges_or_raises_ends_alone_and_the_others_go_on():
+    ps = params.load("full-scale")
+
+    def three():
+        sims = [Simulation(ps, tree_depth_m=100.0, seed=s) for s in (1, 2, 3)]
+        sims[1].x[7] = math.nan  # the tree's sway speed: the plant's state is not finite
+        return sims
+
+    alone = three()
+    rows_0 = alone[0].step(250)
+    with pytest.raises(SimulationDiverged) as err_alone:
+        alone[1].step(250)
+    rows_2 = alone[2].step(250)
+
+    def raises():
+        yield from ()
+        raise RuntimeError("a run's own failure")
+
+    sims = three()
+    outcomes = run_together([sims[0].step_jobs(250), sims[1].step_jobs(250), raises()])
+    assert np.array_equal(outcomes[0].value.data, rows_0.data)
+    assert isinstance(outcomes[1].error, SimulationDiverged)
+    assert str(outcomes[1].error) == str(err_alone.value)
+    assert "tree velocity" in str(outcomes[1].error)
+    assert isinstance(outcomes[2].error, RuntimeError)
+    # the diverged run's neighbour in the batch, run alone once more, is unchanged too
+    again = Simulation(ps, tree_depth_m=100.0, seed=3)
+    assert np.array_equal(again.step(250).data, rows_2.data)
+    assert np.array_equal(sims[0].x, alone[0].x)
+
+
+@pytest.mark.parametrize(
+    ("todo", "workers", "size"),
+    [(1, 2, 1), (4, 2, 1), (8, 2, 2), (40, 2, 10), (200, 2, 16), (1000, 4, 16)],
+)
+def test_runs_per_task_splits_the_runs_so_the_workers_finish_together(todo, workers, size):
+    assert runner.runs_per_task(todo, workers) == size
+
+
+def test_a_driver_keeping_only_the_scored_columns_scores_the_same():
+    # what a campaign's runs keep (many are alive at once in a batch): 13 of the log's 115
+    # columns, the same figures to the bit
+    from missions.driver import SCORED_LAYOUT
+    from missions.setup import build_simulation
+
+    for mission in (cases()["model-step-priority-ekf"], cases()["full-docking-current-0.3"]):
+        full = MissionDriver(mission, build_simulation(mission)).run_to_end()
+        lean = MissionDriver(mission, build_simulation(mission), keep_log=False).run_to_end()
+        assert lean.log.data.shape == (len(full.log), SCORED_LAYOUT.width)
+        assert SCORED_LAYOUT.width < full.log.data.shape[1] / 5
+        assert np.array_equal(lean.log["tree_eta_n"], full.log["tree_eta_n"])
+        assert lean.summary() == full.summary()
+        assert lean.settling_time_s == full.settling_time_s
