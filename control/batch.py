@@ -62,6 +62,8 @@ class _Slots:
         self.pos = np.zeros(n_runs, np.int64)
         self.length = np.zeros(n_runs, np.int64)
         self.ok = np.zeros(n_runs, np.int64)
+        self.active = np.zeros(n_runs, np.bool_)
+        self.n_rps = np.zeros((n_runs, s.arrays.thr_T.shape[1]))
         self.k0 = np.zeros(n_runs, np.int64)
         self.x = np.zeros((n_runs, *s.x.shape))
         self.held_y = np.zeros((n_runs, *s.held_y.shape))
@@ -182,6 +184,7 @@ class _Slots:
             self.pos,
             self.length,
             self.ok,
+            self.active,
             self.k0,
             self.x,
             self.held_y,
@@ -189,6 +192,7 @@ class _Slots:
             self.Pc,
             self.cs,
             self.target,
+            self.n_rps,
             self.env,
             self.noise,
             self.fresh,

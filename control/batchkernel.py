@@ -142,6 +142,7 @@ def batch_steps(
     pos: np.ndarray,
     length: np.ndarray,
     ok: np.ndarray,
+    active: np.ndarray,
     k0: np.ndarray,
     x: np.ndarray,
     held_y: np.ndarray,
@@ -149,6 +150,7 @@ def batch_steps(
     Pc: np.ndarray,
     cs: np.ndarray,
     target: np.ndarray,
+    n_rps: np.ndarray,
     env: np.ndarray,
     noise: np.ndarray,
     fresh: np.ndarray,
@@ -164,7 +166,12 @@ def batch_steps(
     them one step before any takes the next, until the first of them reaches the end of its
     chunk. Run r's step j (``pos[r]``) is its chunk's step, at time ``(k0[r] + j) dt``, and
     writes ``log[r, j]``. A run whose plant state stops being finite at step j ends its
-    chunk there: ``ok[r] = j``, ``pos[r] = length[r]``. Returns the steps taken."""
+    chunk there: ``ok[r] = j``, ``pos[r] = length[r]``. Returns the steps taken.
+
+    Each step goes over the runs three times: sensors, control and thrusters (propeller
+    speeds into ``n_rps[r]``); the plants' RK4 steps; the observers' predictions and the
+    rows' plant columns. Per run these are ``loop._closed_steps``' calls in its order
+    (``finish_step_into`` is ``thrusters_into``, the RK4 step, ``observe_into``)."""
     n_runs = pos.shape[0]
     m = CS.f_lo.shape[1]
     tau6 = W.vec[loop.W_TAU6, 0:6]
@@ -175,23 +182,46 @@ def batch_steps(
             h = length[r] - pos[r]
     for _ in range(h):
         for r in range(n_runs):
-            if pos[r] >= length[r]:
+            active[r] = pos[r] < length[r]
+            if not active[r]:
                 continue
             j = pos[r]
-            P = plant_view(PS, r)
             C = control_view(CS, r)
             Q = quality_view(QS, r)
             t = (k0[r] + j) * dt
             row = log[r, j]
-            xr, hr, er, Pr = x[r], held_y[r], xhat[r], Pc[r]
+            xr, hr = x[r], held_y[r]
             sensors.sample_into(hr, xr, hr, noise[r, j], fresh[r, j], sensors.Y_SENSOR)
             loop.control_step_into(
-                tau6, t, xr, hr, fresh[r, j], er, Pr, cs[r], target[r], C, Q, dt, row, W
+                tau6, t, xr, hr, fresh[r, j], xhat[r], Pc[r], cs[r], target[r], C, Q, dt, row, W
             )
             loop.allocate_into(f, tau6, C, W)
-            loop.finish_step_into(xr, f, env[r, j], er, Pr, C, P, dt, t + dt, hr, row, work, W)
+            loop.thrusters_into(n_rps[r, 0:m], f, C, row, W)
+        for r in range(n_runs):
+            if active[r]:
+                P = plant_view(PS, r)
+                plant.rk4_step_into(x[r], x[r], n_rps[r, 0:m], env[r, pos[r]], P, dt, work)
+        for r in range(n_runs):
+            if not active[r]:
+                continue
+            j = pos[r]
+            t = (k0[r] + j) * dt
+            loop.observe_into(
+                x[r],
+                env[r, j],
+                xhat[r],
+                Pc[r],
+                control_view(CS, r),
+                plant_view(PS, r),
+                dt,
+                t + dt,
+                held_y[r],
+                log[r, j],
+                work,
+                W,
+            )
             pos[r] = j + 1
-            if not plant.all_finite(xr):
+            if not plant.all_finite(x[r]):
                 ok[r] = j
                 pos[r] = length[r]
     return h

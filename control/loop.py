@@ -666,9 +666,20 @@ def finish_step_into(
     W: ControlWork,
 ) -> None:
     """``finish_step`` with the observer (``xhat``, ``Pc``) predicted in place; allocates
-    nothing."""
+    nothing: ``thrusters_into``, the plant's RK4 step, ``observe_into``."""
+    n = W.vec[W_N, 0 : f.shape[0]]
+    thrusters_into(n, f, C, log_row, W)
+    plant.rk4_step_into(x, x, n, env_k, P, dt, work)
+    observe_into(x, env_k, xhat, Pc, C, P, dt, t_next, held_y, log_row, work, W)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def thrusters_into(
+    n: np.ndarray, f: np.ndarray, C: ControlArrays, log_row: np.ndarray, W: ControlWork
+) -> None:
+    """The propeller speeds for the allocated forces ``f`` into ``n``, and the row's thruster
+    columns and achieved wrench (``L_TAU_ACH``, which ``observe_into`` reads back)."""
     m = f.shape[0]
-    n = W.vec[W_N, 0:m]
     thrusters.speed_from_thrust_into(n, f, C.k_pos, C.k_neg, C.n_max)
     ach = W.vec[W_ACH, 0:6]
     _matvec_into(ach, C.T6, f)
@@ -679,11 +690,31 @@ def finish_step_into(
         log_row[L_UTIL + i] = min(abs(f[i]) / lim, 1.0)
     for k in range(6):
         log_row[L_TAU_ACH + k] = ach[k]
-    plant.rk4_step_into(x, x, n, env_k, P, dt, work)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def observe_into(
+    x: np.ndarray,
+    env_k: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    C: ControlArrays,
+    P: plant.PlantArrays,
+    dt: float,
+    t_next: float,
+    held_y: np.ndarray,
+    log_row: np.ndarray,
+    work: plant.PlantWork,
+    W: ControlWork,
+) -> None:
+    """After the plant's step: the observer's prediction over it (in place), from the
+    achieved wrench of the row (``thrusters_into``), and the row's plant columns."""
     if C.feedback_ekf:
         # the observer's input: the achieved wrench moved to the tree (eq. 3.6)
         ach3 = W.vec[W_ACH3, 0:3]
-        ach3[0], ach3[1], ach3[2] = ach[0], ach[1], ach[5]
+        ach3[0] = log_row[L_TAU_ACH]
+        ach3[1] = log_row[L_TAU_ACH + 1]
+        ach3[2] = log_row[L_TAU_ACH + 5]
         tau_tree = W.vec[W_TAU_OBS, 0:3]
         _matvec_into(tau_tree, C.A_inv, ach3)
         mode = int(log_row[L_MODE])
