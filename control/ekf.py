@@ -71,7 +71,27 @@ def _model_rhs_into(
 ) -> None:
     """``model_rhs`` written into ``xdot`` (9,), with scalars for the 3-vectors (the same
     operations in the same order, no temporary arrays)."""
-    c, s = np.cos(x[2]), np.sin(x[2])
+    _model_rhs_cs_into(
+        xdot, x, np.cos(x[2]), np.sin(x[2]), tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b
+    )
+
+
+@njit(inline="always", **JIT)
+def _model_rhs_cs_into(
+    xdot: np.ndarray,
+    x: np.ndarray,
+    c: float,
+    s: float,
+    tau: np.ndarray,
+    M_inv: np.ndarray,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    T_b: np.ndarray,
+) -> None:
+    """``_model_rhs_into`` with the cosine and sine of the heading x[2] given."""
     nu0, nu1, nu2 = x[3], x[4], x[5]
     xdot[0] = c * nu0 - s * nu1
     xdot[1] = s * nu0 + c * nu1
@@ -147,7 +167,9 @@ def predict_into(
     """``predict`` in place: advances ``x`` (9,) and ``P`` (9, 9), allocating nothing. The
     work arrays ``f0``, ``fj``, ``xp`` (9,), ``phi``, ``tmp`` (9, 9) are overwritten (nothing is
     read from them before it is written)."""
-    _model_rhs_into(f0, x, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+    # the heading's cosine and sine once: only the heading's own column perturbs it
+    c0, s0 = np.cos(x[2]), np.sin(x[2])
+    _model_rhs_cs_into(f0, x, c0, s0, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
     for i in range(9):
         for j in range(9):
             phi[i, j] = 1.0 if i == j else 0.0
@@ -155,7 +177,10 @@ def predict_into(
     for j in range(9):
         eps = 1e-6 * max(1.0, abs(x[j]))
         xp[j] = x[j] + eps
-        _model_rhs_into(fj, xp, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+        if j == PSI:
+            _model_rhs_into(fj, xp, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
+        else:
+            _model_rhs_cs_into(fj, xp, c0, s0, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
         xp[j] = x[j]
         for i in range(9):
             phi[i, j] += dt * (fj[i] - f0[i]) / eps
