@@ -19,9 +19,10 @@ What differs between runs is a select per run: gripping (``E_GRIP``), the wire s
 taut, the wire force from outside (``E_WEXT``), the wire's mass (``E_WMASS``); the work for
 the coupling and the wire's mass is skipped for the whole batch when no run needs it (the
 same numbers for the runs that do). Contact with the frame and the seabed (``E_LAND`` > 0) is
-branchy, per corner and per post: it is evaluated run by run, for the runs that need it, by
-the scalar ``sim.plant.contact_wrench_into`` on a contiguous copy of the run's column (the
-same arithmetic). A run that is not finite stays in its own column; the others go on.
+branchy, per corner and per post: it is evaluated run by run, for the runs near the frame,
+by the scalar ``sim.plant.contact_wrench_into`` on a contiguous copy of the run's column (the
+same arithmetic); a run clearly above it adds the scalar code's zero wrench as a select.
+A run that is not finite stays in its own column; the others go on.
 
 The step allocates nothing (compiled without numba's runtime, ``JIT_NOALLOC``):
 ``make_batch_work(n_thrusters, n_runs)`` makes the work space once. ``rk4_batch`` is the
@@ -392,14 +393,45 @@ def _wire_force_rows(
         f[2, r] = env[E_FWIRE + 2, r] if ext else f2
 
 
+CONTACT_MARGIN_M = 1.0
+"""[m] A run whose tree is more than its reach plus this above the landing surface cannot
+touch it (see ``_contact_runs``); far more than the rounding of the depths compared."""
+
+
 @njit(inline="always", **JIT_NOALLOC)
-def _contact_runs(tau: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork):
-    """Add the contact wrench (``plant.contact_wrench_into``, the scalar code on a copy of
-    the run's column) to ``tau`` for each run with a landing surface (``E_LAND`` > 0)."""
+def _contact_runs(
+    tau: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork
+) -> None:
+    """Add the contact wrench to ``tau`` for each run with a landing surface
+    (``E_LAND`` > 0), as ``plant.tree_wrench_into`` does.
+
+    A run whose tree is clearly above the surface and the posts' tops (its centre's depth
+    plus the farthest its bottom corners reach, or plus half its height and the posts'
+    height, plus ``CONTACT_MARGIN_M``, still above the surface) has a contact wrench of
+    exactly zero: no corner penetrates and every post is free (``post_penetration_into``'s
+    first test). It gets the scalar code's ``tau += 0.0`` as a select over the row. The
+    others (near the frame, or not finite) get the scalar ``plant.contact_wrench_into`` on a
+    copy of their column (the same arithmetic)."""
+    half_l, half_w = 0.5 * P.tree_footprint[0], 0.5 * P.tree_footprint[1]
+    hh = P.tree_half_height
+    reach = max(np.sqrt(half_l * half_l + half_w * half_w + hh * hh), hh + P.dock_post_height)
+    reach += CONTACT_MARGIN_M
+    n = tau.shape[1]
+    any_near = False
+    for r in range(n):
+        land = env[E_LAND, r]
+        far = x[2, r] + reach < land
+        skip = (land > 0.0) & far
+        any_near |= (land > 0.0) & (not far)
+        for i in range(6):
+            tau[i, r] = tau[i, r] + 0.0 if skip else tau[i, r]
+    if not any_near:
+        return
     R = work.mat[BM_RT]
     col_x, col_env, col_R, col_cw = work.col_x, work.col_env, work.col_R, work.col_cw
-    for r in range(tau.shape[1]):
-        if not env[E_LAND, r] > 0.0:
+    for r in range(n):
+        land = env[E_LAND, r]
+        if not (land > 0.0 and not x[2, r] + reach < land):
             continue
         for i in range(N_STATE):
             col_x[i] = x[i, r]

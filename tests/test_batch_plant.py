@@ -60,8 +60,9 @@ def _batch_inputs(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
         env[plant.E_WMASS, r] = 0.0
         env[plant.E_WDAMP, r] = 0.0
         env[plant.E_WEXT, r] = 0.0
-        if case == 1:  # slack wire: the tree lifted 3 m above its hang
+        if case == 1:  # slack wire: the tree lifted 3 m above its hang; the seabed 20 m below
             x[2, r] -= 3.0
+            env[plant.E_LAND, r] = x[2, r] + 20.0
         elif case == 2:  # the wire force from outside (MoorDyn)
             env[plant.E_WEXT, r] = 1.0
             env[plant.E_FWIRE : plant.E_FWIRE + 3, r] = rng.uniform(-5e4, 5e4, 3)
@@ -76,9 +77,13 @@ def _batch_inputs(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
             env[plant.E_FRAME : plant.E_FRAME + 2, r] = x[0:2, r] + rng.uniform(-off, off, 2)
             env[plant.E_FRAME_PSI, r] = x[5, r] + rng.uniform(-0.02, 0.02)
             x[11, r] = rng.uniform(-0.05, 0.05)
-        elif case == 7:  # a heading past sim.trig's polynomial range (libm's)
+        elif case == 7:  # a heading past sim.trig's polynomial range (libm's); the frame's
+            # posts' tops 0.5 m under the tree's bottom (near enough for the contact code, which
+            # finds nothing)
             x[5, r] += 2.0e5
             x[17, r] -= 3.0e5
+            env[plant.E_LAND, r] = x[2, r] + half_h + P.dock_post_height + 0.5
+            env[plant.E_FRAME : plant.E_FRAME + 2, r] = x[0:2, r]
     return x, n_rps, env
 
 
