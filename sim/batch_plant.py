@@ -12,8 +12,7 @@ reassociation; numba compiles without fast-math or contraction into fused multip
 Matrices of ``PlantArrays`` are read element by element outside the loops over runs, so
 those loops only touch rows and the compiler vectorises them (AVX-512 here: checked in the
 assembly by ``benchmarks/batch_plant_benchmark.py``). Sines and cosines come from
-``sim.trig.sincos_poly`` over a row, with ``sim.trig.sincos``'s libm fix-up for an angle past
-its range, as the scalar plant does.
+``sim.trig.sincos`` over a row (branch-free), as in the scalar plant.
 
 What differs between runs is a select per run: gripping (``E_GRIP``), the wire slack or
 taut, the wire force from outside (``E_WEXT``), the wire's mass (``E_WMASS``); the work for
@@ -61,7 +60,7 @@ from sim.plant import (
     make_work,
 )
 from sim.thrusters import thrust_of_one
-from sim.trig import TRIG_POLY_LIMIT, sincos, sincos_poly
+from sim.trig import sincos
 
 # rows of ``BatchWork.trig``: sines and cosines of the tree's and the ROV's angles
 T_SPHI, T_CPHI, T_STH, T_CTH, T_SPSI, T_CPSI = 0, 1, 2, 3, 4, 5
@@ -144,16 +143,9 @@ def make_batch_work(n_thrusters: int, n_runs: int) -> BatchWork:
 
 @njit(inline="always", **JIT_NOALLOC)
 def _sincos_rows(s_out: np.ndarray, c_out: np.ndarray, x: np.ndarray) -> None:
-    """``sim.trig.sincos`` of every element of the row ``x``: the polynomial over the row
-    (vectorised), then libm's for the angles past its range (rare: a diverged run)."""
-    n = x.shape[0]
-    inside = True
-    for r in range(n):
-        s_out[r], c_out[r] = sincos_poly(x[r])
-        inside &= abs(x[r]) <= TRIG_POLY_LIMIT
-    if not inside:
-        for r in range(n):
-            s_out[r], c_out[r] = sincos(x[r])
+    """``sim.trig.sincos`` of every element of the row ``x`` (branch-free: vectorised)."""
+    for r in range(x.shape[0]):
+        s_out[r], c_out[r] = sincos(x[r])
 
 
 @njit(inline="always", **JIT_NOALLOC)

@@ -12,18 +12,20 @@ without branches or calls, so a loop of it becomes AVX-512 code:
 - **Quadrant** ``n mod 4`` by two-way selects (a four-way chain of them stayed a branch
   and kept the loop scalar, ``benchmarks/batch_probe.py``).
 
-Accuracy: at most 1 ulp from libm's ``sin`` and ``cos`` for ``|x| <= TRIG_POLY_LIMIT``
-(1e5 rad), measured in ``tests/test_trig.py`` (dense grids and random angles, including
-angles next to multiples of pi/2, where the reduction cancels). Outside that range the
-reduction is no longer checked (past 2^20 pi/2 its products stop being exact, past about
-2^51 the rounding to an integer fails outright), so ``sincos_poly`` alone is bounded to it.
+Accuracy against libm's ``sin`` and ``cos``, measured in ``tests/test_trig.py`` (dense grids
+and random angles, and every angle next to a multiple of pi/2 in the range, where the
+reduction cancels most): at most 1 ulp for |x| <= 200 rad, at most 2 ulp up to
+``TRIG_POLY_LIMIT`` = 1.5e6 rad (the reduced argument is used without its rounding tail;
+fdlibm keeps it, which costs a second ulp on rare large angles). Past the limit the
+reduction is not checked (from 2^20 pi/2 = 1.65e6 rad its products stop being exact, past
+about 2^51 the rounding to an integer fails outright).
 
-``sincos`` is what the plant calls: ``sincos_poly`` inside the range, libm's ``sin`` and
-``cos`` outside it (a heading is not wrapped in the state; 1e5 rad is 16 000 turns, which no
-run reaches unless it has diverged, but the answer stays libm's then). Infinity and NaN give
-NaN either way. The batch plant takes ``sincos_poly`` over a row of runs and then the same
-libm fix-up for any run outside the range (``sim.batch_plant._sincos_rows``), so both give
-the same bits.
+``sincos`` is what the plant calls: ``sincos_poly`` with NaN for |x| beyond the limit, as a
+select (a branch to libm there made the scalar plant step 20 % slower, measured). Headings
+are not wrapped in the plant's state, but 1.5e6 rad is 240 000 turns (some 35 days of
+spinning at 0.5 rad/s): a run that gets there has diverged, and the NaN stops it as the
+plant's finiteness check stops any other. Infinity and NaN give NaN. The batch plant calls
+the same ``sincos`` over a row of runs, so both give the same bits.
 """
 
 from __future__ import annotations
@@ -50,20 +52,20 @@ S4, S5, S6 = 2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099
 C1, C2, C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05
 C4, C5, C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
 
-TRIG_POLY_LIMIT = 1.0e5
-"""[rad] ``sincos_poly`` is within 1 ulp of libm for |x| up to this; ``sincos`` goes to
-libm beyond it."""
+TRIG_POLY_LIMIT = 1.5e6
+"""[rad] ``sincos_poly`` is within 2 ulp of libm for |x| up to this (1 ulp to 200 rad);
+``sincos`` gives NaN beyond it."""
 
 _QUADRANT_SAFE = 2.0**30
 """Quotients at or above this (or NaN) are given quadrant 0 before the integer conversion,
-so the conversion is always defined; the result there is discarded (``sincos``) or NaN."""
+so the conversion is always defined; the result there is replaced by NaN (``sincos``)."""
 
 
 @njit(inline="always", **JIT_NOALLOC)
 def sincos_poly(x: float) -> tuple[float, float]:
-    """(sin x, cos x) without branches or calls, within 1 ulp of libm for
-    |x| <= ``TRIG_POLY_LIMIT``; not to be used outside that range (see the module's
-    docstring; ``sincos`` is the full-range form)."""
+    """(sin x, cos x) without branches or calls, within 2 ulp of libm for
+    |x| <= ``TRIG_POLY_LIMIT`` (1 ulp to 200 rad); meaningless outside that range
+    (``sincos`` gives NaN there)."""
     n = (x * INV_PIO2 + TO_INT) - TO_INT
     y = (((x - n * PIO2_1) - n * PIO2_2) - n * PIO2_3) - n * PIO2_3T
     z = y * y
@@ -86,8 +88,8 @@ def sincos_poly(x: float) -> tuple[float, float]:
 
 @njit(inline="always", **JIT_NOALLOC)
 def sincos(x: float) -> tuple[float, float]:
-    """(sin x, cos x) for any x: ``sincos_poly`` for |x| <= ``TRIG_POLY_LIMIT``, libm's
-    ``sin`` and ``cos`` beyond (and NaN for infinity or NaN)."""
-    if abs(x) <= TRIG_POLY_LIMIT:
-        return sincos_poly(x)
-    return math.sin(x), math.cos(x)
+    """(sin x, cos x): ``sincos_poly`` for |x| <= ``TRIG_POLY_LIMIT``, NaN beyond it and
+    for infinity or NaN. Branch-free, so a loop of it vectorises."""
+    s, c = sincos_poly(x)
+    inside = abs(x) <= TRIG_POLY_LIMIT
+    return (s if inside else math.nan), (c if inside else math.nan)

@@ -2,7 +2,7 @@
 the scalar plant step (``sim.plant.rk4_step``) gives that run alone, over every branch of the
 plant: gripping or not, the wire slack or taut, the wire force from outside, the wire's mass,
 the landing surface with the corners and the posts in contact or not, with and without the
-ROV, and a heading past ``sim.trig``'s polynomial range. States and environment rows start
+ROV, and headings of 10^5 turns. States and environment rows start
 from a built full-scale docking simulation and are perturbed per run.
 """
 
@@ -77,7 +77,7 @@ def _batch_inputs(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
             env[plant.E_FRAME : plant.E_FRAME + 2, r] = x[0:2, r] + rng.uniform(-off, off, 2)
             env[plant.E_FRAME_PSI, r] = x[5, r] + rng.uniform(-0.02, 0.02)
             x[11, r] = rng.uniform(-0.05, 0.05)
-        elif case == 7:  # a heading past sim.trig's polynomial range (libm's); the frame's
+        elif case == 7:  # headings 2e5 and -3e5 rad (sim.trig's large reduction); the frame's
             # posts' tops 0.5 m under the tree's bottom (near enough for the contact code, which
             # finds nothing)
             x[5, r] += 2.0e5
@@ -164,11 +164,12 @@ def test_a_non_finite_run_leaves_the_others_alone() -> None:
     x[4, 3] = math.nan  # pitch of run 3
     x[8, 9] = math.inf  # heave speed of run 9
     env[plant.E_PUSH, 12] = math.nan  # push on run 12 (a landing case)
+    x[17, 14] = 2.0e6  # ROV heading of run 14 past sim.trig's range: NaN
     expected = _scalar_steps(x, n_rps, env, P, dt, steps=3)[-1]
     work = make_batch_work(n_rps.shape[0], 16)
     for _ in range(3):
         rk4_batch_into(x, n_rps, env, P, dt, work)
-    bad = [3, 9, 12]
+    bad = [3, 9, 12, 14]
     for r in range(16):
         assert np.all(np.isfinite(x[:, r])) == (r not in bad), r
         # the bad runs as the scalar step leaves them, NaN for NaN; the others untouched
