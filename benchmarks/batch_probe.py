@@ -2,10 +2,10 @@
 batch stepper (docs/speed.md, "Batch stepper"), measured on two pieces of the step:
 
 1. **Sine and cosine.** numba finds no SVML here, so a loop over runs that calls ``math.sin``
-   stays scalar (one libm call per element). ``sincos_poly`` is a sine and cosine the compiler
-   can vectorise: Cody-Waite reduction by pi/2 in three parts, then the minimax polynomials
-   of fdlibm's ``__kernel_sin`` and ``__kernel_cos`` on [-pi/4, pi/4], the quadrant chosen
-   by selects instead of branches. The probe reports its error against libm in units in the
+   stays scalar (one libm call per element). ``sim.trig.sincos_poly`` is a sine and cosine the
+   compiler can vectorise: Cody-Waite reduction by pi/2, then the minimax polynomials of
+   fdlibm's ``__kernel_sin`` and ``__kernel_cos`` on [-pi/4, pi/4], the quadrant chosen by
+   selects instead of branches. The probe reports its error against libm in units in the
    last place (over angles in [-100, 100] rad) and the time per element, both ways.
 2. **One body's kinematics** (the body-to-NED velocity for each run):
    ``eta_dot = R(phi, theta, psi) nu`` for N runs, once through the plant's own
@@ -33,44 +33,7 @@ from numba import njit
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from sim.gnc import JIT_NOALLOC, Rzyx_into, mv3_into
-
-# pi/2 in three parts (the first two with their low bits zero, so n * part is exact for
-# |n| < 2^20) and 2/pi: the constants of fdlibm's medium-size argument reduction
-PIO2_1 = 1.57079632673412561417e00
-PIO2_2 = 6.07710050630396597660e-11
-PIO2_3 = 2.02226624871116645580e-21
-INV_PIO2 = 6.36619772367581382433e-01
-TO_INT = 1.5 * 2.0**52
-"""Adding and subtracting it rounds a double below 2^51 to the nearest integer (ties to even)."""
-
-# fdlibm's minimax polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c)
-S1, S2, S3 = -1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04
-S4, S5, S6 = 2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10
-C1, C2, C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05
-C4, C5, C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
-
-
-@njit(inline="always", **JIT_NOALLOC)
-def sincos_poly(x: float) -> tuple[float, float]:
-    """(sin x, cos x) without branches, for |x| < 1e5 rad."""
-    n = (x * INV_PIO2 + TO_INT) - TO_INT
-    y = ((x - n * PIO2_1) - n * PIO2_2) - n * PIO2_3
-    z = y * y
-    s = y + y * z * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))))
-    r = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))))
-    hz = 0.5 * z
-    w = 1.0 - hz
-    c = w + (((1.0 - w) - hz) + z * r)
-    # quadrant q = n mod 4: odd quadrants swap sine and cosine; the sine is negative in
-    # quadrants 2 and 3, the cosine in 1 and 2 (two-way selects, which the compiler turns
-    # into blends; a four-way chain of them stayed a branch and kept the loop scalar)
-    q = int(n)
-    odd = (q & 1) != 0
-    sin_x = c if odd else s
-    cos_x = s if odd else c
-    sin_x = -sin_x if (q & 2) != 0 else sin_x
-    cos_x = -cos_x if ((q + 1) & 2) != 0 else cos_x
-    return sin_x, cos_x
+from sim.trig import sincos_poly
 
 
 @njit(**JIT_NOALLOC)

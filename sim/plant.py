@@ -40,6 +40,7 @@ from sim.gnc import (
 from sim.params import ParameterSet
 from sim.thrusters import thrust_from_speed as thrust_from_speed  # re-exported (tests)
 from sim.thrusters import thrust_from_speed_into
+from sim.trig import sincos
 
 # State layout.
 ETA_T = slice(0, 6)
@@ -420,8 +421,16 @@ def tree_acceleration_into(
     mv6_into(base, P.tree_M_inv, rhs6)
     minv_u = vec[V_MINVU, 0:6]
     mv6_into(minv_u, P.tree_M_inv, u)
-    denom = 1.0 + m_w * np.dot(u, minv_u)
-    scale = m_w * np.dot(u, base) / denom
+    # the dot products summed in order from 0.0 (as the batch plant does; BLAS's ddot, which
+    # np.dot calls, sums in an order of its own)
+    u_minv_u = 0.0
+    for i in range(6):
+        u_minv_u += u[i] * minv_u[i]
+    u_base = 0.0
+    for i in range(6):
+        u_base += u[i] * base[i]
+    denom = 1.0 + m_w * u_minv_u
+    scale = m_w * u_base / denom
     for i in range(6):
         nu_dot[i] = base[i] - minv_u[i] * scale
 
@@ -626,10 +635,10 @@ def post_penetration(q: np.ndarray, P: PlantArrays) -> tuple[int, float, np.ndar
 def _post_top_into(q: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, i: int) -> None:
     """Post i's top from the tree's centre into ``q`` (3,): north and east turned into the
     tree's heading (x fore, y starboard, level), and down."""
-    cf, sf = np.cos(env[E_FRAME_PSI]), np.sin(env[E_FRAME_PSI])
+    sf, cf = sincos(env[E_FRAME_PSI])
     dn = env[E_FRAME] + cf * P.dock_xy[i, 0] - sf * P.dock_xy[i, 1] - x[0]
     de = env[E_FRAME + 1] + sf * P.dock_xy[i, 0] + cf * P.dock_xy[i, 1] - x[1]
-    c, s = np.cos(x[5]), np.sin(x[5])
+    s, c = sincos(x[5])
     q[0] = c * dn + s * de
     q[1] = -s * dn + c * de
     q[2] = env[E_LAND] - P.dock_post_height - x[2]
@@ -730,9 +739,10 @@ def contact_wrench_into(
     # as in sim.docking), so they push through the centre and turn the tree about the vertical;
     # its generalized force on the heading, as a body moment, is Q_psi * d(psi_dot)/d(omega_b)
     mv3_into(v_n, R_t, nu[0:3])
-    cphi, sphi, cth = np.cos(x[3]), np.sin(x[3]), np.cos(x[4])
+    sphi, cphi = sincos(x[3])
+    cth = sincos(x[4])[1]
     psi_dot = (sphi * w[1] + cphi * w[2]) / cth
-    c, s = np.cos(x[5]), np.sin(x[5])
+    s, c = sincos(x[5])
     q = vec[V_CQ, 0:3]
     grad = vec[V_CG, 0:3]
     q_dot = vec[V_CQD, 0:3]
@@ -956,10 +966,9 @@ def rov_wrench(
     thrust_b = np.empty(6)
     thruster_wrench_into(thrust_b, n_rps, P, work)
     tau = np.empty(6)
-    phi, theta = x[15], x[16]
-    rov_wrench_into(
-        tau, x, thrust_b, env, P, R_r, np.sin(theta), np.cos(theta), np.sin(phi), np.cos(phi), work
-    )
+    sth, cth = sincos(x[16])
+    sphi, cphi = sincos(x[15])
+    rov_wrench_into(tau, x, thrust_b, env, P, R_r, sth, cth, sphi, cphi, work)
     return tau
 
 
@@ -974,20 +983,23 @@ def rhs_into(
 ) -> None:
     """Time derivative of the plant state into ``xdot`` (N_STATE,), allocating nothing.
     ``thrust_b`` is the thrusters' wrench (``thruster_wrench_into``). The cosines and sines
-    of each body's angles are computed once and shared by R_nb, T_Theta and g(eta)."""
+    of each body's angles are computed once (``sim.trig.sincos``, the batch plant's own
+    arithmetic) and shared by R_nb, T_Theta (tan theta as sin / cos) and g(eta)."""
     vec, mat = work.vec, work.mat
-    cphi, sphi = np.cos(x[3]), np.sin(x[3])
-    cth, sth = np.cos(x[4]), np.sin(x[4])
+    sphi, cphi = sincos(x[3])
+    sth, cth = sincos(x[4])
+    spsi, cpsi = sincos(x[5])
     R_t = mat[M_RT]
-    Rzyx_into(R_t, cphi, sphi, cth, sth, np.cos(x[5]), np.sin(x[5]))
+    Rzyx_into(R_t, cphi, sphi, cth, sth, cpsi, spsi)
     tau_t = vec[V_TAU_T, 0:6]
     tree_wrench_into(tau_t, x, env, P, R_t, work)
     T_theta = mat[M_T]
     if P.has_rov:
-        cphi_r, sphi_r = np.cos(x[15]), np.sin(x[15])
-        cth_r, sth_r = np.cos(x[16]), np.sin(x[16])
+        sphi_r, cphi_r = sincos(x[15])
+        sth_r, cth_r = sincos(x[16])
+        spsi_r, cpsi_r = sincos(x[17])
         R_r = mat[M_RR]
-        Rzyx_into(R_r, cphi_r, sphi_r, cth_r, sth_r, np.cos(x[17]), np.sin(x[17]))
+        Rzyx_into(R_r, cphi_r, sphi_r, cth_r, sth_r, cpsi_r, spsi_r)
         tau_r = vec[V_TAU_R, 0:6]
         rov_wrench_into(tau_r, x, thrust_b, env, P, R_r, sth_r, cth_r, sphi_r, cphi_r, work)
         if env[E_GRIP] > 0.0:
@@ -997,13 +1009,13 @@ def rhs_into(
             for i in range(6):
                 tau_r[i] += w_rov[i]
                 tau_t[i] += w_tree[i]
-        Tzyx_into(T_theta, cphi_r, sphi_r, cth_r, np.tan(x[16]))
+        Tzyx_into(T_theta, cphi_r, sphi_r, cth_r, sth_r / cth_r)
         _kinematics_into(xdot[12:18], x[18:24], R_r, T_theta)
         mv6_into(xdot[18:24], P.rov_M_inv, tau_r)
     else:
         for i in range(12, N_STATE):
             xdot[i] = 0.0
-    Tzyx_into(T_theta, cphi, sphi, cth, np.tan(x[4]))
+    Tzyx_into(T_theta, cphi, sphi, cth, sth / cth)
     _kinematics_into(xdot[0:6], x[6:12], R_t, T_theta)
     tree_acceleration_into(xdot[6:12], x, tau_t, env, P, R_t, work)
 
