@@ -27,7 +27,7 @@ import numpy as np
 from control import loop
 from control.batchkernel import batch_steps
 from control.jobs import ChunkJob, ChunkResult
-from sim import plant
+from sim import batch_plant, plant
 
 T = TypeVar("T")
 
@@ -39,6 +39,11 @@ def _stacked(template: Any, n_runs: int) -> Any:
         a = np.asarray(value)
         fields.append(np.zeros((n_runs, *a.shape), dtype=a.dtype))
     return type(template)(*fields)
+
+
+def _same_values(a: Any, b: Any) -> bool:
+    """Two NamedTuples of arrays and numbers hold the same values, field by field."""
+    return all(np.array_equal(u, v) for u, v in zip(a, b, strict=True))
 
 
 class _Slots:
@@ -74,6 +79,14 @@ class _Slots:
         self._inputs(first, length)
         self.work = plant.make_work(s.arrays.thr_T.shape[1])
         self.W = loop.make_control_work()
+        # the batch's plant (the first run's) and who has it: those runs step together
+        self.P0 = s.arrays
+        self.same_plant = np.zeros(n_runs, np.bool_)
+        m = s.arrays.thr_T.shape[1]
+        self.x_sb = np.zeros((plant.N_STATE, n_runs))
+        self.n_sb = np.zeros((m, n_runs))
+        self.env_sb = np.zeros((first.env.shape[1], n_runs))
+        self.bwork = batch_plant.make_batch_work(m, n_runs)
 
     def _inputs(self, job: ChunkJob, length: int) -> None:
         """(Re)make the chunk buffers for chunks of up to ``length`` steps, keeping what the
@@ -140,6 +153,8 @@ class _Slots:
             self._inputs(job, n)
         for i in p_new:
             self.PS[i][r] = s.arrays[i]
+        if p_new:
+            self.same_plant[r] = s.arrays is self.P0 or _same_values(s.arrays, self.P0)
         for i in c_new:
             self.CS[i][r] = s.C[i]
         self.seen_P[r], self.seen_C[r] = s.arrays, s.C
@@ -203,6 +218,12 @@ class _Slots:
             self.log,
             self.work,
             self.W,
+            self.same_plant,
+            self.P0,
+            self.x_sb,
+            self.n_sb,
+            self.env_sb,
+            self.bwork,
         )
 
 

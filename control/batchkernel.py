@@ -18,7 +18,7 @@ from numba import njit
 
 from control import loop
 from control.loop import ControlArrays, ControlWork, QualityState
-from sim import plant, sensors
+from sim import batch_plant, plant, sensors
 from sim.gnc import JIT_NOALLOC
 
 
@@ -161,6 +161,12 @@ def batch_steps(
     log: np.ndarray,
     work: plant.PlantWork,
     W: ControlWork,
+    same_plant: np.ndarray,
+    P0: plant.PlantArrays,
+    x_sb: np.ndarray,
+    n_sb: np.ndarray,
+    env_sb: np.ndarray,
+    bwork: batch_plant.BatchWork,
 ) -> int:
     """Advance every run with a chunk under way (``pos[r] < length[r]``) step by step, all of
     them one step before any takes the next, until the first of them reaches the end of its
@@ -169,9 +175,12 @@ def batch_steps(
     chunk there: ``ok[r] = j``, ``pos[r] = length[r]``. Returns the steps taken.
 
     Each step goes over the runs three times: sensors, control and thrusters (propeller
-    speeds into ``n_rps[r]``); the plants' RK4 steps; the observers' predictions and the
-    rows' plant columns. Per run these are ``loop._closed_steps``' calls in its order
-    (``finish_step_into`` is ``thrusters_into``, the RK4 step, ``observe_into``)."""
+    speeds into ``n_rps[r]``); the plants' RK4 steps (the runs whose plant is the batch's
+    ``P0``, ``same_plant[r]``, together in the structure-of-arrays step of
+    ``sim.batch_plant`` through ``x_sb`` (N_STATE, N), ``n_sb``, ``env_sb``, ``bwork``); the
+    observers' predictions and the rows' plant columns. Per run these are
+    ``loop._closed_steps``' calls in its order (``finish_step_into`` is ``thrusters_into``,
+    the RK4 step, ``observe_into``), with the same numbers."""
     n_runs = pos.shape[0]
     m = CS.f_lo.shape[1]
     tau6 = W.vec[loop.W_TAU6, 0:6]
@@ -197,8 +206,29 @@ def batch_steps(
             )
             loop.allocate_into(f, tau6, C, W)
             loop.thrusters_into(n_rps[r, 0:m], f, C, row, W)
+        # the plants: the runs on the batch's own plant (``same_plant``) in one step of all
+        # columns, the runs innermost (``sim.batch_plant``, the same bits as alone); any other
+        # run by itself
+        any_same = False
         for r in range(n_runs):
-            if active[r]:
+            if active[r] and same_plant[r]:
+                any_same = True
+                for i in range(plant.N_STATE):
+                    x_sb[i, r] = x[r, i]
+                for i in range(m):
+                    n_sb[i, r] = n_rps[r, i]
+                env_r = env[r, pos[r]]
+                for i in range(env_r.shape[0]):
+                    env_sb[i, r] = env_r[i]
+        if any_same:
+            batch_plant.rk4_batch_into(x_sb, n_sb, env_sb, P0, dt, bwork)
+        for r in range(n_runs):
+            if not active[r]:
+                continue
+            if same_plant[r]:
+                for i in range(plant.N_STATE):
+                    x[r, i] = x_sb[i, r]
+            else:
                 P = plant_view(PS, r)
                 plant.rk4_step_into(x[r], x[r], n_rps[r, 0:m], env[r, pos[r]], P, dt, work)
         for r in range(n_runs):

@@ -498,7 +498,9 @@ speed passes), by number of workers. Kept as measured then: the old code is not 
 
 
 def compute_campaign() -> Results:
-    return _benchmark_json("benchmarks/campaign_benchmark.py", "--runs", "200", "--workers", "1,2")
+    res = _benchmark_json("benchmarks/campaign_benchmark.py", "--runs", "200", "--workers", "1,2")
+    res["batch"] = _benchmark_json("benchmarks/batch_benchmark.py", "--runs", "64")
+    return res
 
 
 def render_campaign(res: Results) -> str:
@@ -532,6 +534,29 @@ def render_campaign(res: Results) -> str:
                 f"{res['one_run_simulated_s_per_s']:,.0f} simulated s/s."
             )
         )
+    batch = res.get("batch")
+    if batch:
+        ways = (
+            ("alone_one_core", "one after the other, alone, one core"),
+            ("batch_one_core", "one batch, one core"),
+            ("batch_two_processes", "two processes, a batch of half the runs each"),
+        )
+        rows += [
+            "",
+            para(
+                "The batch stepper (`.venv/bin/python benchmarks/batch_benchmark.py --runs "
+                f"{batch['runs']}`: {batch['runs']} of these docking runs, "
+                f"{batch['batch_one_core']['simulated_s']:,.0f} simulated s; load average "
+                f"{batch['load_before'][0]:.1f} before), every run giving the rows it gives alone:"
+            ),
+            "",
+            "| how | wall s | simulated s per wall s |",
+            "|---|---|---|",
+            *(
+                f"| {label} | {batch[key]['wall_s']:.2f} | {batch[key]['rate']:,.0f} |"
+                for key, label in ways
+            ),
+        ]
     return "\n".join(rows)
 
 

@@ -131,7 +131,7 @@ def test_a_run_that_diverges_or_raises_ends_alone_and_the_others_go_on():
 
 @pytest.mark.parametrize(
     ("todo", "workers", "size"),
-    [(1, 2, 1), (4, 2, 1), (8, 2, 2), (40, 2, 10), (200, 2, 16), (1000, 4, 16)],
+    [(1, 2, 1), (4, 2, 1), (8, 2, 2), (40, 2, 10), (200, 2, 32), (1000, 4, 32)],
 )
 def test_runs_per_task_splits_the_runs_so_the_workers_finish_together(todo, workers, size):
     assert runner.runs_per_task(todo, workers) == size
@@ -151,3 +151,41 @@ def test_a_driver_keeping_only_the_scored_columns_scores_the_same():
         assert np.array_equal(lean.log["tree_eta_n"], full.log["tree_eta_n"])
         assert lean.summary() == full.summary()
         assert lean.settling_time_s == full.settling_time_s
+
+
+def test_runs_on_another_plant_step_by_themselves_in_the_batch_and_stay_as_alone():
+    # the runs on the batch's own plant (the first run's) step together, the runs innermost
+    # (sim.batch_plant); a run whose plant differs (a heavier tree: its Froude-Krylov mass
+    # m - W0 / g differs) steps by itself
+    from control.batch import _Slots
+
+    spec = params.load_spec("full-scale")
+    base = params.build(spec)
+    heavy = params.build(
+        spec.model_copy(
+            update={"tree": spec.tree.model_copy(update={"mass_kg": spec.tree.mass_kg * 1.2})}
+        )
+    )
+
+    def runs():
+        sims = [
+            Simulation(base, tree_depth_m=100.0, seed=1),
+            Simulation(heavy, tree_depth_m=100.0, seed=2),
+            Simulation(base, tree_depth_m=100.0, seed=1),
+        ]
+        for sim in sims:  # a move, so that the tree's inertia counts
+            sim.set_target(3.0, 0.0, 0.0)
+        return sims
+
+    alone = [sim.step(300) for sim in runs()]
+    together = run_together([sim.step_jobs(300) for sim in runs()])
+    for a, o in zip(alone, together, strict=True):
+        assert o.error is None
+        assert np.array_equal(o.value.data, a.data)
+    assert np.array_equal(alone[0].data, alone[2].data)  # the same run twice
+    assert not np.array_equal(alone[0].data, alone[1].data)
+    sims = runs()
+    jobs = [next(sim.step_jobs(10)) for sim in sims]
+    slots = _Slots(jobs[0], 3, 100)
+    assert all(slots.put(r, job) for r, job in enumerate(jobs))
+    assert slots.same_plant.tolist() == [True, False, True]
