@@ -19,6 +19,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 DONE_MARK = "precompiled"
 """The file written into the cache folder once every kernel is in it."""
 
@@ -102,6 +104,15 @@ def compile_all(part: str | None = None) -> None:
         runs = [Simulation(ps, tree_depth_m=100.0) for _ in range(2)]
         run_together([sim.step_jobs(2) for sim in runs])
     if closed:
+        # the batch plant's step called from Python (its tests and tools; the batch kernel
+        # inlines its own): compiled here, beside the closed loop, rather than in the tests
+        from sim import batch_plant, plant
+
+        arrays = Simulation(params.load("full-scale"), tree_depth_m=100.0).arrays
+        m = arrays.thr_T.shape[1]
+        batch_plant.rk4_batch(
+            np.zeros((plant.N_STATE, 2)), np.zeros((m, 2)), np.zeros((plant.N_ENV, 2)), arrays, 0.01
+        )
         for feedback in ("perfect", "ekf"):
             for allocation in ("pinv", "priority"):
                 for reference in ("first", "third"):
