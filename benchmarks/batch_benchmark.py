@@ -2,12 +2,14 @@
 ``full-docking-current-0.3``, current at random in 0.1-0.5 m/s), simulated seconds of all runs
 per wall second.
 
-    .venv/bin/python benchmarks/batch_benchmark.py [--runs 64] [--json]
+    .venv/bin/python benchmarks/batch_benchmark.py [--runs 64] [--json] [--sizes 8,16,32,64]
 
 Three ways over the same runs: one after the other alone in this process (one core), all in
 one batch in this process (``control.batch.run_together``, one core), and split over two
 processes each running its half as one batch (two cores: the issue's configuration of 64 runs
 at once). The compiled kernels are loaded before timing (a warm-up run of each kind).
+``--sizes`` instead runs the same runs on one core in batches of each size (what
+``missions.campaign.MAX_RUNS_PER_TASK`` was chosen from).
 """
 
 from __future__ import annotations
@@ -63,11 +65,21 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=64, help="docking runs")
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.add_argument("--sizes", help="batch sizes to compare on one core, e.g. 8,16,32,64")
     args = parser.parse_args()
     runs = args.runs
     indices = list(range(runs))
     load = os.getloadavg()
     _warm(runs)
+    if args.sizes:
+        sim_a, wall_a = alone(runs, indices)
+        print(f"{runs} docking runs on one core, load before {load}")
+        print(f"  alone          {sim_a / wall_a:7,.0f}x")
+        for size in (int(v) for v in args.sizes.split(",")):
+            parts = [together(runs, indices[k : k + size]) for k in range(0, runs, size)]
+            rate = sum(s for s, _ in parts) / sum(w for _, w in parts)
+            print(f"  batches of {size:3d} {rate:7,.0f}x")
+        return
     sim_a, wall_a = alone(runs, indices)
     sim_b, wall_b = together(runs, indices)
     halves = [indices[: runs // 2], indices[runs // 2 :]]

@@ -772,10 +772,9 @@ def run_one(c: Campaign, base: schema.Mission, index: int) -> dict:
 
 MAX_RUNS_PER_TASK = 32
 """Most runs of a campaign stepped together in one batch (one Dask task, ``run_block``).
-Measured on 64 docking runs on one core (``benchmarks/batch_benchmark.py``, the plants of a
-batch in one structure-of-arrays step): batches of 16 and 32 ran 3,253x and 3,296x against
-2,289x alone, a batch of 64 2,827x (the control steps, still run by run, then go out of
-cache)."""
+Measured on 64 docking runs on one core (``benchmarks/batch_benchmark.py --sizes
+8,16,32,64``, load 0.6): batches of 16 and 32 ran 3,358x and 3,492x against 2,337x alone, a
+batch of 64 2,978x (the control steps, still run by run, then go out of cache)."""
 
 
 def run_block(c: Campaign, base: schema.Mission, indices: Sequence[int]) -> list[dict]:
