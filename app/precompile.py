@@ -67,13 +67,14 @@ def main(argv: list[str] | None = None) -> None:
 
 
 PARTS = ("closed-loop", "open-loop-and-qp", "batch")
-"""Two halves of the compile that share no large kernel, so that two processes compile them
-at once: the closed loop's chunk kernel (``loop.run_chunk``, about 90 s), and the open loop's
+"""Three parts of the compile that share no large kernel, so that separate processes compile
+them at once: the closed loop's chunk kernel (``loop.run_chunk``) with the plant's own
+kernels as Python calls them (``plant.rk4_step_into``, ``rhs``, ...); the open loop's
 (``loop.run_open_chunk``) with the QP allocation's step (``loop.control_step`` and
-``loop.finish_step``, each inlining a whole plant or control step; about 115 s together).
-One after the other they took 210 s on a quiet machine. The third, the batch kernel of
-campaigns (``control.batchkernel.batch_steps``, the closed loop's step once more), is
-compiled beside them."""
+``loop.finish_step``); and the batch kernel of campaigns
+(``control.batchkernel.batch_steps``) with the batch plant. Each part alone took 3-5 min
+on a quiet machine (each kernel that inlines the plant's or the control's step takes about a
+minute); side by side on two cores, 6-7 min."""
 
 
 def compile_parts_at_once() -> None:
@@ -98,21 +99,32 @@ def compile_all(part: str | None = None) -> None:
     closed = part in (None, "closed-loop")
     other = part in (None, "open-loop-and-qp")
     ps = params.load("model-scale")
+    from sim import batch_plant, plant
+
+    arrays = Simulation(params.load("full-scale"), tree_depth_m=100.0).arrays
+    m = arrays.thr_T.shape[1]
+    x, n, env = np.zeros(plant.N_STATE), np.zeros(m), np.zeros(plant.N_ENV)
+    env[plant.E_LREST] = 100.0
     if part in (None, "batch"):
         from control.batch import run_together
 
         runs = [Simulation(ps, tree_depth_m=100.0) for _ in range(2)]
         run_together([sim.step_jobs(2) for sim in runs])
-    if closed:
-        # the batch plant's step called from Python (its tests and tools; the batch kernel
-        # inlines its own): compiled here, beside the closed loop, rather than in the tests
-        from sim import batch_plant, plant
-
-        arrays = Simulation(params.load("full-scale"), tree_depth_m=100.0).arrays
-        m = arrays.thr_T.shape[1]
+        # the batch plant's step called from Python (its tests and tools): it calls the
+        # batch kernel's own ``rk4_batch_into``, compiled just above
         batch_plant.rk4_batch(
             np.zeros((plant.N_STATE, 2)), np.zeros((m, 2)), np.zeros((plant.N_ENV, 2)), arrays, 0.01
         )
+    if closed:
+        # the plant's own kernels as tools, benchmarks and tests call them from Python (one
+        # step, the right-hand side, a run of steps): compiled here rather than by the first
+        # test run (rk4_step_into is the step the other kernels call; rhs inlines the
+        # right-hand side once more)
+        plant.rk4_step_into(x.copy(), x, n, env, arrays, 0.01, plant.make_work(m))
+        plant.rk4_step(x, n, env, arrays, 0.01)
+        plant.rhs_into(np.zeros(plant.N_STATE), x, np.zeros(6), env, arrays, plant.make_work(m))
+        plant.rhs(x, n, env, arrays)
+        plant.advance(x, n, env[None, :], arrays, 0.01)
         for feedback in ("perfect", "ekf"):
             for allocation in ("pinv", "priority"):
                 for reference in ("first", "third"):

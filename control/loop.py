@@ -812,7 +812,11 @@ def _closed_steps(
         sensors.sample_into(held_y, x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
         control_step_into(tau6, t, x, held_y, fresh[j], xhat, Pc, cs, target, C, Q, dt, row, W)
         allocate_into(f, tau6, C, W)
-        finish_step_into(x, f, env[j], xhat, Pc, C, P, dt, t + dt, held_y, row, work, W)
+        # ``finish_step_into`` with the plant's step inlined
+        n_rps = W.vec[W_N, 0 : f.shape[0]]
+        thrusters_into(n_rps, f, C, row, W)
+        plant.rk4_step_inline(x, x, n_rps, env[j], P, dt, work)
+        observe_into(x, env[j], xhat, Pc, C, P, dt, t + dt, held_y, row, work, W)
         if not plant.all_finite(x):
             return j
     return n
@@ -908,7 +912,7 @@ def _open_steps(
     m = n_rps.shape[0]
     for j in range(n):
         row = log[j]
-        plant.rk4_step_into(x, x, n_rps, env[j], P, dt, work)
+        plant.rk4_step_inline(x, x, n_rps, env[j], P, dt, work)
         if not plant.all_finite(x):
             return j
         sensors.sample_into(held_y, x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)

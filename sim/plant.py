@@ -1032,8 +1032,26 @@ def rhs(x: np.ndarray, n_rps: np.ndarray, env: np.ndarray, P: PlantArrays) -> np
     return xdot
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def rk4_step_into(
+    out: np.ndarray,
+    x: np.ndarray,
+    n_rps: np.ndarray,
+    env: np.ndarray,
+    P: PlantArrays,
+    dt: float,
+    work: PlantWork,
+) -> None:
+    """``rk4_step_inline`` compiled once, as a function of its own that kernels call (the
+    plant's step is the largest piece of compiled code: each kernel that inlined it took half
+    a minute more to compile). The closed and open loops' own kernels, where the call would
+    cost (their step arguments, the ``PlantArrays``, are passed field by field), inline
+    ``rk4_step_inline`` instead."""
+    rk4_step_inline(out, x, n_rps, env, P, dt, work)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def rk4_step_inline(
     out: np.ndarray,
     x: np.ndarray,
     n_rps: np.ndarray,
