@@ -184,13 +184,18 @@ class _Slots:
             value[...] = stack[r]
         self.length[r] = 0
         self.pos[r] = 0
+        if job.out is None:
+            rows = self.log[r, :n].copy()
+        else:
+            rows = job.out
+            rows[...] = self.log[r, :n]
         return (
             self.x[r].copy(),
             self.held_y[r].copy(),
             self.xhat[r].copy(),
             self.Pc[r].copy(),
             self.cs[r].copy(),
-            self.log[r, :n].copy(),
+            rows,
             int(self.ok[r]),
         )
 

@@ -179,8 +179,8 @@ def batch_steps(
     ``P0``, ``same_plant[r]``, together in the structure-of-arrays step of
     ``sim.batch_plant`` through ``x_sb`` (N_STATE, N), ``n_sb``, ``env_sb``, ``bwork``); the
     observers' predictions and the rows' plant columns. Per run these are
-    ``loop._closed_steps``' calls in its order (``finish_step_into`` is ``thrusters_into``,
-    the RK4 step, ``observe_into``), with the same numbers."""
+    ``loop._closed_steps``' calls in its order (sensors, control, allocation, thrusters, the
+    RK4 step, ``observe_into``), with the same numbers."""
     n_runs = pos.shape[0]
     m = CS.f_lo.shape[1]
     tau6 = W.vec[loop.W_TAU6, 0:6]

@@ -39,6 +39,10 @@ class ChunkJob:
     env: np.ndarray  # (n, N_ENV) environment rows
     noise: np.ndarray  # sensor noise rows
     fresh: np.ndarray  # which sensors have a fresh sample at each step
+    out: np.ndarray | None = None
+    """Where the chunk's log rows go, (n, N_LOG): a slice of its request's rows; None, a new
+    array. (A batch copies the rows from its slot there; ``run`` returns a new array and
+    the run copies it.)"""
 
     @property
     def n(self) -> int:

@@ -718,20 +718,24 @@ class Simulation:
         it runs itself. Returns the rows of the ``n`` steps."""
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 0:
             raise ValueError(f"steps must be a whole number >= 0, got {n!r}")
-        parts: list[FloatArray] = []
+        out: FloatArray | None = None
         done = 0
         while done < n:
             k = min(self.chunk_steps, int(n) - done, self._steps_to_fault_edge())
             if self.mdwire is not None:
                 k = 1  # MoorDyn and the plant take turns, one step each
-            parts.append((yield from self._chunk(k)))
+            if done == 0 and k == n:
+                # most requests: one chunk, whose own fresh rows are the answer
+                out = yield from self._chunk(k)
+            else:
+                # several chunks: each writes its rows straight into the request's (a
+                # batch copies them there from its slot; no join of the parts afterwards)
+                if out is None:
+                    out = np.empty((n, N_LOG))
+                yield from self._chunk(k, out[done : done + k])
             done += k
-        if not parts:
+        if out is None:
             out = np.empty((0, N_LOG))
-        elif len(parts) == 1:
-            out = parts[0]  # most requests: the chunk's own fresh rows, not copied again
-        else:
-            out = np.concatenate(parts)
         out.flags.writeable = False  # shared by the joins of whoever reads them (LogRows.join)
         return LogRows(out, self.n_thrusters, self.Q.counters.copy())
 
@@ -971,7 +975,11 @@ class Simulation:
                 self.crane_tip_n = env[-1, plant.E_CT : plant.E_CT + 3].copy()
                 self.crane_target_n = self.crane_tip_n.copy()
 
-    def _chunk(self, n: int) -> Generator[ChunkJob, ChunkResult, FloatArray]:
+    def _chunk(
+        self, n: int, out: FloatArray | None = None
+    ) -> Generator[ChunkJob, ChunkResult, FloatArray]:
+        """Advance n steps in one chunk; returns their rows: ``out`` (n, N_LOG) filled, when
+        given, else a new array."""
         if self.control_on:
             self._sync_site()
         env, noise = self._chunk_inputs(n)
@@ -991,13 +999,17 @@ class Simulation:
             x, held, self.xhat, self.P_cov, self.cs, log, ok = self._chunk_qp(env, noise)
         else:
             x, held, self.xhat, self.P_cov, self.cs, log, ok = yield ChunkJob(
-                self, env, noise.noise, noise.fresh
+                self, env, noise.noise, noise.fresh, out
             )
         if ok < n:
             self._diverged(x, ok)
         self.x, self.held_y = x, held
         self.step_index += n
-        return log
+        if out is None:
+            return log
+        if log is not out:
+            out[...] = log
+        return out
 
     def _diverged(self, x: FloatArray, ok: int) -> None:
         parts = {

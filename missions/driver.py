@@ -32,9 +32,9 @@ def _scored_columns(rows: LogRows) -> LogRows:
     )
 
 
-_SCORED_INDEX = [
-    LAYOUT.starts[name] + k for name in SCORED_LAYOUT.starts for k in range(LAYOUT.widths[name])
-]
+_SCORED_INDEX = np.array(
+    [LAYOUT.starts[name] + k for name in SCORED_LAYOUT.starts for k in range(LAYOUT.widths[name])]
+)
 
 
 class MissionDriver:
