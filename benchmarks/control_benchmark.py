@@ -45,12 +45,12 @@ _NO_NRT = {"cache": True, "error_model": "numpy", "_nrt": False}
 @njit(**_NO_NRT)
 def _plant_steps(x, n, env, P, dt, work, reps):
     for _ in range(reps):
-        plant.rk4_step_into(x, x, n, env, P, dt, work)
+        plant.rk4_step_inline(x, x, n, env, P, dt, work)
 
 
 @njit(cache=True)
 def _time_plant(x, n, env, P, dt, reps):
-    """The RK4 step as the loops call it: into the state, with one work space."""
+    """The RK4 step as the loops run it: inlined, into the state, with one work space."""
     x = x.copy()
     _plant_steps(x, n, env, P, dt, plant.make_work(n.shape[0]), reps)
     return x
@@ -123,7 +123,7 @@ def _predicts(xh, Pc, tau, C, dt, W, reps):
     for _ in range(reps):
         ekf.predict_into(
             xh, Pc, tau, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq, C.T_b, C.GQG,
-            W.vec[loop.W_F0, 0:9], W.vec[loop.W_FJ, 0:9], W.vec[loop.W_XP, 0:9],
+            W.vec[loop.W_F0, 0:9],
             W.mat[loop.MW_PHI], W.mat[loop.MW_TMP],
         )  # fmt: skip
     return xh[0]

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from sim.gnc import JIT, JIT_NOALLOC, dot_into, ssa
+from sim.gnc import JIT, JIT_NOALLOC, ssa
 
 N_X = 9
 NORTH, EAST, PSI, SURGE, SWAY, YAW_RATE, B_N, B_E, B_PSI = range(9)
@@ -133,15 +133,122 @@ def predict(
     GQG: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """One prediction step (table 3.1): x+ = x + h f(x, u); P+ = Phi P Phi^T + Gamma Q Gamma^T
-    with Phi = I + h df/dx (forward-difference Jacobian, step 1e-6 scaled to each state).
-    Returns new arrays (``predict_into`` is the step in place)."""
+    with Phi = I + h df/dx (the Jacobian by hand, ``jacobian_phi_into``). Returns new arrays
+    (``predict_into`` is the step in place)."""
     x_new = x.copy()
     P_new = P.copy()
     predict_into(
         x_new, P_new, tau, dt, M_inv, M, D_l, D_nl, k_h, p_eq, T_b, GQG,
-        np.empty(9), np.empty(9), np.empty(9), np.empty((9, 9)), np.empty((9, 9)),
+        np.empty(9), np.empty((9, 9)), np.empty((9, 9)),
     )  # fmt: skip
     return x_new, P_new
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def jacobian_phi_into(
+    phi: np.ndarray,
+    x: np.ndarray,
+    c: float,
+    s: float,
+    dt: float,
+    M_inv: np.ndarray,
+    M: np.ndarray,
+    D_l: np.ndarray,
+    D_nl: np.ndarray,
+    k_h: float,
+    p_eq: np.ndarray,
+    T_b: np.ndarray,
+) -> None:
+    """Phi = I + dt df/dx of ``_model_rhs_cs_into`` at x (c, s: the heading's cosine and
+    sine) into ``phi`` (9, 9), differentiated by hand. Entries where f does not depend on the
+    state are exactly 0 (``phi_times_into`` leaves them out). ``d|u| u / du = 2 |u|``, also
+    at u = 0. Checked against central differences in ``tests/test_ekf.py``."""
+    u, v, r = x[3], x[4], x[5]
+    fn = -k_h * (x[0] - p_eq[0]) + x[6]
+    fe = -k_h * (x[1] - p_eq[1]) + x[7]
+    ax = M[0, 0] * u + M[0, 1] * v + M[0, 2] * r
+    ay = M[1, 0] * u + M[1, 1] * v + M[1, 2] * r
+    for i in range(9):
+        for j in range(9):
+            phi[i, j] = 0.0
+    # eta_dot = R(psi) nu
+    phi[0, PSI] = -s * u - c * v
+    phi[0, SURGE] = c
+    phi[0, SWAY] = -s
+    phi[1, PSI] = c * u - s * v
+    phi[1, SURGE] = s
+    phi[1, SWAY] = c
+    phi[2, YAW_RATE] = 1.0
+    # g = M nu_dot (the generalised force), row k over the states j: d g_k / d x_j, kept
+    # in phi's rows 6-8 for the moment (the bias rows, set last)
+    g = phi[6:9]
+    g[0, NORTH] = -c * k_h
+    g[0, EAST] = -s * k_h
+    g[0, PSI] = -s * fn + c * fe
+    g[0, SURGE] = M[1, 0] * r - (D_l[0] + 2.0 * D_nl[0] * abs(u))
+    g[0, SWAY] = M[1, 1] * r
+    g[0, YAW_RATE] = ay + M[1, 2] * r
+    g[0, B_N] = c
+    g[0, B_E] = s
+    g[1, NORTH] = s * k_h
+    g[1, EAST] = -c * k_h
+    g[1, PSI] = -c * fn - s * fe
+    g[1, SURGE] = -M[0, 0] * r
+    g[1, SWAY] = -M[0, 1] * r - (D_l[1] + 2.0 * D_nl[1] * abs(v))
+    g[1, YAW_RATE] = -ax - M[0, 2] * r
+    g[1, B_N] = -s
+    g[1, B_E] = c
+    # g_2 = tau_2 + b_psi - (ay u - ax v) - (D_l + D_nl |r|) r
+    g[2, SURGE] = -(M[1, 0] * u + ay - M[0, 0] * v)
+    g[2, SWAY] = -(M[1, 1] * u - ax - M[0, 1] * v)
+    g[2, YAW_RATE] = -(M[1, 2] * u - M[0, 2] * v) - (D_l[2] + 2.0 * D_nl[2] * abs(r))
+    g[2, B_PSI] = 1.0
+    # nu_dot = M^-1 g
+    for i in range(3):
+        for j in range(9):
+            phi[3 + i, j] = M_inv[i, 0] * g[0, j] + M_inv[i, 1] * g[1, j] + M_inv[i, 2] * g[2, j]
+    for i in range(6):
+        for j in range(9):
+            phi[i, j] *= dt
+    for i in range(3):
+        for j in range(9):
+            phi[6 + i, j] = 0.0
+        phi[6 + i, 6 + i] = -dt / T_b[i]
+    for i in range(9):
+        phi[i, i] += 1.0
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def phi_times_into(out: np.ndarray, phi: np.ndarray, A: np.ndarray, transposed: bool) -> None:
+    """out = phi @ A (``transposed``: phi @ A.T) for phi of ``jacobian_phi_into``, leaving
+    out the products with its known zeros (37 of 81 entries are not: rows 0-1 reach the
+    heading and the velocities, row 2 the yaw rate, rows 3-5 everything, rows 6-8 their own
+    bias), column by column."""
+    for j in range(9):
+        if transposed:
+            a0, a1, a2, a3, a4 = A[j, 0], A[j, 1], A[j, 2], A[j, 3], A[j, 4]
+            a5, a6, a7, a8 = A[j, 5], A[j, 6], A[j, 7], A[j, 8]
+        else:
+            a0, a1, a2, a3, a4 = A[0, j], A[1, j], A[2, j], A[3, j], A[4, j]
+            a5, a6, a7, a8 = A[5, j], A[6, j], A[7, j], A[8, j]
+        out[0, j] = a0 + phi[0, 2] * a2 + phi[0, 3] * a3 + phi[0, 4] * a4
+        out[1, j] = a1 + phi[1, 2] * a2 + phi[1, 3] * a3 + phi[1, 4] * a4
+        out[2, j] = a2 + phi[2, 5] * a5
+        for i in range(3, 6):
+            out[i, j] = (
+                phi[i, 0] * a0
+                + phi[i, 1] * a1
+                + phi[i, 2] * a2
+                + phi[i, 3] * a3
+                + phi[i, 4] * a4
+                + phi[i, 5] * a5
+                + phi[i, 6] * a6
+                + phi[i, 7] * a7
+                + phi[i, 8] * a8
+            )
+        out[6, j] = phi[6, 6] * a6
+        out[7, j] = phi[7, 7] * a7
+        out[8, j] = phi[8, 8] * a8
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -159,37 +266,21 @@ def predict_into(
     T_b: np.ndarray,
     GQG: np.ndarray,
     f0: np.ndarray,
-    fj: np.ndarray,
-    xp: np.ndarray,
     phi: np.ndarray,
     tmp: np.ndarray,
 ) -> None:
     """``predict`` in place: advances ``x`` (9,) and ``P`` (9, 9), allocating nothing. The
-    work arrays ``f0``, ``fj``, ``xp`` (9,), ``phi``, ``tmp`` (9, 9) are overwritten (nothing is
-    read from them before it is written)."""
-    # the heading's cosine and sine once: only the heading's own column perturbs it
+    work arrays ``f0`` (9,), ``phi``, ``tmp`` (9, 9) are overwritten (nothing is read from
+    them before it is written)."""
     c0, s0 = np.cos(x[2]), np.sin(x[2])
     _model_rhs_cs_into(f0, x, c0, s0, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
-    for i in range(9):
-        for j in range(9):
-            phi[i, j] = 1.0 if i == j else 0.0
-        xp[i] = x[i]  # one work copy: each column perturbs one state and puts it back
-    for j in range(9):
-        eps = 1e-6 * max(1.0, abs(x[j]))
-        xp[j] = x[j] + eps
-        if j == PSI:
-            _model_rhs_into(fj, xp, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
-        else:
-            _model_rhs_cs_into(fj, xp, c0, s0, tau, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
-        xp[j] = x[j]
-        for i in range(9):
-            phi[i, j] += dt * (fj[i] - f0[i]) / eps
+    jacobian_phi_into(phi, x, c0, s0, dt, M_inv, M, D_l, D_nl, k_h, p_eq, T_b)
     for i in range(9):
         x[i] = x[i] + dt * f0[i]
-    # phi P phi^T by the same two BLAS products as ``phi @ P @ phi.T``; + GQG and the
-    # symmetrisation 0.5 (A + A^T) element by element, in place
-    dot_into(phi, P, tmp)
-    dot_into(tmp, phi.T, P)
+    # phi P phi^T = phi (phi P)^T (P is symmetric), each product without phi's zeros; + GQG
+    # and the symmetrisation 0.5 (A + A^T) element by element, in place
+    phi_times_into(tmp, phi, P, False)
+    phi_times_into(P, phi, tmp, True)
     for i in range(9):
         for j in range(9):
             P[i, j] += GQG[i, j]

@@ -162,7 +162,7 @@ class QualityState(NamedTuple):
 # --- the control system's work space (``ControlWork``): rows of ``vec`` ---
 W_ETA, W_DETA, W_REF, W_TAU6, W_TAU_TREE, W_I_NEXT, W_E, W_DE = 0, 1, 2, 3, 4, 5, 6, 7
 W_TAU3, W_F, W_N, W_ACH, W_ACH3, W_TAU_OBS = 8, 9, 10, 11, 12, 13
-W_F0, W_FJ, W_XP, W_K0, W_K1 = 14, 15, 16, 17, 18  # the EKF's
+W_F0, W_K0, W_K1 = 14, 17, 18  # the EKF's (15 and 16 are free)
 W_NE, W_UV, W_ACCEPT, W_BTAU, W_ZERO = 19, 20, 21, 22, 23
 W_ETA4, W_DETA4, W_FI, W_E4, W_TAU_ROV, W_ROWS = 24, 25, 26, 27, 28, 29
 N_CVEC = 30
@@ -735,8 +735,6 @@ def observe_into(
             C.T_b,
             C.GQG,
             W.vec[W_F0, 0:9],
-            W.vec[W_FJ, 0:9],
-            W.vec[W_XP, 0:9],
             W.mat[MW_PHI],
             W.mat[MW_TMP],
         )

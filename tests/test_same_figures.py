@@ -16,6 +16,14 @@ every figure and final state bit for bit as recorded. What moved: the docking's 
 error 0.02479386 -> 0.02479422 m (1.4e-5 relative), RMS east 0.02265973 -> 0.02265967 m
 (2.7e-6), RMS heading 3.6e-8 relative, the others below 1e-11; the model-scale EKF mission
 below 1.2e-12 relative; the pseudo-inverse mission (no EKF) not at all.
+
+Re-recorded by the sixth speed pass (docs/speed.md): the EKF prediction's Jacobian is written
+by hand (``control.ekf.jacobian_phi_into``, was forward differences with a 1e-6 step) and
+phi P phi^T skips phi's zeros (was two BLAS products). What moved: the docking's RMS east
+error 0.0226605859 -> 0.0226599041 m (3.0e-5 relative), RMS north 0.0247932013 ->
+0.0247937167 m (2.1e-5), its landing miss 2.0e-8, the others below 1e-8; the model-scale EKF
+mission at most 2.6e-8 (RMS east); the pseudo-inverse mission (no EKF) not at all. The
+docking's RMS errors have moved most at each of these re-recordings.
 """
 
 from __future__ import annotations
