@@ -61,15 +61,51 @@ def _warm(runs: int) -> None:
     together(runs, [0, 1])
 
 
+def split(size: int) -> None:
+    """Time one batch of ``size`` runs and, apart, the calls of its compiled kernel
+    (``_Slots.steps``); the rest is Python between chunks (environment rows, noise, the
+    missions' checks, the slot copies)."""
+    from control import batch
+
+    _warm(size)
+    spent = [0.0]
+    kernel = batch._Slots.steps
+
+    def timed(slots: batch._Slots) -> int:
+        t0 = time.perf_counter()
+        h = kernel(slots)
+        spent[0] += time.perf_counter() - t0
+        return h
+
+    batch._Slots.steps = timed  # type: ignore[method-assign]
+    try:
+        sim_s, wall = together(size, list(range(size)))
+    finally:
+        batch._Slots.steps = kernel  # type: ignore[method-assign]
+    run_steps = sim_s / 0.01  # the docking runs step at 100 Hz
+    print(f"one batch of {size} docking runs on one core: {sim_s / wall:,.0f}x")
+    print(f"  compiled kernel {spent[0] / run_steps * 1e6:.2f} us per run-step")
+    print(f"  the rest        {(wall - spent[0]) / run_steps * 1e6:.2f} us per run-step")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=64, help="docking runs")
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.add_argument("--sizes", help="batch sizes to compare on one core, e.g. 8,16,32,64")
+    parser.add_argument(
+        "--split",
+        type=int,
+        metavar="SIZE",
+        help="one batch of SIZE runs on one core: its compiled kernel and the rest timed apart",
+    )
     args = parser.parse_args()
     runs = args.runs
     indices = list(range(runs))
     load = os.getloadavg()
+    if args.split:
+        split(args.split)
+        return
     _warm(runs)
     if args.sizes:
         sim_a, wall_a = alone(runs, indices)
