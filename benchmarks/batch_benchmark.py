@@ -29,9 +29,20 @@ from control.batch import run_together
 from missions import campaign as cm
 from missions.driver import MissionDriver
 
+VARY_MASS = """
+[random.tree_mass_scale]
+distribution = "uniform"
+low = 0.9
+high = 1.1
+"""
+"""Added to the campaign by ``--vary-mass``: every run has a plant of its own (the tree's mass
+and inertia), so the batch steps each run's plant by itself, not in the structure-of-arrays
+step."""
+_text = CAMPAIGN
+
 
 def _drivers(runs: int, indices: list[int]) -> list[MissionDriver]:
-    c, base = cm.parse_text(CAMPAIGN.format(runs=runs), "<batch benchmark>")
+    c, base = cm.parse_text(_text.format(runs=runs), "<batch benchmark>")
     return [MissionDriver(*cm.prepare_run(c, base, i)[1:], keep_log=False) for i in indices]
 
 
@@ -99,7 +110,18 @@ def main() -> None:
         metavar="SIZE",
         help="one batch of SIZE runs on one core: its compiled kernel and the rest timed apart",
     )
+    parser.add_argument(
+        "--vary-mass",
+        action="store_true",
+        help="with --split or --sizes: the tree's mass varies from run to run (every run on a "
+        "plant of its own)",
+    )
     args = parser.parse_args()
+    if args.vary_mass:
+        if not (args.split or args.sizes):
+            parser.error("--vary-mass goes with --split or --sizes")
+        global _text
+        _text = CAMPAIGN + VARY_MASS
     runs = args.runs
     indices = list(range(runs))
     load = os.getloadavg()
