@@ -104,7 +104,7 @@ def compile_all(part: str | None = None) -> None:
     arrays = Simulation(params.load("full-scale"), tree_depth_m=100.0).arrays
     m = arrays.thr_T.shape[1]
     x, n, env = np.zeros(plant.N_STATE), np.zeros(m), np.zeros(plant.N_ENV)
-    env[plant.E_LREST] = 100.0
+    env[plant.E_LREST] = 100.0  # a 100 m wire; the values do not matter, the calls only compile
     if part in (None, "batch"):
         from control.batch import run_together
 

@@ -91,4 +91,6 @@ def test_prediction_equals_the_dense_form(seed: int) -> None:
     dense = 0.5 * (dense + dense.T)
     np.testing.assert_allclose(P_new, dense, rtol=0.0, atol=1e-12 * np.abs(dense).max())
     assert np.array_equal(P_new, P_new.T)
+    # the state's step is x + dt f(x), the same operations as here; the compiled cosine and
+    # sine of the heading may differ from numpy's in the last bit (1e-15 relative)
     np.testing.assert_allclose(x_new, x + dt * _f(x, tau, model), rtol=1e-15, atol=0.0)
