@@ -229,8 +229,9 @@ def batch_steps(
                 for i in range(plant.N_STATE):
                     x[r, i] = x_sb[i, r]
             else:
+                # inlined: a call would pass run r's ``PlantArrays`` views one by one
                 P = plant_view(PS, r)
-                plant.rk4_step_into(x[r], x[r], n_rps[r, 0:m], env[r, pos[r]], P, dt, work)
+                plant.rk4_step_inline(x[r], x[r], n_rps[r, 0:m], env[r, pos[r]], P, dt, work)
         for r in range(n_runs):
             if not active[r]:
                 continue

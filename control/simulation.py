@@ -750,7 +750,8 @@ class Simulation:
             )
             self._k_h_memo = (self.wire_length_m, float(k))
         k_h = self._k_h_memo[1]
-        if (k_h != self.C.k_h) or np.any(self.C.p_eq != self.crane_tip_n[0:2]):
+        p_eq, tip = self.C.p_eq, self.crane_tip_n
+        if k_h != self.C.k_h or p_eq[0] != tip[0] or p_eq[1] != tip[1]:
             self.C = self.C._replace(k_h=float(k_h), p_eq=self.crane_tip_n[0:2].copy())
 
     def _chunk_inputs(self, n: int) -> tuple[FloatArray, sensors.NoiseChunk]:
@@ -1076,11 +1077,12 @@ class Simulation:
         return start + np.sign(target - start) * np.minimum(steps, abs(target - start))
 
     def _crane_path(self, n: int) -> FloatArray:
-        """(n, 3) crane-tip positions over the next n steps."""
+        """(n, 3) crane-tip positions over the next n steps; (1, 3) when the crane tip stays
+        where it is (``site.environment_rows_into`` reads one row for all)."""
         delta = self.crane_target_n - self.crane_tip_n
         dist = float(np.linalg.norm(delta))
         if dist < 1e-12 or self.crane_speed_mps <= 0.0:
-            return np.repeat(self.crane_tip_n[None, :], n, axis=0)
+            return self.crane_tip_n[None, :].copy()  # still: one row stands for all n
         frac = self._ramp(0.0, dist, self.crane_speed_mps, n) / dist
         return self.crane_tip_n[None, :] + frac[:, None] * delta[None, :]
 
@@ -1121,14 +1123,14 @@ class Simulation:
             base[plant.E_FRAME : plant.E_FRAME + 2] = self.docking_frame.center_n
             base[plant.E_FRAME_PSI] = self.docking_frame.heading_rad
             base[plant.E_LAND] = self.docking_frame.landing_depth_m
-        env = np.repeat(base[None, :], n, axis=0)
-        # the current's velocity (envmod.current_velocity_n's operations, written straight
-        # into the rows) and the waves' velocity and acceleration added to it
-        env[:, plant.E_VC] = speeds * np.cos(dirs)
-        env[:, plant.E_VC + 1] = speeds * np.sin(dirs)
-        env[:, plant.E_VC + 2] = 0.0
-        env[:, plant.E_AC : plant.E_AC + 3] = 0.0
+        # winch and vessel move smoothly within the chunk
+        lengths = self._ramp(self.wire_length_m, self.wire_target_m, self.wire_rate_mps, n)
+        crane = self._crane_path(n)
+        stretch = site.self_weight_stretch(ps, self.wire_length_m)
+        env = np.empty((n, plant.N_ENV))
+        site.environment_rows_into(env, base, speeds, dirs, lengths, stretch, crane)
         if self.wave_field is not None:
+            # the waves' velocity and acceleration added to the current's
             t = self.t_s + self.dt_s * np.arange(n)
             # the tree's centre, kept inside the water column (a tree in the seabed's contact
             # spring sits a few centimetres into it)
@@ -1139,11 +1141,6 @@ class Simulation:
             env[:, plant.E_VC : plant.E_VC + 3] += v_w
             if self.wave_load != "drag":
                 env[:, plant.E_AC : plant.E_AC + 3] += a_w
-        # winch and vessel move smoothly within the chunk
-        lengths = self._ramp(self.wire_length_m, self.wire_target_m, self.wire_rate_mps, n)
-        env[:, plant.E_LREST] = lengths + site.self_weight_stretch(ps, self.wire_length_m)
-        crane = self._crane_path(n)
-        env[:, plant.E_CT : plant.E_CT + 3] = crane
         self.wire_length_m = float(lengths[-1])
         self.crane_tip_n = crane[-1].copy()
         return env

@@ -9,9 +9,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from sim import plant
 from sim import wire as wire_mod
+from sim.gnc import JIT_NOALLOC
 from sim.params import ParameterSet
 
 
@@ -86,3 +88,40 @@ def wire_environment(
     env[plant.E_OFF] = offset * math.cos(current_direction_rad)
     env[plant.E_OFF + 1] = offset * math.sin(current_direction_rad)
     return env
+
+
+@njit(**JIT_NOALLOC)
+def environment_rows_into(
+    env: np.ndarray,
+    base: np.ndarray,
+    speeds_mps: np.ndarray,
+    directions_rad: np.ndarray,
+    lengths_m: np.ndarray,
+    stretch_m: float,
+    crane_n: np.ndarray,
+) -> None:
+    """A chunk's environment rows (n, N_ENV) into ``env``: each row ``base`` (the wire's
+    entries for the chunk's mean current, the push, the grip and the frame), with step j's
+    current velocity ``[V cos(beta), V sin(beta), 0]``, no water acceleration, the wire's rest
+    length ``lengths_m[j] + stretch_m`` and the crane tip ``crane_n[j]`` (``crane_n`` (n, 3),
+    or (1, 3): a crane tip that stays put). The same operations on the same numbers as the
+    numpy form it replaces (a repeat of ``base`` and whole-column products and sums: the
+    simulator makes these rows for every chunk, and the dozen numpy calls cost more than
+    the arithmetic); waves are added to the rows afterwards."""
+    n = env.shape[0]
+    still = crane_n.shape[0] == 1
+    for j in range(n):
+        row = env[j]
+        for i in range(base.shape[0]):
+            row[i] = base[i]
+        row[plant.E_VC] = speeds_mps[j] * math.cos(directions_rad[j])
+        row[plant.E_VC + 1] = speeds_mps[j] * math.sin(directions_rad[j])
+        row[plant.E_VC + 2] = 0.0
+        row[plant.E_AC] = 0.0
+        row[plant.E_AC + 1] = 0.0
+        row[plant.E_AC + 2] = 0.0
+        row[plant.E_LREST] = lengths_m[j] + stretch_m
+        c = crane_n[0] if still else crane_n[j]
+        row[plant.E_CT] = c[0]
+        row[plant.E_CT + 1] = c[1]
+        row[plant.E_CT + 2] = c[2]

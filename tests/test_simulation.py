@@ -13,7 +13,7 @@ from control import loop
 from control.config import ControlSettings
 from control.simulation import Simulation, SimulationDiverged
 from sim import environment as envmod
-from sim import params, sensors
+from sim import params, plant, sensors, site
 from tests.helpers import steady_current
 
 MODEL = params.load("model-scale")
@@ -369,3 +369,29 @@ def test_grip_closes_only_within_reach_of_the_mount():
     # the gripper spring pulls the last centimetres together (measured: 0.07 deg of tree turn);
     # 2 deg stays far below the 12 deg yank of the defect while leaving room for the seed
     assert abs(math.degrees(sim.tree_eta_n[5] - psi_before)) < 2.0
+
+
+@pytest.mark.parametrize("crane_rows", [23, 1], ids=["crane moving", "crane still"])
+def test_environment_rows_are_the_numpy_forms_numbers(crane_rows):
+    """``site.environment_rows_into`` (the compiled fill of a chunk's rows) against the numpy
+    operations it replaced, bit for bit: a repeat of the base row, the current's velocity as
+    V cos(beta), V sin(beta), 0, no water acceleration, the rest length plus the stretch, and
+    the crane tip's path (one row standing for all when the crane is still)."""
+    rng = np.random.default_rng(11)
+    n = 23
+    base = rng.normal(size=plant.N_ENV)
+    speeds = rng.uniform(0.0, 1.2, n)
+    dirs = rng.uniform(-7.0, 7.0, n)
+    lengths = 97.0 + rng.uniform(0.0, 2.0, n)
+    stretch = 0.0731
+    crane = rng.normal(size=(crane_rows, 3))
+    env = np.full((n, plant.N_ENV), np.nan)
+    site.environment_rows_into(env, base, speeds, dirs, lengths, stretch, crane)
+    ref = np.repeat(base[None, :], n, axis=0)
+    ref[:, plant.E_VC] = speeds * np.cos(dirs)
+    ref[:, plant.E_VC + 1] = speeds * np.sin(dirs)
+    ref[:, plant.E_VC + 2] = 0.0
+    ref[:, plant.E_AC : plant.E_AC + 3] = 0.0
+    ref[:, plant.E_LREST] = lengths + stretch
+    ref[:, plant.E_CT : plant.E_CT + 3] = crane
+    np.testing.assert_array_equal(env, ref)
