@@ -406,3 +406,39 @@ def test_panel_updates_do_not_burst_after_a_stall() -> None:
     assert due == pytest.approx(0.2)
     due = _next_due(due, 0.2, 3.0)  # 2.8 s late
     assert due == pytest.approx(3.2)
+
+
+def test_a_seek_is_not_undone_by_a_frame_update_that_comes_before_its_callback():
+    """The scrub bar's race (a flaky browser test found it): viser sets the bar to the value
+    a viewer typed, then runs the seek callback; a frame update in between used to set the
+    bar back to the replay's present time, so the seek went nowhere. The panel's own methods
+    on a stand-in panel, in that order."""
+    from types import SimpleNamespace
+
+    from app.console.snapshot import ReplayStatus
+    from web.panels import ClientPanel
+
+    seeks: list[float] = []
+    bar = SimpleNamespace(value=20.0)
+    panel = SimpleNamespace(
+        replay=SimpleNamespace(seek=seeks.append),
+        replay_time=bar,
+        unlocked=True,
+        _replay_name="trial",
+        _replay_shown=20.0,
+        _say=lambda text: None,
+    )
+
+    def frame(t_s: float) -> None:
+        status = ReplayStatus("trial", t_s, 0.0, 60.0, False, True)
+        ClientPanel._update_replay(panel, SimpleNamespace(source="replay", replay=status))
+
+    frame(20.0)
+    bar.value = 5.0  # the viewer's value, as viser sets it before the callback
+    frame(20.0)  # paused at 20 s: this frame's time is the old one
+    ClientPanel._on_seek_replay(panel, SimpleNamespace(client=object()))
+    assert seeks == [5.0]
+    frame(5.0)
+    assert bar.value == 5.0
+    frame(7.3)  # playing again: the bar follows the replay
+    assert bar.value == 7.3

@@ -364,6 +364,9 @@ class ClientPanel:
             )
         self.replay_time.disabled = not self.unlocked
         self.replay_time.on_update(self._on_seek_replay)
+        self._replay_shown = float(self.replay_time.value)
+        """The scrub bar's value as this panel last set it: another value there is a viewer's
+        seek on its way to ``_on_seek_replay``, which the frame updates leave alone."""
 
     # ================================================================== callbacks
     def _set_enabled(self, enabled: bool) -> None:
@@ -571,12 +574,15 @@ class ClientPanel:
 
     def _on_seek_replay(self, event: Any) -> None:
         replay = self.replay
-        if event.client is None or replay is None or not self.unlocked:
-            return
+        value = float(self.replay_time.value)
         try:
-            replay.seek(float(self.replay_time.value))
+            if event.client is None or replay is None or not self.unlocked:
+                return
+            replay.seek(value)
         except ConsoleError as err:
             self._say(f"**error**: {err}")
+        finally:
+            self._replay_shown = value  # the bar follows the replay again
 
     # ================================================================== updates
     def _apply_camera(self, snap: Snapshot) -> None:
@@ -789,8 +795,14 @@ class ClientPanel:
         if rp.name != self._replay_name:
             self._replay_name = rp.name
             self._make_replay_slider(rp.start_s, rp.end_s, rp.marks)
-        if abs(self.replay_time.value - rp.t_s) > 0.05:
-            self.replay_time.value = round(rp.t_s, 1)
+        value = self.replay_time.value
+        if value != self._replay_shown:
+            # a viewer moved the bar since this panel last set it and its seek has not run
+            # yet: setting the bar now would make that seek go to where the replay already is
+            return
+        if abs(value - rp.t_s) > 0.05:
+            self._replay_shown = round(rp.t_s, 1)
+            self.replay_time.value = self._replay_shown
 
 
 def _next_due(due: float, period: float, now: float) -> float:
