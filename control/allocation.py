@@ -355,8 +355,36 @@ def _joint_corrections(A: FloatArray) -> FloatArray:
     return R
 
 
-@lru_cache(maxsize=64)
+class _SameNumbers:
+    """A ``ThrusterConfig`` that hashes and compares by its numbers (the config itself does
+    so by identity): every simulation builds its own config, and a campaign's runs of one
+    ROV have the same numbers, so they share one priority plan (its tables cost some 3 ms
+    of ``pinv`` per run, more than a second's simulation)."""
+
+    __slots__ = ("_key", "config")
+
+    def __init__(self, config: ThrusterConfig) -> None:
+        self.config = config
+        self._key = tuple(
+            (a.shape, a.tobytes()) for a in (config.T, config.k_pos, config.k_neg, config.n_max_rps)
+        )
+
+    def __hash__(self) -> int:
+        return hash(self._key)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, _SameNumbers) and self._key == other._key
+
+
 def _priority_plan(config: ThrusterConfig, priority: tuple[int, ...]) -> _PriorityPlan:
+    """The priority allocation's tables for this thruster layout and priority (read only by
+    the allocator: shared by every config with the same numbers)."""
+    return _priority_plan_of(_SameNumbers(config), priority)
+
+
+@lru_cache(maxsize=64)
+def _priority_plan_of(same: _SameNumbers, priority: tuple[int, ...]) -> _PriorityPlan:
+    config = same.config
     indices = _checked_dofs("priority", priority)
     if config.n_thrusters > _MAX_PRIORITY_THRUSTERS:
         raise ValueError(

@@ -192,11 +192,12 @@ def pose_load(
     w_rov = plant.rov_wrench(x, np.zeros(arr.thr_T.shape[1]), env, arr, rot_r)
     # everything on the pair, about the ROV's origin in its axes; the thrust must cancel it
     f_tree_r = rot_m.T @ w_tree[0:3]
-    r_tree_from_rov = -(rot_m.T @ arr.mount_r)
-    m_tree_r = rot_m.T @ w_tree[3:6] + np.cross(r_tree_from_rov, f_tree_r)
-    total = np.array(
-        [f_tree_r[0] + w_rov[0], f_tree_r[1] + w_rov[1], m_tree_r[2] + w_rov[5]], dtype=float
-    )
+    r = -(rot_m.T @ arr.mount_r)  # the tree's origin from the ROV's, in the ROV's axes
+    m_tree_r = rot_m.T @ w_tree[3:6]
+    # the yaw moment of the tree's force about the ROV: z of r x f (np.cross's products and
+    # difference, without its per-call cost: this runs for every heading a landing checks)
+    m_z = float(m_tree_r[2]) + (float(r[0] * f_tree_r[1]) - float(r[1] * f_tree_r[0]))
+    total = np.array([f_tree_r[0] + w_rov[0], f_tree_r[1] + w_rov[1], m_z + w_rov[5]], dtype=float)
     needed = -total
     norm = float(np.linalg.norm(needed))
     if norm == 0.0:

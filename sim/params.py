@@ -17,6 +17,7 @@ import json
 import math
 import tomllib
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Annotated
 
@@ -639,12 +640,19 @@ def load_spec(name_or_path: str | Path) -> ParameterSetSpec:
         path = preset
     if not path.exists():
         raise ParameterError(f"parameter file not found: {path}")
-    text = path.read_text()
+    return _spec_of_text(path.read_text(), path.suffix == ".json", str(path))
+
+
+@lru_cache(maxsize=32)
+def _spec_of_text(text: str, is_json: bool, source: str) -> ParameterSetSpec:
+    """A parameter file's text parsed and validated, kept by its text (the spec is frozen):
+    each run of a campaign loads its set again, and parsing the TOML cost some 2 ms a run.
+    A file edited between runs is read again and parsed anew."""
     try:
-        data = json.loads(text) if path.suffix == ".json" else tomllib.loads(text)
+        data = json.loads(text) if is_json else tomllib.loads(text)
     except (json.JSONDecodeError, tomllib.TOMLDecodeError) as err:
-        raise ParameterError(f"cannot parse {path}: {err}") from None
-    return parse_spec(data, str(path))
+        raise ParameterError(f"cannot parse {source}: {err}") from None
+    return parse_spec(data, source)
 
 
 def load(name_or_path: str | Path) -> ParameterSet:

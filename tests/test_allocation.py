@@ -351,3 +351,22 @@ def test_allocators_do_not_modify_arguments(allocator: str) -> None:
     np.testing.assert_array_equal(tau, [800.0, 600.0, 10.0, 1.0, 2.0, 60.0])
     with pytest.raises(ValueError):
         result.force_newton[0] = 0.0  # results are read-only
+
+
+def test_configs_with_the_same_numbers_share_one_priority_plan():
+    """Each simulation builds its own ``ThrusterConfig`` (compared by identity); the priority
+    plan's tables are kept by the numbers, so a campaign's runs of one ROV build them once.
+    A config with other numbers gets its own plan, the same as a plan built afresh."""
+    from control import allocation as alloc
+
+    a, b = work_class_rov(), work_class_rov()
+    assert a != b  # two objects
+    plan_a = alloc._priority_plan(a, DEFAULT_PRIORITY)
+    assert alloc._priority_plan(b, DEFAULT_PRIORITY) is plan_a
+    other = ThrusterConfig(T=a.T * 1.01, k_pos=a.k_pos, k_neg=a.k_neg, n_max_rps=a.n_max_rps)
+    plan_o = alloc._priority_plan(other, DEFAULT_PRIORITY)
+    assert plan_o is not plan_a
+    fresh = alloc._priority_plan_of.__wrapped__(alloc._SameNumbers(other), DEFAULT_PRIORITY)
+    for got, want in ((plan_o.A, fresh.A), (plan_o.D, fresh.D), (plan_o.R, fresh.R)):
+        np.testing.assert_array_equal(got, want)
+    assert not np.array_equal(plan_o.A, plan_a.A)

@@ -141,3 +141,22 @@ def test_files_with_the_old_newton_spelling_still_load(tmp_path):
     path.write_text(json.dumps(data))
     with pytest.raises(params.ParameterError, match="submerged_weight_n"):
         params.load(path)
+
+
+def test_a_parameter_file_edited_between_loads_is_read_again(tmp_path):
+    """``load_spec`` keeps parsed files by their text (a campaign loads its set for every
+    run): the same text gives the same (frozen) spec, an edited file its new values, and a
+    file broken by the edit its parse error, naming the file."""
+    path = tmp_path / "rig.toml"
+    text = (params.PRESET_DIR / "full-scale.toml").read_text()
+    path.write_text(text)
+    first = params.load_spec(path)
+    assert params.load_spec(path) is first
+    mass = first.tree.mass_kg
+    edited = text.replace(f"mass_kg = {mass!r}", f"mass_kg = {mass + 1000.0!r}", 1)
+    assert edited != text
+    path.write_text(edited)
+    assert params.load_spec(path).tree.mass_kg == mass + 1000.0
+    path.write_text(text + "\n[[[ broken")
+    with pytest.raises(params.ParameterError, match=r"cannot parse .*rig\.toml"):
+        params.load_spec(path)
