@@ -499,7 +499,7 @@ speed passes), by number of workers. Kept as measured then: the old code is not 
 
 def compute_campaign() -> Results:
     res = _benchmark_json("benchmarks/campaign_benchmark.py", "--runs", "200", "--workers", "1,2")
-    res["batch"] = _benchmark_json("benchmarks/batch_benchmark.py", "--runs", "64")
+    res["batch"] = _benchmark_json("benchmarks/batch_benchmark.py", "--runs", "64", "--repeat", "3")
     return res
 
 
@@ -545,15 +545,20 @@ def render_campaign(res: Results) -> str:
             "",
             para(
                 "The batch stepper (`.venv/bin/python benchmarks/batch_benchmark.py --runs "
-                f"{batch['runs']}`: {batch['runs']} of these docking runs, "
-                f"{batch['batch_one_core']['simulated_s']:,.0f} simulated s; load average "
-                f"{batch['load_before'][0]:.1f} before), every run giving the rows it gives alone:"
+                f"{batch['runs']} --repeat {batch.get('repeat', 1)}`: {batch['runs']} of these "
+                f"docking runs, {batch['batch_one_core']['simulated_s']:,.0f} simulated s; load "
+                f"average {batch['load_before'][0]:.1f} before), every run giving the rows it "
+                "gives alone. Each way is timed "
+                f"{batch.get('repeat', 1)} times, interleaved, and the best is shown (this shared "
+                "machine's speed drifts by 20 % or more from minute to minute; every time is in "
+                "the last column):"
             ),
             "",
-            "| how | wall s | simulated s per wall s |",
-            "|---|---|---|",
+            "| how | wall s | simulated s per wall s | each time |",
+            "|---|---|---|---|",
             *(
-                f"| {label} | {batch[key]['wall_s']:.2f} | {batch[key]['rate']:,.0f} |"
+                f"| {label} | {batch[key]['wall_s']:.2f} | {batch[key]['rate']:,.0f} "
+                f"| {', '.join(f'{r:,}' for r in batch[key].get('rates', []))} |"
                 for key, label in ways
             ),
         ]
