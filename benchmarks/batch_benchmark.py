@@ -2,7 +2,8 @@
 ``full-docking-current-0.3``, current at random in 0.1-0.5 m/s), simulated seconds of all runs
 per wall second.
 
-    .venv/bin/python benchmarks/batch_benchmark.py [--runs 64] [--repeat 3] [--json] [--sizes 8,16,32,64]
+    .venv/bin/python benchmarks/batch_benchmark.py [--runs 64] [--repeat 3] [--json]
+    .venv/bin/python benchmarks/batch_benchmark.py --sizes 8,16,32,64 | --split 32 [--vary-mass]
 
 Three ways over the same runs: one after the other alone in this process (one core), all in
 one batch in this process (``control.batch.run_together``, one core), and split over two
