@@ -541,27 +541,46 @@ def render_campaign(res: Results) -> str:
             ("batch_one_core", "one batch, one core"),
             ("batch_two_processes", "two processes, a batch of half the runs each"),
         )
-        rows += [
-            "",
-            para(
-                "The batch stepper (`.venv/bin/python benchmarks/batch_benchmark.py --runs "
-                f"{batch['runs']} --repeat {batch.get('repeat', 1)}`: {batch['runs']} of these "
-                f"docking runs, {batch['batch_one_core']['simulated_s']:,.0f} simulated s; load "
-                f"average {batch['load_before'][0]:.1f} before), every run giving the rows it "
-                "gives alone. Each way is timed "
-                f"{batch.get('repeat', 1)} times, interleaved, and the best is shown (this shared "
-                "machine's speed drifts by 20 % or more from minute to minute; every time is in "
-                "the last column):"
-            ),
-            "",
-            "| how | wall s | simulated s per wall s | each time |",
-            "|---|---|---|---|",
-            *(
-                f"| {label} | {batch[key]['wall_s']:.2f} | {batch[key]['rate']:,.0f} "
-                f"| {', '.join(f'{r:,}' for r in batch[key].get('rates', []))} |"
-                for key, label in ways
-            ),
-        ]
+        repeat = int(batch.get("repeat", 1))
+        if "rates" not in batch["batch_one_core"]:  # figures from before --repeat
+            rows += [
+                "",
+                para(
+                    "The batch stepper (`.venv/bin/python benchmarks/batch_benchmark.py --runs "
+                    f"{batch['runs']}`: {batch['runs']} of these docking runs, "
+                    f"{batch['batch_one_core']['simulated_s']:,.0f} simulated s; load average "
+                    f"{batch['load_before'][0]:.1f} before), every run giving the rows it "
+                    "gives alone:"
+                ),
+                "",
+                "| how | wall s | simulated s per wall s |",
+                "|---|---|---|",
+                *(
+                    f"| {label} | {batch[key]['wall_s']:.2f} | {batch[key]['rate']:,.0f} |"
+                    for key, label in ways
+                ),
+            ]
+        else:
+            rows += [
+                "",
+                para(
+                    "The batch stepper (`.venv/bin/python benchmarks/batch_benchmark.py --runs "
+                    f"{batch['runs']} --repeat {repeat}`: {batch['runs']} of these docking runs, "
+                    f"{batch['batch_one_core']['simulated_s']:,.0f} simulated s; load average "
+                    f"{batch['load_before'][0]:.1f} before), every run giving the rows it gives "
+                    f"alone. Each way is timed {repeat} times, interleaved, and the best is "
+                    "shown (this shared machine's speed drifts by 20 % or more from minute to "
+                    "minute; every time is in the last column):"
+                ),
+                "",
+                "| how | wall s | simulated s per wall s | each time |",
+                "|---|---|---|---|",
+                *(
+                    f"| {label} | {batch[key]['wall_s']:.2f} | {batch[key]['rate']:,.0f} "
+                    f"| {', '.join(f'{r:,}' for r in batch[key]['rates'])} |"
+                    for key, label in ways
+                ),
+            ]
     return "\n".join(rows)
 
 

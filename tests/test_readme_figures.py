@@ -104,3 +104,19 @@ def test_wording_follows_the_ratio():
     assert rf.reduction(0.0024, 0.0025) == "about the same"
     assert rf.reduction(0.1, 0.3) == "3.0 times larger"
     assert rf.sig(0.0062) == "0.0062" and rf.sig(7.349) == "7.3" and rf.sig(3170.4) == "3170"
+
+
+def test_batch_figures_timed_several_times_show_the_best_and_every_time():
+    way = {"simulated_s": 30590.0, "wall_s": 5.0, "rate": 6118.0, "rates": [6118, 5200, 4100]}
+    batch = {"runs": 64, "repeat": 3, "load_before": [0.5, 0.5, 0.5]}
+    batch |= dict.fromkeys(("alone_one_core", "batch_one_core", "batch_two_processes"), way)
+    campaign = {"workers": 1, "runs": 200, "simulated_s": 1.0, "failed": 0, "wall_s": 1.0}
+    campaign["simulated_s_per_wall_s"] = 1.0
+    text = rf.render_campaign(
+        {"campaigns": [campaign], "load_average_before": [0.5], "batch": batch}
+    )
+    assert "--runs 64 --repeat 3" in text
+    assert (
+        "| two processes, a batch of half the runs each | 5.00 | 6,118 | 6,118, 5,200, 4,100 |"
+        in text
+    )
