@@ -244,7 +244,7 @@ def test_a_run_started_while_recording_goes_on_in_the_same_file(tmp_path: Path) 
 def test_a_handler_that_blocks_the_server_does_not_stop_the_loop(tmp_path: Path) -> None:
     """Defect (issue 15, console jitter): the loop ran as a task on the HTTP server's event
     loop, so any handler or telemetry send that held that event loop delayed its ticks. It
-    now has its own thread and event loop: a handler blocking the server for 0.6 s leaves the
+    now has its own thread and event loop: a handler blocking the server until released leaves the
     loop ticking (100 ticks/s; before: none while blocked)."""
     import threading
 
@@ -255,9 +255,11 @@ def test_a_handler_that_blocks_the_server_does_not_stop_the_loop(tmp_path: Path)
 
     settings = ConsoleSettings(port=0, view=False, recordings_dir=tmp_path)
     with serve_in_thread(settings) as srv:
+        entered, release = threading.Event(), threading.Event()
 
         async def hold_the_event_loop() -> dict:
-            time.sleep(0.6)  # a blocking call on the server's event loop
+            entered.set()
+            release.wait(20.0)  # a blocking call on the server's event loop, until released
             return {}
 
         srv.app.add_api_route("/test/block", hold_the_event_loop)
@@ -267,20 +269,26 @@ def test_a_handler_that_blocks_the_server_does_not_stop_the_loop(tmp_path: Path)
         done = threading.Event()
 
         def call() -> None:
-            httpx.get(f"{srv.base_url}/test/block", timeout=10.0)
+            httpx.get(f"{srv.base_url}/test/block", timeout=30.0)
             done.set()
 
         caller = threading.Thread(target=call)
         caller.start()
-        time.sleep(0.15)  # the handler is now holding the server's event loop
-        ticks0 = loop.ticks
-        time.sleep(0.3)
-        ticks = loop.ticks - ticks0
-        assert not done.is_set(), "the handler was still blocking while ticks were counted"
-        caller.join()
-        # 30 ticks are due in 0.3 s at 100 Hz; a third of them leaves room for a loaded
-        # machine, and the defect gave none (the loop waited for the handler)
-        assert ticks >= 10, f"{ticks} ticks in 0.3 s while the server's event loop was blocked"
+        try:
+            assert entered.wait(10.0), "the blocking handler never ran"
+            # the server's event loop is held until ``release``: the loop must go on ticking
+            # (100 ticks/s). Waited for as a count, not timed: on a loaded machine the ticks
+            # come late but come; the defect gave none at all while the handler held on.
+            ticks0 = loop.ticks
+            deadline = time.monotonic() + 10.0
+            while loop.ticks - ticks0 < 10 and time.monotonic() < deadline:
+                time.sleep(0.02)
+            ticks = loop.ticks - ticks0
+            assert not done.is_set(), "the handler was still blocking while ticks were counted"
+        finally:
+            release.set()
+            caller.join()
+        assert ticks >= 10, f"{ticks} ticks in 10 s while the server's event loop was blocked"
 
 
 def test_a_commands_answer_comes_after_the_state_that_shows_it(tmp_path: Path) -> None:
