@@ -18,6 +18,18 @@ if [[ ! -f "$stamp" || "$(cat "$stamp")" != "$want" ]]; then
   .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".$extras" >&2
   echo "$want" > "$stamp"
 fi
+# One OpenBLAS kernel for every process of this environment. OpenBLAS chooses its kernels by
+# the CPU it finds, and its Haswell, SkylakeX and SapphireRapids kernels round differently in
+# the last bits (the set-up's matrix inverses and pseudo-inverses, the controller's
+# matrix-vector products each step); a full-scale docking run carries that into its figures
+# at 1e-5 relative. Pinned to the Haswell kernels (any x86-64 CPU with AVX2 and FMA runs
+# them), a mission with the same seed gives the same figures on every such machine
+# (tests/test_reproducible.py). A .pth file's import line runs as Python starts, before numpy
+# loads OpenBLAS; an OPENBLAS_CORETYPE set by the user wins.
+site_packages=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+cat > "$site_packages/rov_console_openblas.pth" <<'PTH'
+import os; os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell") if os.uname().machine == "x86_64" and all(f" {flag} " in open("/proc/cpuinfo").read() for flag in ("avx2", "fma")) else None
+PTH
 # compile the numeric core into numba's cache now, so every run loads the same machine code;
 # the cache is kept per version of the sources (sim/numba_cache.py): after a change to them
 # this compiles again (a few minutes), otherwise it returns at once
