@@ -52,7 +52,6 @@ class _Slots:
     env: np.ndarray  # (runs, steps, N_ENV) the chunks' environment rows
     noise: np.ndarray  # (runs, steps, ...) their sensor noise
     fresh: np.ndarray  # (runs, steps, ...) their fresh-sample flags
-    log: np.ndarray  # (runs, steps, N_LOG) their log rows
 
     def __init__(self, first: ChunkJob, n_runs: int, length: int) -> None:
         s = first.sim
@@ -76,6 +75,11 @@ class _Slots:
         self.Pc = np.zeros((n_runs, *np.shape(s.P_cov)))
         self.cs = np.zeros((n_runs, *s.cs.shape))
         self.target = np.zeros((n_runs, *s.target.shape))
+        # each run's chunk writes its log rows straight into its own (steps, N_LOG) array,
+        # kept here while the chunk runs, at the address in ``log_at`` (the kernel's
+        # ``row_at``): no slot of rows to zero and copy out
+        self.rows: list[np.ndarray | None] = [None] * n_runs
+        self.log_at = np.zeros(n_runs, np.int64)
         self._inputs(first, length)
         self.work = plant.make_work(s.arrays.thr_T.shape[1])
         self.W = loop.make_control_work()
@@ -96,12 +100,11 @@ class _Slots:
             np.zeros((n, length, job.env.shape[1])),
             np.zeros((n, length, *job.noise.shape[1:])),
             np.zeros((n, length, *job.fresh.shape[1:]), dtype=job.fresh.dtype),
-            np.zeros((n, length, loop.N_LOG)),
         )
         if hasattr(self, "env"):
-            for new, old in zip(bufs, (self.env, self.noise, self.fresh, self.log), strict=True):
+            for new, old in zip(bufs, (self.env, self.noise, self.fresh), strict=True):
                 new[:, : old.shape[1]] = old
-        self.env, self.noise, self.fresh, self.log = bufs
+        self.env, self.noise, self.fresh = bufs
 
     @staticmethod
     def key_of(job: ChunkJob) -> tuple:
@@ -169,7 +172,11 @@ class _Slots:
         self.env[r, :n] = job.env
         self.noise[r, :n] = job.noise
         self.fresh[r, :n] = job.fresh
-        self.log[r, :n] = 0.0
+        out = job.out
+        if out is None or not out.flags.c_contiguous or out.shape != (n, loop.N_LOG):
+            out = np.empty((n, loop.N_LOG))  # (copied into ``job.out`` at the chunk's end)
+        self.rows[r] = out
+        self.log_at[r] = out.ctypes.data
         self.k0[r] = s.step_index
         self.pos[r] = 0
         self.length[r] = n
@@ -184,11 +191,13 @@ class _Slots:
             value[...] = stack[r]
         self.length[r] = 0
         self.pos[r] = 0
-        if job.out is None:
-            rows = self.log[r, :n].copy()
-        else:
+        rows = self.rows[r]
+        assert rows is not None and len(rows) == n
+        self.rows[r] = None
+        self.log_at[r] = 0
+        if job.out is not None and rows is not job.out:
+            job.out[...] = rows
             rows = job.out
-            rows[...] = self.log[r, :n]
         return (
             self.x[r].copy(),
             self.held_y[r].copy(),
@@ -220,7 +229,7 @@ class _Slots:
             self.CS,
             self.QS,
             self.dt_s,
-            self.log,
+            self.log_at,
             self.work,
             self.W,
             self.same_plant,

@@ -14,12 +14,51 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic
+from numba.np.arrayobj import make_array, populate_array
 
 from control import loop
+from control.columns import N_LOG
 from control.loop import ControlArrays, ControlWork, QualityState
 from sim import batch_plant, plant, sensors
 from sim.gnc import JIT_NOALLOC
+
+ROW_BYTES = N_LOG * 8
+"""Bytes of one log row (``N_LOG`` float64)."""
+
+
+def _row_at(typingctx: Any, address: Any, length: Any) -> Any:
+    """The ``length`` float64 numbers at memory ``address`` as a 1-D array (a view: no copy,
+    no owner). Lets the kernel write each run's log rows straight into the rows its
+    ``Simulation`` asked for (arrays of different runs, not one stacked array) instead of
+    into a slot copied out afterwards. The caller keeps that memory alive while the kernel
+    runs (``control.batch._Slots.rows``)."""
+    if not isinstance(address, types.Integer) or not isinstance(length, types.Integer):
+        return None
+    array_type = types.Array(types.float64, 1, "C")
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        address_v, length_v = args
+        n = context.cast(builder, length_v, signature.args[1], types.intp)
+        ary = make_array(array_type)(context, builder)
+        data = builder.inttoptr(address_v, context.get_value_type(types.CPointer(types.float64)))
+        itemsize = context.get_constant(types.intp, 8)
+        populate_array(
+            ary,
+            data=data,
+            shape=cgutils.pack_array(builder, [n]),
+            strides=cgutils.pack_array(builder, [itemsize]),
+            itemsize=itemsize,
+            meminfo=None,
+        )
+        return ary._getvalue()
+
+    return array_type(address, length), codegen
+
+
+row_at: Any = intrinsic(_row_at)
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -158,7 +197,7 @@ def batch_steps(
     CS: Any,
     QS: Any,
     dt: float,
-    log: np.ndarray,
+    log_at: np.ndarray,
     work: plant.PlantWork,
     W: ControlWork,
     same_plant: np.ndarray,
@@ -171,8 +210,10 @@ def batch_steps(
     """Advance every run with a chunk under way (``pos[r] < length[r]``) step by step, all of
     them one step before any takes the next, until the first of them reaches the end of its
     chunk. Run r's step j (``pos[r]``) is its chunk's step, at time ``(k0[r] + j) dt``, and
-    writes ``log[r, j]``. A run whose plant state stops being finite at step j ends its
-    chunk there: ``ok[r] = j``, ``pos[r] = length[r]``. Returns the steps taken.
+    writes its log row j: the ``N_LOG`` numbers at address ``log_at[r] + j ROW_BYTES`` (a
+    C-contiguous (steps, N_LOG) array of the run's own, zeroed here row by row). A run whose
+    plant state stops being finite at step j ends its chunk there: ``ok[r] = j``,
+    ``pos[r] = length[r]``; its rows from j on are left unwritten. Returns the steps taken.
 
     Each step goes over the runs three times: sensors, control and thrusters (propeller
     speeds into ``n_rps[r]``); the plants' RK4 steps (the runs whose plant is the batch's
@@ -198,7 +239,9 @@ def batch_steps(
             C = control_view(CS, r)
             Q = quality_view(QS, r)
             t = (k0[r] + j) * dt
-            row = log[r, j]
+            row = row_at(log_at[r] + j * ROW_BYTES, N_LOG)
+            for i in range(N_LOG):
+                row[i] = 0.0
             xr, hr = x[r], held_y[r]
             sensors.sample_into(hr, xr, hr, noise[r, j], fresh[r, j], sensors.Y_SENSOR)
             loop.control_step_into(
@@ -247,7 +290,7 @@ def batch_steps(
                 dt,
                 t + dt,
                 held_y[r],
-                log[r, j],
+                row_at(log_at[r] + j * ROW_BYTES, N_LOG),
                 work,
                 W,
             )

@@ -212,9 +212,12 @@ def score(
         )
         if span.score:
             scored.append(part.data)
-    scored_rows = (
-        LogRows(np.vstack(scored), rows.n_thrusters, layout=rows.layout) if scored else rows
-    )
+    if not scored:
+        scored_rows = rows
+    else:
+        # one scored leg (most missions): its rows as they are, not a copy of them
+        data = scored[0] if len(scored) == 1 else np.vstack(scored)
+        scored_rows = LogRows(data, rows.n_thrusters, layout=rows.layout)
     rms_n, rms_e, rms_psi, _, _ = tracking_figures(scored_rows, dt_s)
     full = tracking_figures(rows, dt_s)
     final = rows["tree_eta_n"][-1] if len(rows) else np.zeros(6)
