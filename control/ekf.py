@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from sim.gnc import JIT, JIT_NOALLOC, ssa
+from sim.gnc import JIT, JIT_NOALLOC, ssa_scalar
 
 N_X = 9
 NORTH, EAST, PSI, SURGE, SWAY, YAW_RATE, B_N, B_E, B_PSI = range(9)
@@ -348,9 +348,9 @@ def correct_into(
     e0 = z0 - x[row0]
     e1 = z1 - x[row1] if m == 2 else 0.0
     if angle_row == 0:
-        e0 = ssa(e0)
+        e0 = ssa_scalar(e0)
     elif angle_row == 1:
-        e1 = ssa(e1)
+        e1 = ssa_scalar(e1)
     # innovation covariance and its inverse
     s00 = P[row0, row0] + r0
     if m == 1:

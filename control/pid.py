@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from sim.gnc import JIT, JIT_NOALLOC, dot_into, ssa
+from sim.gnc import JIT, JIT_NOALLOC, mv3_into, ssa_scalar
 
 
 @njit(inline="always", **JIT)
@@ -58,7 +58,7 @@ def body_to_ned(vec_b: np.ndarray, psi: float) -> np.ndarray:
 def pose_error(eta: np.ndarray, eta_d: np.ndarray) -> np.ndarray:
     """e = eta - eta_d with the heading difference wrapped into [-pi, pi)."""
     e = eta - eta_d
-    e[2] = ssa(e[2])
+    e[2] = ssa_scalar(e[2])
     return e
 
 
@@ -98,8 +98,9 @@ def feedforward_into(
     """``feedforward`` into ``tau`` (3,), ``acc`` (3,) a work array.
 
     Written with scalars (the operations of ``ned_to_body``, ``coriolis3`` and the vector
-    sums, in their order); ``M @ acc`` stays the BLAS product the vector form used
-    (``dot_into``)."""
+    sums, in their order); ``M @ acc`` as ``sim.gnc.mv3_into``'s sums (it was OpenBLAS's
+    ``gemv``: 30 ns a call, and its last bits depend on the kernel OpenBLAS picks for the
+    CPU)."""
     cd, sd = rot2(eta_d[2])
     nu0 = cd * deta_d[0] + sd * deta_d[1]
     nu1 = -sd * deta_d[0] + cd * deta_d[1]
@@ -110,7 +111,7 @@ def feedforward_into(
     acc[0] = (cd * ddeta_d[0] + sd * ddeta_d[1]) - r_d * (cd * sv0 + sd * sv1)
     acc[1] = (-sd * ddeta_d[0] + cd * ddeta_d[1]) - r_d * (-sd * sv0 + cd * sv1)
     acc[2] = ddeta_d[2]
-    dot_into(M, acc, tau)
+    mv3_into(tau, M, acc)
     # + C(nu_d) nu_d as in coriolis3, then damping
     ax = M[0, 0] * nu0 + M[0, 1] * nu1 + M[0, 2] * nu2
     ay = M[1, 0] * nu0 + M[1, 1] * nu1 + M[1, 2] * nu2
@@ -210,19 +211,19 @@ def tree_pid_into(
     for k in range(3):
         e[k] = eta[k] - eta_d[k]
         de[k] = deta[k] - deta_d[k] if use_ff else deta[k]
-    e[2] = ssa(e[2])
+    e[2] = ssa_scalar(e[2])
     # anti-windup (eq. 3.19): clamp the integral part in the ROV frame
     i_b[0] = c * i_n[0] + s * i_n[1]
     i_b[1] = -s * i_n[0] + c * i_n[1]
     i_b[2] = i_n[2]
-    dot_into(A, i_b, i_rov)
+    mv3_into(i_rov, A, i_b)
     changed = False
     for k in range(3):
         clipped[k] = np.minimum(np.maximum(i_rov[k], -i_limit_rov[k]), i_limit_rov[k])
         changed = changed or clipped[k] != i_rov[k]
     if changed:
         # body_to_ned(A_inv @ clipped, psi)
-        dot_into(A_inv, clipped, i_b)
+        mv3_into(i_b, A_inv, clipped)
         i_use[0] = c * i_b[0] - s * i_b[1]
         i_use[1] = s * i_b[0] + c * i_b[1]
         i_use[2] = i_b[2]
@@ -289,7 +290,7 @@ def free_rov_pid_into(
     operations of the vector form, in its order); the outputs must not alias the inputs."""
     for k in range(4):
         e[k] = eta4[k] - eta4_d[k]
-    e[3] = ssa(e[3])
+    e[3] = ssa_scalar(e[3])
     # tau_n = -Kp * e - Kd * deta4 + i4
     t0 = -Kp[0] * e[0] - Kd[0] * deta4[0] + i4[0]
     t1 = -Kp[1] * e[1] - Kd[1] * deta4[1] + i4[1]
@@ -355,10 +356,10 @@ def bumpless_tree_integral_into(
     work: np.ndarray,
 ) -> None:
     """``bumpless_tree_integral`` into ``out`` (3,), ``work`` (3, 3); the vector form's
-    operations element by element, ``A_inv @`` the same BLAS product."""
+    operations element by element, ``A_inv @`` as ``sim.gnc.mv3_into``'s sums."""
     psi = eta[2]
     tau_tree = work[0]
-    dot_into(A_inv, tau_rov3, tau_tree)
+    mv3_into(tau_tree, A_inv, tau_rov3)
     if use_ff:
         ff = work[1]
         feedforward_into(ff, psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq, work[2])
@@ -370,7 +371,7 @@ def bumpless_tree_integral_into(
     b2 = tau_tree[2]
     e0 = eta[0] - eta_d[0]
     e1 = eta[1] - eta_d[1]
-    e2 = ssa(eta[2] - eta_d[2])
+    e2 = ssa_scalar(eta[2] - eta_d[2])
     de0 = deta[0] - deta_d[0] if use_ff else deta[0]
     de1 = deta[1] - deta_d[1] if use_ff else deta[1]
     de2 = deta[2] - deta_d[2] if use_ff else deta[2]
@@ -411,7 +412,7 @@ def bumpless_free_integral_into(
     t1 = s * tau_rov6[0] + c * tau_rov6[1]
     t2 = tau_rov6[2]
     t3 = tau_rov6[5]
-    e3 = ssa(eta4[3] - eta4_d[3])
+    e3 = ssa_scalar(eta4[3] - eta4_d[3])
     out[0] = t0 + Kp[0] * (eta4[0] - eta4_d[0]) + Kd[0] * deta4[0]
     out[1] = t1 + Kp[1] * (eta4[1] - eta4_d[1]) + Kd[1] * deta4[1]
     out[2] = t2 + Kp[2] * (eta4[2] - eta4_d[2]) + Kd[2] * deta4[2]

@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from sim.gnc import JIT, ssa
+from sim.gnc import JIT, ssa_scalar
 from sim.sensors import N_SENSORS, N_Y, Y_SENSOR
 
 RANGE, WILD, FROZEN, VARIANCE = 0, 1, 2, 3
@@ -102,7 +102,7 @@ def check_sample(
         for i in range(N_Y):
             if y_sensor[i] != k:
                 continue
-            d = ssa(y[i] - last[i]) if i == 4 else y[i] - last[i]
+            d = ssa_scalar(y[i] - last[i]) if i == 4 else y[i] - last[i]
             if abs(d) > wild[i] + max_rate[i] * gap:
                 counters[k, WILD] += 1
                 return False
@@ -115,7 +115,7 @@ def check_sample(
     for i in range(N_Y):
         if y_sensor[i] != k:
             continue
-        d = ssa(y[i] - last[i]) if i == 4 else y[i] - last[i]
+        d = ssa_scalar(y[i] - last[i]) if i == 4 else y[i] - last[i]
         for j in range(WINDOW - 1):
             hist[i, j] = hist[i, j + 1]
         hist[i, WINDOW - 1] = d if last_t[k] >= 0.0 else 0.0

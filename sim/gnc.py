@@ -10,14 +10,10 @@ Angles are radians, ``eta = [x, y, z, phi, theta, psi]`` (NED) and ``nu = [u, v,
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from typing import Any, Literal, TypedDict, cast
+from typing import Any, Literal, TypedDict
 
 import numpy as np
-from numba import njit, types
-from numba.core.extending import intrinsic
-from numba.core.typing import signature
-from numba.np import linalg as _nplinalg
+from numba import njit
 
 
 # Compile options for the numeric core: no Python-style zero-division checks. No fast-math:
@@ -38,37 +34,6 @@ step): compiled without numba's runtime, so an array made inside one, or anythin
 needs the runtime, is a compile error, and array views cost no reference counting."""
 
 
-def _dot_into_typer(typingctx, a, b, out):
-    """``np.dot(a, b, out)`` for contiguous float64 arrays, usable in kernels compiled without
-    numba's runtime (``JIT_NOALLOC``): the same BLAS call (``gemv`` for a matrix and a vector,
-    ``gemm`` for two matrices) as ``np.dot(a, b, out)`` and ``a @ b``, so the same bits, but it
-    returns nothing (numba's own ``np.dot(a, b, out)`` returns ``out``, which needs the
-    runtime). ``out`` must not alias ``a`` or ``b``. Built on numba's lowering of
-    ``np.dot(a, b, out)`` (``numba.np.linalg.dot_3_mm`` / ``dot_3_vm``), a private API: if a
-    numba release moves it, use ``np.dot(a, b, out)`` in kernels compiled with ``JIT``."""
-    arrays = (a, b, out)
-    if not all(isinstance(t, types.Array) and t.layout in "CF" for t in arrays):
-        raise TypeError("dot_into needs C- or F-contiguous arrays (a copy would allocate)")
-    if not (a.dtype == b.dtype == out.dtype == types.float64):
-        raise TypeError("dot_into needs float64 arrays")
-    if (a.ndim, b.ndim, out.ndim) not in ((2, 2, 2), (2, 1, 1)):
-        raise TypeError("dot_into takes (matrix, matrix, matrix) or (matrix, vector, vector)")
-
-    def codegen(context, builder, sig, args):
-        _nplinalg.ensure_blas()
-        inner = signature(out, a, b, out)
-        if b.ndim == 2:
-            _nplinalg.dot_3_mm(context, builder, inner, args)
-        else:
-            _nplinalg.dot_3_vm(context, builder, inner, args)
-        return context.get_dummy_value()
-
-    return types.none(a, b, out), codegen
-
-
-dot_into = cast(Callable[[np.ndarray, np.ndarray, np.ndarray], None], intrinsic(_dot_into_typer))
-
-
 # Named indices into eta / nu (SNAME 1950, thesis table 2.1).
 X, Y, Z, PHI, THETA, PSI = 0, 1, 2, 3, 4, 5
 U, V, W, P, Q, R = 0, 1, 2, 3, 4, 5
@@ -80,6 +45,20 @@ def ssa(angle: float) -> float:
     arrays too. (angle + pi) mod 2 pi rounds to 2 pi for angles just below -pi: folded back."""
     wrapped = (angle + np.pi) % (2.0 * np.pi)
     wrapped = wrapped - 2.0 * np.pi * (wrapped >= 2.0 * np.pi)
+    return wrapped - np.pi
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def ssa_scalar(angle: float) -> float:
+    """``ssa`` of one number, the same bits, for the compiled loop: an angle already within
+    [-pi, pi) (almost every call) skips the floating-point remainder, a call into numba's
+    helper library (``numba_fmod``, 1 % of a campaign's time): for 0 <= a + pi < 2 pi,
+    (a + pi) mod 2 pi is a + pi exactly, so the rest of ``ssa`` sees the same number."""
+    two_pi = 2.0 * np.pi
+    wrapped = angle + np.pi
+    if not (wrapped >= 0.0 and wrapped < two_pi):  # outside, or NaN: as ``ssa``
+        wrapped = wrapped % two_pi
+        wrapped = wrapped - two_pi * (wrapped >= two_pi)
     return wrapped - np.pi
 
 

@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from sim.gnc import JIT, JIT_NOALLOC, ssa
+from sim.gnc import JIT, JIT_NOALLOC, ssa_scalar
 from sim.params import SensorsSpec
 
 POSITION, DEPTH, COMPASS, DVL, GYRO = 0, 1, 2, 3, 4
@@ -149,7 +149,7 @@ def sample_into(
             out[i] = x[_Y_STATE[i]] + noise[i]
         else:
             out[i] = held[i]
-    out[4] = ssa(out[4])
+    out[4] = ssa_scalar(out[4])
 
 
 @njit(**JIT)

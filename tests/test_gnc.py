@@ -3,7 +3,6 @@
 import math
 
 import numpy as np
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numba import njit
@@ -16,12 +15,12 @@ from sim.gnc import (
     Tzyx,
     coriolis_force,
     cross,
-    dot_into,
     euler_from_rotation,
     m2c,
     quaternion_wxyz_from_rpy_radians,
     ssa,
     ssa_each,
+    ssa_scalar,
 )
 
 angle = st.floats(-10.0, 10.0, allow_nan=False)
@@ -130,42 +129,6 @@ def test_euler_rates_match_finite_difference_of_rotation(phi, theta, w):
     np.testing.assert_allclose(rates, Tzyx(phi, theta) @ w, atol=1e-4 * (1 + np.abs(w).max()))
 
 
-@njit(cache=False, error_model="numpy", _nrt=False)
-def _dot_into_no_runtime(a, b, out):  # type: ignore[no-untyped-def]
-    dot_into(a, b, out)
-
-
-@njit(cache=False, error_model="numpy")
-def _matmul(a, b):  # type: ignore[no-untyped-def]
-    return a @ b
-
-
-def test_dot_into_is_the_blas_product_to_the_bit_without_the_runtime() -> None:
-    """``gnc.dot_into`` (compiled without numba's runtime) gives the bits of numba's ``a @ b``
-    and of numpy's product, for a matrix and a vector, two matrices and a transposed
-    (F-ordered) factor, as the EKF's ``phi P phi^T`` and the feedforward's ``M @ acc`` use it."""
-    rng = np.random.default_rng(5)
-    M = rng.normal(size=(9, 9))
-    P = rng.normal(size=(9, 9))
-    v = rng.normal(size=9)
-    out_v = np.empty(9)
-    _dot_into_no_runtime(M, v, out_v)
-    assert np.array_equal(out_v, _matmul(M, v))
-    out_m = np.empty((9, 9))
-    _dot_into_no_runtime(M, P.T, out_m)
-    assert np.array_equal(out_m, _matmul(M, P.T))
-    assert np.array_equal(out_m, M @ P.T)
-    M3 = rng.normal(size=(3, 3))
-    out3 = np.empty(3)
-    _dot_into_no_runtime(M3, v[0:3], out3)
-    assert np.array_equal(out3, _matmul(M3, v[0:3]))
-
-
-def test_dot_into_refuses_an_array_it_would_have_to_copy() -> None:
-    with pytest.raises(Exception, match="contiguous"):
-        _dot_into_no_runtime(np.ones((4, 4))[::2, ::2], np.ones(2), np.empty(2))
-
-
 def test_ssa_each_is_ssa_of_every_element_to_the_bit() -> None:
     """The scores' heading errors go through ``ssa_each``: the compiled scalar ``ssa`` of each
     element, the same bits as calling it per element, just below -pi and at odd multiples of
@@ -181,3 +144,27 @@ def test_ssa_each_is_ssa_of_every_element_to_the_bit() -> None:
     got = ssa_each(angles)
     assert got.tobytes() == want.tobytes()
     assert np.all((got >= -math.pi) & (got < math.pi))
+
+
+@njit(cache=False, error_model="numpy")
+def _ssa_scalar_each(angles):  # type: ignore[no-untyped-def]
+    out = np.empty(angles.shape[0])
+    for i in range(angles.shape[0]):
+        out[i] = ssa_scalar(angles[i])
+    return out
+
+
+def test_ssa_scalar_is_ssa_to_the_bit() -> None:
+    """The kernels' ``ssa_scalar`` skips the remainder for angles already in [-pi, pi): the
+    same bits as ``ssa`` there, beyond it, at its edges (just below -pi, +-pi, odd multiples
+    of pi, +-0, the largest double below pi) and for NaN and infinities."""
+    rng = np.random.default_rng(6)
+    edges = [-math.pi, math.pi, 3.0 * math.pi, -3.0 * math.pi, np.nextafter(-math.pi, -4.0)]
+    edges += [np.nextafter(math.pi, 0.0), 0.0, -0.0, 1e-300, -1e-300, 1e17, -1e17]
+    angles = np.concatenate([rng.uniform(-4.0, 4.0, 20000), rng.uniform(-1e4, 1e4, 2000), edges])
+    want = np.array([ssa(float(v)) for v in angles])
+    got = _ssa_scalar_each(angles)
+    assert got.tobytes() == want.tobytes()
+    special = np.array([math.nan, math.inf, -math.inf])
+    assert np.all(np.isnan(_ssa_scalar_each(special)))
+    assert np.all(np.isnan([ssa(float(v)) for v in special]))

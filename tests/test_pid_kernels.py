@@ -1,6 +1,7 @@
 """The tree controller's kernels written with scalars (control.pid.tree_pid, feedforward) do
 the arithmetic of their vector form, to the bit. The vector form is written out here as it
-stood before (numpy expressions, ``ned_to_body``, ``coriolis3``, ``A @``), compiled the same
+stood before (numpy expressions, ``ned_to_body``, ``coriolis3``, ``A @`` summed as
+``sim.gnc.mv3_into`` sums it), compiled the same
 way, and both are run on random states, with and without feedforward, with the integral
 inside and beyond its anti-windup limit."""
 
@@ -15,13 +16,26 @@ from sim.gnc import JIT, ssa
 
 
 @njit(**JIT)
+def _mv3(A, v):  # type: ignore[no-untyped-def]
+    """A 3x3 matrix times a vector as the kernels sum it (``sim.gnc.mv3_into``, row by row,
+    left to right), not OpenBLAS's ``gemv``."""
+    out = np.empty(3)
+    for i in range(3):
+        s = 0.0
+        for j in range(3):
+            s += A[i, j] * v[j]
+        out[i] = s
+    return out
+
+
+@njit(**JIT)
 def _ff_vector(psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq):
     nu_d = pid.ned_to_body(deta_d, eta_d[2])
     r_d = deta_d[2]
     sv = np.array([-deta_d[1], deta_d[0], 0.0])
     acc = pid.ned_to_body(ddeta_d, eta_d[2]) - r_d * pid.ned_to_body(sv, eta_d[2])
     acc[2] = ddeta_d[2]
-    tau = M @ acc + ekf.coriolis3(M, nu_d)
+    tau = _mv3(M, acc) + ekf.coriolis3(M, nu_d)
     for i in range(3):
         tau[i] += (D_l[i] + D_nl[i] * abs(nu_d[i])) * nu_d[i]
     spring_n = np.array([k_h * (eta_d[0] - p_eq[0]), k_h * (eta_d[1] - p_eq[1]), 0.0])
@@ -39,11 +53,11 @@ def _pid_vector(
     de = deta - deta_d if use_ff else deta.copy()
     p_n = -Kp * e
     d_n = -Kd * de
-    i_rov = A @ pid.ned_to_body(i_n, psi)
+    i_rov = _mv3(A, pid.ned_to_body(i_n, psi))
     clipped = np.minimum(np.maximum(i_rov, -i_limit_rov), i_limit_rov)
     i_use = i_n.copy()
     if np.any(clipped != i_rov):
-        i_use = pid.body_to_ned(A_inv @ clipped, psi)
+        i_use = pid.body_to_ned(_mv3(A_inv, clipped), psi)
     terms = np.zeros((4, 3))
     terms[0] = pid.ned_to_body(p_n, psi)
     terms[1] = pid.ned_to_body(i_use, psi)
