@@ -27,7 +27,7 @@ from scipy.optimize import linprog
 from control.simulation import Simulation
 from sim import plant, site
 from sim.docking import DockingFrame
-from sim.gnc import Rzyx, ssa
+from sim.gnc import ssa
 
 FloatArray = NDArray[np.float64]
 
@@ -179,31 +179,23 @@ def pose_load(
     depth_m: float,
 ) -> PoseLoad:
     """The ROV's share of holding the pair still at (north, east, psi) at ``depth_m``."""
-    arr = sim.arrays
-    x = np.zeros(plant.N_STATE)
-    x[0:3] = north, east, depth_m
-    x[5] = psi
-    rot_t = Rzyx(0.0, 0.0, psi)
-    rot_m = arr.mount_R
-    rot_r = rot_t @ rot_m
-    x[12:15] = x[0:3] + rot_t @ arr.mount_r
-    x[17] = psi + math.atan2(rot_m[1, 0], rot_m[0, 0])
-    w_tree = plant.tree_wrench(x, env, arr, rot_t)
-    w_rov = plant.rov_wrench(x, np.zeros(arr.thr_T.shape[1]), env, arr, rot_r)
-    # everything on the pair, about the ROV's origin in its axes; the thrust must cancel it
-    f_tree_r = rot_m.T @ w_tree[0:3]
-    r = -(rot_m.T @ arr.mount_r)  # the tree's origin from the ROV's, in the ROV's axes
-    m_tree_r = rot_m.T @ w_tree[3:6]
-    # the yaw moment of the tree's force about the ROV: z of r x f (np.cross's products and
-    # difference, without its per-call cost: this runs for every heading a landing checks)
-    m_z = float(m_tree_r[2]) + (float(r[0] * f_tree_r[1]) - float(r[1] * f_tree_r[0]))
-    total = np.array([f_tree_r[0] + w_rov[0], f_tree_r[1] + w_rov[1], m_z + w_rov[5]], dtype=float)
-    needed = -total
-    norm = float(np.linalg.norm(needed))
-    if norm == 0.0:
-        return PoseLoad(needed, needed.copy())
-    reach = thrusters.reach(needed / norm)
-    return PoseLoad(needed, needed / norm * reach)
+    return pose_loads(sim, thrusters, np.array([[north, east, psi]]), env, depth_m)[0]
+
+
+def pose_loads(
+    sim: Simulation, thrusters: Thrusters, poses: FloatArray, env: FloatArray, depth_m: float
+) -> list[PoseLoad]:
+    """``pose_load`` of each pose (north, east, psi) of ``poses`` (k, 3): the forces from one
+    compiled call for all of them (``sim.plant.hold_needed_xyn``)."""
+    needed_all = plant.hold_needed_xyn(np.ascontiguousarray(poses, float), depth_m, env, sim.arrays)
+    loads = []
+    for needed in needed_all:
+        norm = float(np.linalg.norm(needed))
+        if norm == 0.0:
+            loads.append(PoseLoad(needed, needed.copy()))
+        else:
+            loads.append(PoseLoad(needed, needed / norm * thrusters.reach(needed / norm)))
+    return loads
 
 
 def plan_landing(sim: Simulation, frame: DockingFrame, target_n: FloatArray, depth_m: float):
@@ -221,10 +213,8 @@ def plan_landing(sim: Simulation, frame: DockingFrame, target_n: FloatArray, dep
         headings = target_n[2] + np.linspace(0.0, turn, steps)
         for turn_first in (True, False):
             n, e = (target_n[0], target_n[1]) if turn_first else (north, east)
-            worst = max(
-                pose_load(sim, thrusters, n, e, float(h), env, depth_m).utilisation
-                for h in headings
-            )
+            poses = np.column_stack([np.full(steps, n), np.full(steps, e), headings])
+            worst = max(p.utilisation for p in pose_loads(sim, thrusters, poses, env, depth_m))
             options.append((worst, abs(turn), turn, turn_first))
     worst, _, turn, turn_first = min(options)
     feasible = at_frame.utilisation <= FEASIBLE_UTILISATION

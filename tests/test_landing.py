@@ -126,6 +126,51 @@ def test_planner_force_is_the_wire_pull_back_in_still_water():
     assert np.linalg.norm(still.needed_xyn) < 0.01 * abs(load.needed_xyn[0])
 
 
+def _needed_with_numpy(sim, north, east, psi, env, depth_m):
+    """The hold force as ``missions.landing.pose_load`` worked it out before the compiled
+    ``sim.plant.hold_needed_xyn``: numpy's products and the plant's two wrench calls."""
+    from sim import plant
+    from sim.gnc import Rzyx
+
+    arr = sim.arrays
+    x = np.zeros(plant.N_STATE)
+    x[0:3] = north, east, depth_m
+    x[5] = psi
+    rot_t = Rzyx(0.0, 0.0, psi)
+    rot_m = arr.mount_R
+    x[12:15] = x[0:3] + rot_t @ arr.mount_r
+    x[17] = psi + math.atan2(rot_m[1, 0], rot_m[0, 0])
+    w_tree = plant.tree_wrench(x, env, arr, rot_t)
+    w_rov = plant.rov_wrench(x, np.zeros(arr.thr_T.shape[1]), env, arr, rot_t @ rot_m)
+    f = rot_m.T @ w_tree[0:3]
+    r = -(rot_m.T @ arr.mount_r)
+    m_z = (rot_m.T @ w_tree[3:6])[2] + (r[0] * f[1] - r[1] * f[0])
+    return -np.array([f[0] + w_rov[0], f[1] + w_rov[1], m_z + w_rov[5]])
+
+
+def test_compiled_hold_force_is_the_numpy_form():
+    """``sim.plant.hold_needed_xyn`` (all of a turn's headings in one compiled call) gives
+    the numpy form's forces at 60 poses around the frame in a 0.4 m/s current, to 1e-12 of
+    the largest component (the rotations' products are summed in another order than
+    OpenBLAS's: the last bits only)."""
+    from control.simulation import Simulation
+    from sim import params as params_mod
+    from sim import plant
+
+    ps = params_mod.load("full-scale")
+    sim = Simulation(ps, tree_depth_m=395.0)
+    env = landing._environment(sim, 395.0, 0.4, math.radians(200.0))
+    rng = np.random.default_rng(3)
+    poses = np.column_stack(
+        [rng.uniform(-5.0, 5.0, 60), rng.uniform(-5.0, 5.0, 60), rng.uniform(-4.0, 4.0, 60)]
+    )
+    got = plant.hold_needed_xyn(poses, 395.0, env, sim.arrays)
+    for pose, row in zip(poses, got, strict=True):
+        want = _needed_with_numpy(sim, *pose, env, 395.0)
+        assert np.abs(row - want).max() <= 1e-12 * np.abs(want).max(), (pose, row, want)
+    assert np.abs(got).max() > 1e3  # real forces, not zeros
+
+
 def test_a_small_random_set_of_landings_lands_where_it_is_accepted():
     """Issue 11: a few landings drawn at random (the Monte Carlo's draw, seed 1 at full scale
     and 2 at model scale, as `benchmarks/landing_montecarlo.py --seed 1` draws them): every one
