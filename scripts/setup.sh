@@ -28,7 +28,7 @@ fi
 # loads OpenBLAS; an OPENBLAS_CORETYPE set by the user wins.
 site_packages=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
 cat > "$site_packages/rov_console_openblas.pth" <<'PTH'
-import os; os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell") if os.uname().machine == "x86_64" and all(f" {flag} " in open("/proc/cpuinfo").read() for flag in ("avx2", "fma")) else None
+import os; os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell") if os.uname().machine == "x86_64" and {"avx2", "fma"} <= set(open("/proc/cpuinfo").read().split()) else None
 PTH
 # compile the numeric core into numba's cache now, so every run loads the same machine code;
 # the cache is kept per version of the sources (sim/numba_cache.py): after a change to them

@@ -1151,52 +1151,47 @@ def hold_needed_xyn(
     with it). The surge force [N], sway force [N] and yaw moment [N m] in the ROV's axes,
     about its origin: minus the sum of the tree's wrench (``tree_wrench_into``, moved to the
     ROV) and the ROV's own with its thrusters off (``rov_wrench_into``). The rotations'
-    products are written out (row by row, left to right), not OpenBLAS's, whose last bits
-    depend on the CPU; one call for all poses instead of two compiled calls and a dozen
-    numpy ones per pose. Returns (len(poses), 3)."""
+    products are ``sim.gnc``'s 3x3 loops, not OpenBLAS's, whose last bits depend on the CPU;
+    one call for all poses instead of two compiled calls and a dozen numpy ones per pose.
+    Returns (len(poses), 3)."""
     k = poses.shape[0]
     m = P.thr_T.shape[1]
     out = np.empty((k, 3))
     work = make_work(m)
     x = np.zeros(N_STATE)
-    n_off = np.zeros(m)
     thrust_b = np.empty(6)
-    thruster_wrench_into(thrust_b, n_off, P, work)
+    thruster_wrench_into(thrust_b, np.zeros(m), P, work)
     w_tree = np.empty(6)
     w_rov = np.empty(6)
     rot_t = np.empty((3, 3))
     rot_r = np.empty((3, 3))
-    rot_m, mount_r = P.mount_R, P.mount_r
+    offset = np.empty(3)
+    f_tree = np.empty(3)
+    m_tree = np.empty(3)
+    r_tree = np.empty(3)
+    rot_m = P.mount_R
     psi_mount = np.arctan2(rot_m[1, 0], rot_m[0, 0])
-    # the tree's origin seen from the ROV's, in the ROV's axes: -(R_m^T r_m)
-    r0 = -((rot_m[0, 0] * mount_r[0] + rot_m[1, 0] * mount_r[1]) + rot_m[2, 0] * mount_r[2])
-    r1 = -((rot_m[0, 1] * mount_r[0] + rot_m[1, 1] * mount_r[1]) + rot_m[2, 1] * mount_r[2])
+    mtv3_into(r_tree, rot_m, P.mount_r)  # minus the tree's origin from the ROV's, ROV axes
     for i in range(k):
         north, east, psi = poses[i, 0], poses[i, 1], poses[i, 2]
         Rzyx_into(rot_t, 1.0, 0.0, 1.0, 0.0, np.cos(psi), np.sin(psi))
-        for a in range(3):
-            for b in range(3):
-                rot_r[a, b] = (rot_t[a, 0] * rot_m[0, b] + rot_t[a, 1] * rot_m[1, b]) + rot_t[
-                    a, 2
-                ] * rot_m[2, b]
+        mm_into(rot_r, rot_t, rot_m)
+        mv3_into(offset, rot_t, P.mount_r)
         for j in range(N_STATE):
             x[j] = 0.0
         x[0], x[1], x[2], x[5] = north, east, depth_m, psi
         for a in range(3):
-            x[12 + a] = x[a] + (
-                (rot_t[a, 0] * mount_r[0] + rot_t[a, 1] * mount_r[1]) + rot_t[a, 2] * mount_r[2]
-            )
+            x[12 + a] = x[a] + offset[a]
         x[17] = psi + psi_mount
         tree_wrench_into(w_tree, x, env, P, rot_t, work)
         sth, cth = sincos(x[16])
         sphi, cphi = sincos(x[15])
         rov_wrench_into(w_rov, x, thrust_b, env, P, rot_r, sth, cth, sphi, cphi, work)
-        # the tree's force and moment in the ROV's axes (R_m^T w), its yaw moment about the ROV
-        f0 = (rot_m[0, 0] * w_tree[0] + rot_m[1, 0] * w_tree[1]) + rot_m[2, 0] * w_tree[2]
-        f1 = (rot_m[0, 1] * w_tree[0] + rot_m[1, 1] * w_tree[1]) + rot_m[2, 1] * w_tree[2]
-        mz = (rot_m[0, 2] * w_tree[3] + rot_m[1, 2] * w_tree[4]) + rot_m[2, 2] * w_tree[5]
-        m_z = mz + (r0 * f1 - r1 * f0)
-        out[i, 0] = -(f0 + w_rov[0])
-        out[i, 1] = -(f1 + w_rov[1])
+        # the tree's force and moment in the ROV's axes, its yaw moment about the ROV
+        mtv3_into(f_tree, rot_m, w_tree[0:3])
+        mtv3_into(m_tree, rot_m, w_tree[3:6])
+        m_z = m_tree[2] + ((-r_tree[0]) * f_tree[1] - (-r_tree[1]) * f_tree[0])
+        out[i, 0] = -(f_tree[0] + w_rov[0])
+        out[i, 1] = -(f_tree[1] + w_rov[1])
         out[i, 2] = -(m_z + w_rov[5])
     return out
