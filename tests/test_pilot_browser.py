@@ -88,12 +88,13 @@ def test_hold_w_flies_forward_and_letting_go_holds_station(
         time.sleep(0.05)
     assert text(pilot, "#v-surge") == "0.50"  # the key is half stick
     pilot.keyboard.up("w")
-    # where W was let go is where the simulation took the stick back to zero: under load the
-    # release reaches it late (a CI run at load 2-3 sampled the ROV 1.1 m before that point,
-    # still at full speed, and took the difference for a drift of the station keeping)
+    # where W was let go is where the simulation took the stick back to zero, and the hold's
+    # set point is the pose of that step: read it from the simulation, not from a sample of
+    # /api/state taken after the release (under load a CI run sampled the ROV 1.1 m before that
+    # point, still at full speed; another sampled it 0.6 m past it, coasting, and each took the
+    # difference for a drift of the station keeping)
     sim = server.console.loop.session.sim
     wait_for(lambda: float(sim.pilot_demand[0]) == 0.0, 10.0, "the simulation's stick at zero")
-    release = rov(api)[0]
     t, along = np.array(track).T
     t, first = np.unique(t, return_index=True)  # one sample per published state
     along = along[first]
@@ -102,13 +103,16 @@ def test_hold_w_flies_forward_and_letting_go_holds_station(
     late = np.polyfit(t[t > 1.5], along[t > 1.5], 1)[0]
     assert along[-1] > 0.5  # metres forward in 2 s (half stick, free ROV)
     assert late > early + 0.2 and late > 0.3  # the surge speed grows [m/s]
-    assert abs(float((release - start)[0:2] @ side)) < 0.2 * along[-1]  # not sideways
     wait_for(lambda: text(pilot, "#v-surge") == "0.00", 5.0, "the stick back at zero")
-    t_release = rov(api)[3]
+    t_release = rov(api)[3]  # a step after the stick reached zero: the set point is frozen
+    hold_n = sim.free_setpoint_n[0:2]
+    assert float((hold_n - start[0:2]) @ forward) > along[-1] - 0.05  # where it was let go
+    assert abs(float((hold_n - start[0:2]) @ side)) < 0.2 * along[-1]  # not sideways
     wait_for(lambda: rov(api)[3] > t_release + 10.0, 60.0, "10 s of simulated time")
     held = rov(api)[0]
-    # the station keeping brings it back to where W was let go (0.09 m after 10 s simulated)
-    assert np.linalg.norm((held - release)[0:2]) < 0.5
+    assert np.allclose(sim.free_setpoint_n[0:2], hold_n, rtol=0.0, atol=0.0)  # not moved
+    # the station keeping brings it back to that point (0.09 m after 10 s simulated)
+    assert np.linalg.norm(held[0:2] - hold_n) < 0.5
 
 
 def test_p_hands_over_to_the_autopilot_and_back_and_h_toggles_auto_heading(
