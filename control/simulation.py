@@ -266,7 +266,10 @@ class Simulation:
     ) -> None:
         ps = self.plant_ps
         self.arrays = plant.plant_arrays(ps, has_rov=self.has_rov)
-        self._wire_env_memo: tuple[tuple[float, ...], FloatArray] | None = None
+        self._wire_site = site.wire_site(ps)
+        """The wire's and the tree's numbers behind every chunk's wire entries."""
+        self._frame_entries = np.zeros(5)  # site.chunk_rows_into's ``frame``
+        self._chunk_out = np.zeros(6)  # and its ``out``
         self._k_h_memo: tuple[float, float] | None = None
         self.rng = np.random.default_rng(seed)
         self.current_params = current or steady_current(0.0, 0.0)
@@ -1069,66 +1072,44 @@ class Simulation:
         return x, held, xhat, pc, cs, log, n
 
     # ------------------------------------------------------------------ environment rows
-    def _ramp(self, start: float, target: float, rate: float, n: int) -> FloatArray:
-        """Values after each of n steps moving from start towards target at rate."""
-        if target == start:  # idle: start + 0 * ..., the same numbers without the ramp
-            return np.full(n, start + 0.0)
-        steps = np.arange(1, n + 1) * self.dt_s * rate
-        return start + np.sign(target - start) * np.minimum(steps, abs(target - start))
-
-    def _crane_path(self, n: int) -> FloatArray:
-        """(n, 3) crane-tip positions over the next n steps; (1, 3) when the crane tip stays
-        where it is (``site.environment_rows_into`` reads one row for all)."""
-        delta = self.crane_target_n - self.crane_tip_n
-        dist = float(np.linalg.norm(delta))
-        if dist < 1e-12 or self.crane_speed_mps <= 0.0:
-            return self.crane_tip_n[None, :].copy()  # still: one row stands for all n
-        frac = self._ramp(0.0, dist, self.crane_speed_mps, n) / dist
-        return self.crane_tip_n[None, :] + frac[:, None] * delta[None, :]
-
-    def _wire_environment(self, speed_mps: float, direction_rad: float) -> FloatArray:
-        """``site.wire_environment`` for the present payout and crane tip in a current of this
-        mean speed and direction (a new array). The last answer is kept: a chunk asking for
-        the same inputs as the one before (winch and vessel still, a steady current) gets a
-        copy of it instead of the wire's closed forms again (the same numbers)."""
-        key = (self.wire_length_m, *self.crane_tip_n.tolist(), speed_mps, direction_rad)
-        if self._wire_env_memo is None or self._wire_env_memo[0] != key:
-            env = site.wire_environment(
-                self.plant_ps, self.wire_length_m, self.crane_tip_n, speed_mps, direction_rad
-            )
-            self._wire_env_memo = (key, env)
-        return self._wire_env_memo[1].copy()
-
     def _environment_chunk(self, n: int) -> FloatArray:
         """(n, N_ENV) environment rows (sim.plant.E_*); advances the current, the winch and
         the vessel to the end of the chunk."""
-        ps = self.plant_ps
         self.current_state, speeds, dirs = envmod.advance_current(
             self.current_state, self.current_params, self.dt_s, n, self.rng
         )
         if self.faults:
             speeds, dirs = self._faulted_current(speeds, dirs)
-        # the chunk's mean speed and direction: np.mean's own sum and division (numpy's
-        # pairwise add.reduce, then / n), without its per-call checks
-        mean_speed = float(np.add.reduce(speeds) / n)
-        mean_dir = float(np.add.reduce(dirs) / n)
+        env = np.empty((n, plant.N_ENV))
+        frame = self._frame_entries
+        frame[0] = 0.0
+        if self.docking_frame is not None:
+            frame[0] = 1.0
+            frame[1:3] = self.docking_frame.center_n
+            frame[3] = self.docking_frame.heading_rad
+            frame[4] = self.docking_frame.landing_depth_m
+        out = self._chunk_out
+        site.chunk_rows_into(
+            env,
+            self._wire_site,
+            speeds,
+            dirs,
+            self.wire_length_m,
+            self.wire_target_m,
+            self.wire_rate_mps,
+            self.crane_tip_n,
+            self.crane_target_n,
+            self.crane_speed_mps,
+            self.push_newton,
+            1.0 if self.gripping else 0.0,
+            frame,
+            self.dt_s,
+            out,
+        )
         if self.mdwire is not None:
             # the current the MoorDyn wire sees over this chunk: uniform over depth, the mean
             # speed and direction the quasi-static wire's drag offset takes (no waves)
-            self._wire_current_n = envmod.current_velocity_n(mean_speed, mean_dir)
-        base = self._wire_environment(mean_speed, mean_dir)
-        base[plant.E_PUSH : plant.E_PUSH + 3] = self.push_newton
-        base[plant.E_GRIP] = 1.0 if self.gripping else 0.0
-        if self.docking_frame is not None:
-            base[plant.E_FRAME : plant.E_FRAME + 2] = self.docking_frame.center_n
-            base[plant.E_FRAME_PSI] = self.docking_frame.heading_rad
-            base[plant.E_LAND] = self.docking_frame.landing_depth_m
-        # winch and vessel move smoothly within the chunk
-        lengths = self._ramp(self.wire_length_m, self.wire_target_m, self.wire_rate_mps, n)
-        crane = self._crane_path(n)
-        stretch = site.self_weight_stretch(ps, self.wire_length_m)
-        env = np.empty((n, plant.N_ENV))
-        site.environment_rows_into(env, base, speeds, dirs, lengths, stretch, crane)
+            self._wire_current_n = envmod.current_velocity_n(float(out[4]), float(out[5]))
         if self.wave_field is not None:
             # the waves' velocity and acceleration added to the current's
             t = self.t_s + self.dt_s * np.arange(n)
@@ -1141,6 +1122,6 @@ class Simulation:
             env[:, plant.E_VC : plant.E_VC + 3] += v_w
             if self.wave_load != "drag":
                 env[:, plant.E_AC : plant.E_AC + 3] += a_w
-        self.wire_length_m = float(lengths[-1])
-        self.crane_tip_n = crane[-1].copy()
+        self.wire_length_m = float(out[0])
+        self.crane_tip_n = out[1:4].copy()
         return env

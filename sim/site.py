@@ -7,6 +7,7 @@ Turns the closed forms of ``sim.wire`` into the per-step environment entries of 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -38,7 +39,13 @@ def vertical_stiffness(ps: ParameterSet, length_m: float, current_speed_mps: flo
 def self_weight_stretch(ps: ParameterSet, length_m: float) -> float:
     """Stretch of the wire under its own weight alone, w L^2 / (2 EA) [m]."""
     w = ps.wire.submerged_weight_per_length()
-    return 0.5 * w * length_m**2 / ps.wire.axial_stiffness_newton
+    return float(_stretch(w, ps.wire.axial_stiffness_newton, length_m))
+
+
+@njit(**JIT_NOALLOC)
+def _stretch(w: float, EA: float, L: float) -> float:
+    """w L^2 / (2 EA), compiled (``self_weight_stretch`` and the chunks' rows alike)."""
+    return 0.5 * w * (L * L) / EA
 
 
 def wire_length_for_depth(
@@ -66,6 +73,35 @@ def wire_length_for_depth(
     return length
 
 
+class WireSite(NamedTuple):
+    """A parameter set's numbers behind the wire's entries of the environment rows
+    (``wire_site``), for the compiled ``wire_entries_into`` and ``chunk_rows_into``."""
+
+    w: float  # the wire's submerged weight per metre [N/m]
+    W0: float  # the tree's submerged weight [N]
+    EA: float  # the wire's axial stiffness [N]
+    drag_q: float  # 0.5 rho d C_D: the current's drag per metre of wire is drag_q |V| V
+    tree_D_l: float  # the tree's surge drag, linear [N s/m] (``tree_drag_force``)
+    tree_D_nl: float  # and quadratic [N s^2/m^2]
+    gl_nodes: np.ndarray  # the geometric compliance's Gauss-Legendre rule (``sim.wire``)
+    gl_weights: np.ndarray
+
+
+def wire_site(ps: ParameterSet) -> WireSite:
+    """The ``WireSite`` of a parameter set."""
+    wire = ps.wire
+    return WireSite(
+        float(wire.submerged_weight_per_length()),
+        float(ps.tree.submerged_weight_newton),
+        float(wire.axial_stiffness_newton),
+        0.5 * wire_mod.RHO_WATER * wire.diameter_m * wire.drag_coefficient,
+        float(ps.tree.D_l[0]),
+        float(ps.tree.D_nl[0]),
+        wire_mod._GL_NODES,
+        wire_mod._GL_WEIGHTS,
+    )
+
+
 def wire_environment(
     ps: ParameterSet,
     length_m: float,
@@ -75,53 +111,141 @@ def wire_environment(
 ) -> np.ndarray:
     """Wire entries of the environment vector (the rest of it is zero): crane tip, rest length,
     horizontal and vertical stiffness, and the drag offset of the equilibrium point (eq. 2.29
-    with F0 = 0, along the current)."""
-    w = ps.wire.submerged_weight_per_length()
-    w0 = ps.tree.submerged_weight_newton
-    q = ps.wire.drag_per_length(abs(current_speed_mps))
-    env = np.zeros(plant.N_ENV)
-    env[plant.E_CT : plant.E_CT + 3] = crane_tip_n
-    env[plant.E_LREST] = length_m + self_weight_stretch(ps, length_m)
-    env[plant.E_KH] = wire_mod.horizontal_stiffness(w, w0, length_m)
-    env[plant.E_KZ] = vertical_stiffness(ps, length_m, current_speed_mps)
-    offset = wire_mod.horizontal_offset(q, w, w0, length_m, 0.0)
-    env[plant.E_OFF] = offset * math.cos(current_direction_rad)
-    env[plant.E_OFF + 1] = offset * math.sin(current_direction_rad)
+    with F0 = 0, along the current). The numbers every chunk's rows carry
+    (``wire_entries_into``)."""
+    env = np.empty(plant.N_ENV)
+    tip = np.ascontiguousarray(crane_tip_n, dtype=np.float64)
+    wire_entries_into(
+        env, wire_site(ps), float(length_m), tip, float(current_speed_mps),
+        float(current_direction_rad),
+    )  # fmt: skip
     return env
 
 
 @njit(**JIT_NOALLOC)
-def environment_rows_into(
+def wire_entries_into(
     env: np.ndarray,
-    base: np.ndarray,
+    S: WireSite,
+    length_m: float,
+    crane_tip_n: np.ndarray,
+    speed_mps: float,
+    direction_rad: float,
+) -> None:
+    """``wire_environment`` into ``env`` (N_ENV,), compiled: the rest length with the wire's
+    self-weight stretch, the horizontal stiffness (eq. 2.30, MODEL_NOTES form), the vertical
+    stiffness (elastic and geometric in series, eq. 2.25, with the tree's own drag as F0) and
+    the drag offset (eq. 2.29 with F0 = 0) along the current; every other entry zero. The
+    operations of ``sim.wire``'s closed forms, with libm's logarithm."""
+    for i in range(env.shape[0]):
+        env[i] = 0.0
+    L = length_m
+    v = abs(speed_mps)
+    env[plant.E_CT] = crane_tip_n[0]
+    env[plant.E_CT + 1] = crane_tip_n[1]
+    env[plant.E_CT + 2] = crane_tip_n[2]
+    env[plant.E_LREST] = L + _stretch(S.w, S.EA, L)
+    env[plant.E_KH] = wire_mod.horizontal_stiffness_c(S.w, S.W0, L)
+    q = S.drag_q * abs(v) * v  # WireProperties.drag_per_length(|V|)
+    f0 = S.tree_D_l * v + S.tree_D_nl * v * v  # tree_drag_force
+    compliance = L / S.EA + wire_mod._gauss_compliance(
+        q, S.w, S.W0, L, abs(f0), S.gl_nodes, S.gl_weights
+    )
+    env[plant.E_KZ] = 1.0 / compliance
+    offset = wire_mod.horizontal_offset_c(q, S.w, S.W0, L, 0.0)
+    env[plant.E_OFF] = offset * math.cos(direction_rad)
+    env[plant.E_OFF + 1] = offset * math.sin(direction_rad)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _ramp_at(start: float, target: float, rate: float, dt: float, j: int) -> float:
+    """Where a value moving from ``start`` towards ``target`` at ``rate`` is after j + 1
+    steps of dt (held at the target once there)."""
+    if target == start:
+        return start + 0.0
+    step = (j + 1) * dt * rate
+    sign = 1.0 if target > start else -1.0
+    return start + sign * min(step, abs(target - start))
+
+
+@njit(**JIT_NOALLOC)
+def chunk_rows_into(
+    env: np.ndarray,
+    S: WireSite,
     speeds_mps: np.ndarray,
     directions_rad: np.ndarray,
-    lengths_m: np.ndarray,
-    stretch_m: float,
-    crane_n: np.ndarray,
+    wire_m: float,
+    wire_target_m: float,
+    winch_mps: float,
+    crane_tip_n: np.ndarray,
+    crane_target_n: np.ndarray,
+    crane_mps: float,
+    push_n: np.ndarray,
+    grip: float,
+    frame: np.ndarray,
+    dt: float,
+    out: np.ndarray,
 ) -> None:
-    """A chunk's environment rows (n, N_ENV) into ``env``: each row ``base`` (the wire's
-    entries for the chunk's mean current, the push, the grip and the frame), with step j's
-    current velocity ``[V cos(beta), V sin(beta), 0]``, no water acceleration, the wire's rest
-    length ``lengths_m[j] + stretch_m`` and the crane tip ``crane_n[j]`` (``crane_n`` (n, 3),
-    or (1, 3): a crane tip that stays put). The same operations on the same numbers as the
-    numpy form it replaces (a repeat of ``base`` and whole-column products and sums: the
-    simulator makes these rows for every chunk, and the dozen numpy calls cost more than
-    the arithmetic); waves are added to the rows afterwards."""
+    """A chunk's environment rows (n, N_ENV) into ``env`` in one call (the simulator makes
+    them for every chunk; a dozen Python and numpy calls cost more than the arithmetic).
+
+    Every row carries the wire's entries for the chunk's mean current speed and direction
+    (``wire_entries_into`` at the payout ``wire_m`` and crane tip ``crane_tip_n`` where the
+    chunk starts), the ``push_n``, the ``grip`` and the docking frame (``frame``: [on (1/0),
+    north, east, heading, landing depth]); row j then its own current velocity
+    [V cos(beta), V sin(beta), 0], no water acceleration, the rest length of the payout after
+    j + 1 steps of the winch (towards ``wire_target_m`` at ``winch_mps``) plus the stretch
+    at the chunk's start, and the crane tip after j + 1 steps towards ``crane_target_n`` at
+    ``crane_mps`` along the straight line. Waves are added to the rows afterwards.
+    ``out`` (6,) gets [payout at the end, crane tip at the end (3), mean speed, mean
+    direction]. The means are plain sums in order over n."""
     n = env.shape[0]
-    still = crane_n.shape[0] == 1
+    sum_v = 0.0
+    sum_b = 0.0
     for j in range(n):
+        sum_v += speeds_mps[j]
+        sum_b += directions_rad[j]
+    mean_v = sum_v / n
+    mean_b = sum_b / n
+    base = env[0]
+    wire_entries_into(base, S, wire_m, crane_tip_n, mean_v, mean_b)
+    for i in range(3):
+        base[plant.E_PUSH + i] = push_n[i]
+    base[plant.E_GRIP] = grip
+    if frame[0] > 0.5:
+        base[plant.E_FRAME] = frame[1]
+        base[plant.E_FRAME + 1] = frame[2]
+        base[plant.E_FRAME_PSI] = frame[3]
+        base[plant.E_LAND] = frame[4]
+    stretch = _stretch(S.w, S.EA, wire_m)
+    d0 = crane_target_n[0] - crane_tip_n[0]
+    d1 = crane_target_n[1] - crane_tip_n[1]
+    d2 = crane_target_n[2] - crane_tip_n[2]
+    dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    still = dist < 1e-12 or crane_mps <= 0.0
+    for j in range(n - 1, -1, -1):  # row 0 (the base) last
         row = env[j]
-        for i in range(base.shape[0]):
-            row[i] = base[i]
+        if j > 0:
+            for i in range(row.shape[0]):
+                row[i] = base[i]
         row[plant.E_VC] = speeds_mps[j] * math.cos(directions_rad[j])
         row[plant.E_VC + 1] = speeds_mps[j] * math.sin(directions_rad[j])
         row[plant.E_VC + 2] = 0.0
         row[plant.E_AC] = 0.0
         row[plant.E_AC + 1] = 0.0
         row[plant.E_AC + 2] = 0.0
-        row[plant.E_LREST] = lengths_m[j] + stretch_m
-        c = crane_n[0] if still else crane_n[j]
-        row[plant.E_CT] = c[0]
-        row[plant.E_CT + 1] = c[1]
-        row[plant.E_CT + 2] = c[2]
+        row[plant.E_LREST] = _ramp_at(wire_m, wire_target_m, winch_mps, dt, j) + stretch
+        if still:
+            row[plant.E_CT] = crane_tip_n[0]
+            row[plant.E_CT + 1] = crane_tip_n[1]
+            row[plant.E_CT + 2] = crane_tip_n[2]
+        else:
+            frac = _ramp_at(0.0, dist, crane_mps, dt, j) / dist
+            row[plant.E_CT] = crane_tip_n[0] + frac * d0
+            row[plant.E_CT + 1] = crane_tip_n[1] + frac * d1
+            row[plant.E_CT + 2] = crane_tip_n[2] + frac * d2
+    out[0] = _ramp_at(wire_m, wire_target_m, winch_mps, dt, n - 1)
+    out[1] = env[n - 1, plant.E_CT]
+    out[2] = env[n - 1, plant.E_CT + 1]
+    out[3] = env[n - 1, plant.E_CT + 2]
+    out[4] = mean_v
+    out[5] = mean_b

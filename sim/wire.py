@@ -8,6 +8,7 @@ on the load [N], EA axial stiffness [N].
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,9 +62,18 @@ def horizontal_stiffness(w: float, W0: float, L: float) -> float:
     corrected form (MODEL_NOTES). Tends to the simple pendulum W0 / L as w -> 0."""
     if L <= 0.0:
         raise ValueError(f"wire length L must be > 0 m, got {L}")
+    return float(horizontal_stiffness_c(w, W0, L))
+
+
+@njit(**JIT_NOALLOC)
+def horizontal_stiffness_c(w: float, W0: float, L: float) -> float:
+    """``horizontal_stiffness`` compiled (no check of L), for the environment rows of every
+    chunk (``sim.site.wire_entries_into``): the logarithm is libm's, as everywhere in the
+    compiled step, not numpy's (which takes an AVX-512 implementation on machines that have
+    one, and rounds differently there)."""
     if w <= 0.0:
         return W0 / L
-    return w / np.log((W0 + w * L) / W0)
+    return w / math.log((W0 + w * L) / W0)
 
 
 def horizontal_offset(q: float, w: float, W0: float, L: float, F0: float = 0.0) -> float:
@@ -73,8 +83,14 @@ def horizontal_offset(q: float, w: float, W0: float, L: float, F0: float = 0.0) 
     positive in the direction of the drag q and the force F0)."""
     if w <= 0.0:
         raise ValueError(f"submerged wire weight w must be > 0 N/m, got {w}")
-    log_term = np.log(W0 / (W0 + w * L))
-    return (q * W0 / w**2 - F0 / w) * log_term + q * L / w
+    return float(horizontal_offset_c(q, w, W0, L, F0))
+
+
+@njit(**JIT_NOALLOC)
+def horizontal_offset_c(q: float, w: float, W0: float, L: float, F0: float) -> float:
+    """``horizontal_offset`` compiled (w > 0 not checked; see ``horizontal_stiffness_c``)."""
+    log_term = math.log(W0 / (W0 + w * L))
+    return (q * W0 / (w * w) - F0 / w) * log_term + q * L / w
 
 
 def geometric_compliance(q: float, w: float, W0: float, L: float, F0: float) -> float:

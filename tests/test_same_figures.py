@@ -32,6 +32,16 @@ Re-recorded by the eighth speed pass (docs/speed.md): the controller's four 3x3 
 error 0.0226599041 -> 0.0226603819 m (2.1e-5 relative), RMS north 0.0247937167 ->
 0.0247932599 m (1.8e-5), RMS heading 1.9e-8, its landing miss 2.4e-12; the model-scale
 missions at most 2.2e-14.
+
+Re-recorded by the ninth speed pass (docs/speed.md): a chunk's environment rows are made in
+one compiled call (``sim.site.chunk_rows_into``), whose wire entries take libm's logarithm
+instead of numpy's (an AVX-512 implementation on machines that have one), ``L * L`` instead
+of ``L ** 2``, the chunk's mean current as a sum in order instead of numpy's pairwise sum, and
+the crane's distance as a square root of squares instead of OpenBLAS's dot. What moved: the
+docking's RMS east error 0.0226603819 -> 0.0226606350 m (1.1e-5 relative), RMS north
+0.0247932599 -> 0.0247932977 m (1.5e-6), RMS heading 4.3e-8, the other figures below
+1e-12; the model-scale missions' figures below 1e-12, their final plant states at most
+6.1e-9.
 """
 
 from __future__ import annotations

@@ -16,6 +16,8 @@ from sim import environment as envmod
 from sim import params, plant, sensors, site
 from tests.helpers import steady_current
 
+FULL = params.load("full-scale")
+
 MODEL = params.load("model-scale")
 
 CONTROL_BLOCKS = (
@@ -371,27 +373,79 @@ def test_grip_closes_only_within_reach_of_the_mount():
     assert abs(math.degrees(sim.tree_eta_n[5] - psi_before)) < 2.0
 
 
-@pytest.mark.parametrize("crane_rows", [23, 1], ids=["crane moving", "crane still"])
-def test_environment_rows_are_the_numpy_forms_numbers(crane_rows):
-    """``site.environment_rows_into`` (the compiled fill of a chunk's rows) against the numpy
-    operations it replaced, bit for bit: a repeat of the base row, the current's velocity as
-    V cos(beta), V sin(beta), 0, no water acceleration, the rest length plus the stretch, and
-    the crane tip's path (one row standing for all when the crane is still)."""
-    rng = np.random.default_rng(11)
-    n = 23
-    base = rng.normal(size=plant.N_ENV)
-    speeds = rng.uniform(0.0, 1.2, n)
-    dirs = rng.uniform(-7.0, 7.0, n)
-    lengths = 97.0 + rng.uniform(0.0, 2.0, n)
-    stretch = 0.0731
-    crane = rng.normal(size=(crane_rows, 3))
-    env = np.full((n, plant.N_ENV), np.nan)
-    site.environment_rows_into(env, base, speeds, dirs, lengths, stretch, crane)
+def _numpy_chunk_rows(
+    S, speeds, dirs, wire, wire_to, winch, tip, tip_to, crane, push, grip, frame, dt
+):
+    """``site.chunk_rows_into``'s rows made the way the simulator made them before it (numpy
+    arrays a column at a time: the ramps, the crane's straight path, a repeat of the base
+    row), with the means and the crane's distance summed in order as the compiled call does;
+    the wire's entries from ``site.wire_entries_into`` (checked against the closed forms in
+    ``tests/test_wire.py``)."""
+    n = len(speeds)
+    mean_v = sum(float(v) for v in speeds) / n
+    mean_b = sum(float(b) for b in dirs) / n
+    base = np.empty(plant.N_ENV)
+    site.wire_entries_into(base, S, wire, tip, mean_v, mean_b)
+    base[plant.E_PUSH : plant.E_PUSH + 3] = push
+    base[plant.E_GRIP] = grip
+    if frame[0] > 0.5:
+        base[plant.E_FRAME : plant.E_FRAME + 2] = frame[1:3]
+        base[plant.E_FRAME_PSI] = frame[3]
+        base[plant.E_LAND] = frame[4]
+
+    def ramp(start, target, rate):
+        if target == start:
+            return np.full(n, start + 0.0)
+        steps = np.arange(1, n + 1) * dt * rate
+        return start + np.sign(target - start) * np.minimum(steps, abs(target - start))
+
+    delta = tip_to - tip
+    dist = math.sqrt(delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2])
+    if dist < 1e-12 or crane <= 0.0:
+        path = np.repeat(tip[None, :], n, axis=0)
+    else:
+        path = tip[None, :] + (ramp(0.0, dist, crane) / dist)[:, None] * delta[None, :]
     ref = np.repeat(base[None, :], n, axis=0)
-    ref[:, plant.E_VC] = speeds * np.cos(dirs)
-    ref[:, plant.E_VC + 1] = speeds * np.sin(dirs)
+    ref[:, plant.E_VC] = speeds * np.array([math.cos(b) for b in dirs])
+    ref[:, plant.E_VC + 1] = speeds * np.array([math.sin(b) for b in dirs])
     ref[:, plant.E_VC + 2] = 0.0
     ref[:, plant.E_AC : plant.E_AC + 3] = 0.0
-    ref[:, plant.E_LREST] = lengths + stretch
-    ref[:, plant.E_CT : plant.E_CT + 3] = crane
+    lengths = ramp(wire, wire_to, winch)
+    ref[:, plant.E_LREST] = lengths + 0.5 * S.w * (wire * wire) / S.EA
+    ref[:, plant.E_CT : plant.E_CT + 3] = path
+    return ref, lengths[-1], path[-1], mean_v, mean_b
+
+
+@pytest.mark.parametrize(
+    "crane_mps, winch_mps, frame_on",
+    [(0.4, 0.0, True), (0.0, 0.2, False), (0.4, 0.2, True), (0.0, 0.0, False)],
+    ids=["crane moving", "winch moving", "both", "still"],
+)
+def test_chunk_rows_are_the_numpy_forms_numbers(crane_mps, winch_mps, frame_on):
+    """``site.chunk_rows_into`` (a chunk's environment rows in one compiled call) against
+    the numpy operations it replaced, bit for bit: the base row with the wire's entries for
+    the chunk's mean current, the push, the grip and the frame; each step's current velocity
+    V cos(beta), V sin(beta), 0, no water acceleration, the winch's ramp plus the stretch, the
+    crane tip's straight path (held at its target once there); and what it reports back."""
+    rng = np.random.default_rng(11)
+    n = 73
+    S = site.wire_site(FULL)
+    speeds = rng.uniform(0.0, 1.2, n)
+    dirs = rng.uniform(-7.0, 7.0, n)
+    tip = rng.normal(size=3)
+    tip_to = tip + np.array([0.05, -0.2, 0.01])  # reached within the chunk at 0.4 m/s
+    push = rng.normal(size=3) * 1e3
+    frame = np.array([1.0 if frame_on else 0.0, 3.0, -4.0, 0.7, 101.5])
+    args = (97.2, 97.2 + 0.05, winch_mps, tip, tip_to, crane_mps, push, 1.0, frame, 0.01)
+    env = np.full((n, plant.N_ENV), np.nan)
+    out = np.full(6, np.nan)
+    site.chunk_rows_into(env, S, speeds, dirs, *args, out)
+    ref, last_length, last_tip, mean_v, mean_b = _numpy_chunk_rows(S, speeds, dirs, *args)
     np.testing.assert_array_equal(env, ref)
+    np.testing.assert_array_equal(out, [last_length, *last_tip, mean_v, mean_b])
+    if crane_mps > 0.0:  # the crane got there and stopped
+        np.testing.assert_allclose(out[1:4], tip_to, rtol=0.0, atol=1e-15)
+    if winch_mps > 0.0:  # 0.05 m at 0.2 m/s: there after 25 of the 73 steps
+        assert out[0] == 97.2 + 0.05
+    if not frame_on:
+        assert not env[:, plant.E_FRAME : plant.E_LAND + 1].any()
