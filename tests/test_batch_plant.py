@@ -16,7 +16,7 @@ import pytest
 
 from missions import schema
 from missions.setup import build_simulation
-from sim import plant
+from sim import batch_plant, plant
 from sim.batch_plant import make_batch_work, rk4_batch, rk4_batch_into
 
 
@@ -66,9 +66,13 @@ def _batch_inputs(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
         elif case == 2:  # the wire force from outside (MoorDyn)
             env[plant.E_WEXT, r] = 1.0
             env[plant.E_FWIRE : plant.E_FWIRE + 3, r] = rng.uniform(-5e4, 5e4, 3)
-        elif case == 3:  # elastic wire: mass and damping
+        elif case == 3:  # elastic wire: mass and damping; the posts' tops twice the batch's
+            # contact margin under the tree's bottom (skipped as out of reach, just)
             env[plant.E_WMASS, r] = rng.uniform(100.0, 2000.0)
             env[plant.E_WDAMP, r] = rng.uniform(1e3, 1e5)
+            reach = half_h + P.dock_post_height + 2.0 * batch_plant.CONTACT_MARGIN_M
+            env[plant.E_LAND, r] = x[2, r] + reach
+            env[plant.E_FRAME : plant.E_FRAME + 2, r] = x[0:2, r]
         elif case in (4, 5, 6):  # landing: the bottom plane 2-8 cm above the tree's bottom
             env[plant.E_LAND, r] = x[2, r] + half_h - rng.uniform(0.02, 0.08)
             # the frame under the tree, off by a few cm: posts in the funnels (against the
@@ -78,11 +82,12 @@ def _batch_inputs(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
             env[plant.E_FRAME_PSI, r] = x[5, r] + rng.uniform(-0.02, 0.02)
             x[11, r] = rng.uniform(-0.05, 0.05)
         elif case == 7:  # headings 2e5 and -3e5 rad (sim.trig's large reduction); the frame's
-            # posts' tops 0.5 m under the tree's bottom (near enough for the contact code, which
-            # finds nothing)
+            # posts' tops half the batch's contact margin under the tree's bottom (near enough
+            # for the contact code, which finds nothing)
             x[5, r] += 2.0e5
             x[17, r] -= 3.0e5
-            env[plant.E_LAND, r] = x[2, r] + half_h + P.dock_post_height + 0.5
+            margin = 0.5 * batch_plant.CONTACT_MARGIN_M
+            env[plant.E_LAND, r] = x[2, r] + half_h + P.dock_post_height + margin
             env[plant.E_FRAME : plant.E_FRAME + 2, r] = x[0:2, r]
     return x, n_rps, env
 
