@@ -176,6 +176,54 @@ def quality_view(S: Any, r: int) -> QualityState:
     )
 
 
+@njit(inline="always", **JIT_NOALLOC)
+def plants_into(
+    active: np.ndarray,
+    same_plant: np.ndarray,
+    pos: np.ndarray,
+    x: np.ndarray,
+    n_rps: np.ndarray,
+    env: np.ndarray,
+    PS: Any,
+    P0: plant.PlantArrays,
+    dt: float,
+    work: plant.PlantWork,
+    x_sb: np.ndarray,
+    n_sb: np.ndarray,
+    env_sb: np.ndarray,
+    bwork: batch_plant.BatchWork,
+) -> None:
+    """``batch_steps``' plant pass: one RK4 step of every active run's plant (``x[r]`` in
+    place, at propeller speeds ``n_rps[r]`` and its row ``env[r, pos[r]]``). The runs on the
+    batch's own plant (``same_plant``) go together in one step of all columns, the runs
+    innermost (``sim.batch_plant``, the same bits as alone); any other run by itself."""
+    n_runs = pos.shape[0]
+    m = n_sb.shape[0]
+    any_same = False
+    for r in range(n_runs):
+        if active[r] and same_plant[r]:
+            any_same = True
+            for i in range(plant.N_STATE):
+                x_sb[i, r] = x[r, i]
+            for i in range(m):
+                n_sb[i, r] = n_rps[r, i]
+            env_r = env[r, pos[r]]
+            for i in range(env_r.shape[0]):
+                env_sb[i, r] = env_r[i]
+    if any_same:
+        batch_plant.rk4_batch_into(x_sb, n_sb, env_sb, P0, dt, bwork)
+    for r in range(n_runs):
+        if not active[r]:
+            continue
+        if same_plant[r]:
+            for i in range(plant.N_STATE):
+                x[r, i] = x_sb[i, r]
+        else:
+            # inlined: a call would pass run r's ``PlantArrays`` views one by one
+            P = plant_view(PS, r)
+            plant.rk4_step_inline(x[r], x[r], n_rps[r, 0:m], env[r, pos[r]], P, dt, work)
+
+
 @njit(**JIT_NOALLOC)
 def batch_steps(
     pos: np.ndarray,
@@ -249,32 +297,9 @@ def batch_steps(
             )
             loop.allocate_into(f, tau6, C, W)
             loop.thrusters_into(n_rps[r, 0:m], f, C, row, W)
-        # the plants: the runs on the batch's own plant (``same_plant``) in one step of all
-        # columns, the runs innermost (``sim.batch_plant``, the same bits as alone); any other
-        # run by itself
-        any_same = False
-        for r in range(n_runs):
-            if active[r] and same_plant[r]:
-                any_same = True
-                for i in range(plant.N_STATE):
-                    x_sb[i, r] = x[r, i]
-                for i in range(m):
-                    n_sb[i, r] = n_rps[r, i]
-                env_r = env[r, pos[r]]
-                for i in range(env_r.shape[0]):
-                    env_sb[i, r] = env_r[i]
-        if any_same:
-            batch_plant.rk4_batch_into(x_sb, n_sb, env_sb, P0, dt, bwork)
-        for r in range(n_runs):
-            if not active[r]:
-                continue
-            if same_plant[r]:
-                for i in range(plant.N_STATE):
-                    x[r, i] = x_sb[i, r]
-            else:
-                # inlined: a call would pass run r's ``PlantArrays`` views one by one
-                P = plant_view(PS, r)
-                plant.rk4_step_inline(x[r], x[r], n_rps[r, 0:m], env[r, pos[r]], P, dt, work)
+        plants_into(
+            active, same_plant, pos, x, n_rps, env, PS, P0, dt, work, x_sb, n_sb, env_sb, bwork
+        )
         for r in range(n_runs):
             if not active[r]:
                 continue

@@ -1,0 +1,264 @@
+"""Where a batch's compiled kernel spends its time: the batch kernel's step, pass by pass, timed
+with the processor's time-stamp counter inside the compiled code.
+
+    .venv/bin/python benchmarks/kernel_passes.py [--runs 32] [--json]
+
+Runs ``--runs`` full-scale docking runs in one batch (``benchmarks/batch_benchmark.py``'s runs)
+through a copy of ``control.batchkernel.batch_steps`` that reads the counter
+(``llvm.readcyclecounter``, a few nanoseconds a read) around each of its passes and adds the
+cycles up per pass; prints nanoseconds per run-step for each. The copy calls the same compiled
+functions in the same order as the kernel, so the runs go as they do in a campaign (the same
+simulated time), a little slower for the counter's reads and the extra bookkeeping; the split
+between the passes is what it is for. It also counts how many runs are within reach of the
+landing surface at each step (those take the scalar contact in the plant pass) and what the
+plant pass costs with and without them. Compiling the copy takes two to three minutes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from llvmlite import ir
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from benchmarks import batch_benchmark as bb
+from control import batch, ekf, loop
+from control.batchkernel import (
+    ROW_BYTES,
+    control_view,
+    plant_view,
+    plants_into,
+    quality_view,
+    row_at,
+)
+from control.columns import N_LOG
+from sim import batch_plant, plant, sensors
+
+
+def _cycles(typingctx: Any) -> Any:
+    """The time-stamp counter (``llvm.readcyclecounter``) as an int64."""
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        fnty = ir.FunctionType(ir.IntType(64), [])
+        fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.readcyclecounter")
+        return builder.call(fn, [])
+
+    return types.int64(), codegen
+
+
+cycles: Any = intrinsic(_cycles)
+
+PASSES = (
+    "log row zeroed",
+    "sensors",
+    "control step (checks, EKF corrections, reference, controller)",
+    "allocation",
+    "thrusters",
+    "plant pass (all runs, structure of arrays)",
+    "EKF prediction",
+    "log row's plant columns",
+)
+# acc[k] for k < 8: cycles per pass; then these counters
+RUN_STEPS, FAR_STEPS, FAR_CYCLES, NEAR_STEPS, NEAR_CYCLES, NEAR_RUNS, ACTIVE = range(8, 15)
+
+
+@njit(error_model="numpy", _nrt=False, cache=True)
+def timed_steps(
+    pos, length, ok, active, k0, x, held_y, xhat, Pc, cs, target, n_rps, env, noise, fresh,
+    PS, CS, QS, dt, log_at, work, W, same_plant, P0, x_sb, n_sb, env_sb, bwork, acc,
+):  # fmt: skip
+    """``batch_steps`` with the cycles of each pass added into ``acc`` (see ``PASSES``)."""
+    n_runs = pos.shape[0]
+    m = CS.f_lo.shape[1]
+    tau6 = W.vec[loop.W_TAU6, 0:6]
+    f = W.vec[loop.W_F, 0:m]
+    half_l, half_w = 0.5 * P0.tree_footprint[0], 0.5 * P0.tree_footprint[1]
+    hh = P0.tree_half_height
+    reach = max(np.sqrt(half_l * half_l + half_w * half_w + hh * hh), hh + P0.dock_post_height)
+    reach += batch_plant.CONTACT_MARGIN_M
+    h = 0
+    for r in range(n_runs):
+        if pos[r] < length[r] and (h == 0 or length[r] - pos[r] < h):
+            h = length[r] - pos[r]
+    for _ in range(h):
+        for r in range(n_runs):
+            active[r] = pos[r] < length[r]
+            if not active[r]:
+                continue
+            acc[RUN_STEPS] += 1
+            c0 = cycles()
+            j = pos[r]
+            C = control_view(CS, r)
+            Q = quality_view(QS, r)
+            t = (k0[r] + j) * dt
+            row = row_at(log_at[r] + j * ROW_BYTES, N_LOG)
+            for i in range(N_LOG):
+                row[i] = 0.0
+            xr, hr = x[r], held_y[r]
+            c1 = cycles()
+            sensors.sample_into(hr, xr, hr, noise[r, j], fresh[r, j], sensors.Y_SENSOR)
+            c2 = cycles()
+            loop.control_step_into(
+                tau6, t, xr, hr, fresh[r, j], xhat[r], Pc[r], cs[r], target[r], C, Q, dt, row, W
+            )
+            c3 = cycles()
+            loop.allocate_into(f, tau6, C, W)
+            c4 = cycles()
+            loop.thrusters_into(n_rps[r, 0:m], f, C, row, W)
+            c5 = cycles()
+            acc[0] += c1 - c0
+            acc[1] += c2 - c1
+            acc[2] += c3 - c2
+            acc[3] += c4 - c3
+            acc[4] += c5 - c4
+        near = 0
+        for r in range(n_runs):
+            if active[r]:
+                acc[ACTIVE] += 1
+                land = env[r, pos[r], plant.E_LAND]
+                if land > 0.0 and not x[r, 2] + reach < land:
+                    near += 1
+        c0 = cycles()
+        plants_into(
+            active, same_plant, pos, x, n_rps, env, PS, P0, dt, work, x_sb, n_sb, env_sb, bwork
+        )
+        spent = cycles() - c0
+        acc[5] += spent
+        if near == 0:
+            acc[FAR_STEPS] += 1
+            acc[FAR_CYCLES] += spent
+        else:
+            acc[NEAR_STEPS] += 1
+            acc[NEAR_CYCLES] += spent
+            acc[NEAR_RUNS] += near
+        for r in range(n_runs):
+            if not active[r]:
+                continue
+            c0 = cycles()
+            j = pos[r]
+            C = control_view(CS, r)
+            log_row = row_at(log_at[r] + j * ROW_BYTES, N_LOG)
+            env_k = env[r, j]
+            # loop.observe_into, its two parts timed apart
+            if C.feedback_ekf:
+                ach3 = W.vec[loop.W_ACH3, 0:3]
+                ach3[0] = log_row[loop.L_TAU_ACH]
+                ach3[1] = log_row[loop.L_TAU_ACH + 1]
+                ach3[2] = log_row[loop.L_TAU_ACH + 5]
+                tau_tree = W.vec[loop.W_TAU_OBS, 0:3]
+                loop._matvec_into(tau_tree, C.A_inv, ach3)
+                mode = int(log_row[loop.L_MODE])
+                gripped = mode == loop.MODE_MANUAL and env_k[plant.E_GRIP] > 0.5
+                if not (mode == loop.MODE_TREE or gripped):
+                    tau_tree[0] = tau_tree[1] = tau_tree[2] = 0.0
+                ekf.predict_into(
+                    xhat[r], Pc[r], tau_tree, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq,
+                    C.T_b, C.GQG, W.vec[loop.W_F0, 0:9], W.mat[loop.MW_PHI], W.mat[loop.MW_TMP],
+                )  # fmt: skip
+            c1 = cycles()
+            t_next = (k0[r] + j) * dt + dt
+            loop.write_plant_row(log_row, t_next, x[r], held_y[r], env_k, plant_view(PS, r), work)
+            pos[r] = j + 1
+            if not plant.all_finite(x[r]):
+                ok[r] = j
+                pos[r] = length[r]
+            acc[6] += c1 - c0
+            acc[7] += cycles() - c1
+    return h
+
+
+@njit(cache=True)
+def _now() -> int:
+    return cycles()
+
+
+def _counter_hz() -> float:
+    """The time-stamp counter's rate, against the wall clock over half a second."""
+    a, t0 = _now(), time.perf_counter()
+    time.sleep(0.5)
+    return (_now() - a) / (time.perf_counter() - t0)
+
+
+def measure(runs: int) -> dict:
+    acc = np.zeros(15, np.int64)
+
+    def steps(s: batch._Slots) -> int:
+        return timed_steps(
+            s.pos, s.length, s.ok, s.active, s.k0, s.x, s.held_y, s.xhat, s.Pc, s.cs, s.target,
+            s.n_rps, s.env, s.noise, s.fresh, s.PS, s.CS, s.QS, s.dt_s, s.log_at, s.work, s.W,
+            s.same_plant, s.P0, s.x_sb, s.n_sb, s.env_sb, s.bwork, acc,
+        )  # fmt: skip
+
+    bb._warm(runs)
+    original = batch._Slots.steps
+    batch._Slots.steps = steps  # type: ignore[method-assign,assignment]
+    try:
+        bb.together(runs, [0, 1])  # compiles the copy (or loads it from the cache)
+        acc[:] = 0
+        sim_s, wall = bb.together(runs, list(range(runs)))
+    finally:
+        batch._Slots.steps = original  # type: ignore[method-assign]
+    hz = _counter_hz()
+    run_steps = int(acc[RUN_STEPS])
+    per = {name: float(acc[k] / hz * 1e9 / run_steps) for k, name in enumerate(PASSES)}
+    batch_steps = int(acc[FAR_STEPS] + acc[NEAR_STEPS])
+    return {
+        "runs": runs,
+        "simulated_s": sim_s,
+        "wall_s": wall,
+        "us_per_run_step": wall / run_steps * 1e6,
+        "ns_per_run_step": per,
+        "kernel_ns_per_run_step": sum(per.values()),
+        "active_runs_per_step": float(acc[ACTIVE] / batch_steps),
+        "plant_pass_ns_per_batch_step_none_near": float(
+            acc[FAR_CYCLES] / hz * 1e9 / max(1, acc[FAR_STEPS])
+        ),
+        "plant_pass_ns_per_batch_step_some_near": float(
+            acc[NEAR_CYCLES] / hz * 1e9 / max(1, acc[NEAR_STEPS])
+        ),
+        "steps_with_runs_near": float(acc[NEAR_STEPS] / batch_steps),
+        "runs_near_when_any": float(acc[NEAR_RUNS] / max(1, acc[NEAR_STEPS])),
+        "counter_ghz": hz / 1e9,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=32, help="runs in the batch (default 32)")
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    args = parser.parse_args()
+    if args.runs < 2:
+        parser.error("--runs must be at least 2")
+    out = measure(args.runs)
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return
+    print(
+        f"{args.runs} docking runs in one batch, {out['simulated_s']:,.0f} simulated s: "
+        f"{out['us_per_run_step']:.2f} us per run-step in all (the timed copy)"
+    )
+    for name, ns in out["ns_per_run_step"].items():
+        print(f"  {ns:7.1f} ns  {name}")
+    print(f"  {out['kernel_ns_per_run_step']:7.1f} ns  the kernel's passes together")
+    print(
+        f"plant pass per batch step: {out['plant_pass_ns_per_batch_step_none_near'] / 1e3:.1f} us "
+        f"with no run near the landing surface, "
+        f"{out['plant_pass_ns_per_batch_step_some_near'] / 1e3:.1f} us with some "
+        f"({out['runs_near_when_any']:.1f} runs near on average, "
+        f"{100 * out['steps_with_runs_near']:.0f} % of the steps); "
+        f"{out['active_runs_per_step']:.1f} runs active per step"
+    )
+
+
+if __name__ == "__main__":
+    main()
