@@ -32,7 +32,7 @@ from numba.extending import intrinsic
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks import batch_benchmark as bb
-from control import batch, ekf, loop
+from control import batch, loop
 from control.batchkernel import (
     ROW_BYTES,
     control_view,
@@ -150,21 +150,7 @@ def timed_steps(
             log_row = row_at(log_at[r] + j * ROW_BYTES, N_LOG)
             env_k = env[r, j]
             # loop.observe_into, its two parts timed apart
-            if C.feedback_ekf:
-                ach3 = W.vec[loop.W_ACH3, 0:3]
-                ach3[0] = log_row[loop.L_TAU_ACH]
-                ach3[1] = log_row[loop.L_TAU_ACH + 1]
-                ach3[2] = log_row[loop.L_TAU_ACH + 5]
-                tau_tree = W.vec[loop.W_TAU_OBS, 0:3]
-                loop._matvec_into(tau_tree, C.A_inv, ach3)
-                mode = int(log_row[loop.L_MODE])
-                gripped = mode == loop.MODE_MANUAL and env_k[plant.E_GRIP] > 0.5
-                if not (mode == loop.MODE_TREE or gripped):
-                    tau_tree[0] = tau_tree[1] = tau_tree[2] = 0.0
-                ekf.predict_into(
-                    xhat[r], Pc[r], tau_tree, dt, C.M_inv, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq,
-                    C.T_b, C.GQG, W.vec[loop.W_F0, 0:9], W.mat[loop.MW_PHI], W.mat[loop.MW_TMP],
-                )  # fmt: skip
+            loop.predict_from_row_into(env_k, xhat[r], Pc[r], C, dt, log_row, W)
             c1 = cycles()
             t_next = (k0[r] + j) * dt + dt
             loop.write_plant_row(log_row, t_next, x[r], held_y[r], env_k, plant_view(PS, r), work)

@@ -693,22 +693,17 @@ def thrusters_into(
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def observe_into(
-    x: np.ndarray,
+def predict_from_row_into(
     env_k: np.ndarray,
     xhat: np.ndarray,
     Pc: np.ndarray,
     C: ControlArrays,
-    P: plant.PlantArrays,
     dt: float,
-    t_next: float,
-    held_y: np.ndarray,
     log_row: np.ndarray,
-    work: plant.PlantWork,
     W: ControlWork,
 ) -> None:
-    """After the plant's step: the observer's prediction over it (in place), from the
-    achieved wrench of the row (``thrusters_into``), and the row's plant columns."""
+    """The observer's prediction over the step just taken (``xhat``, ``Pc`` in place), from
+    the achieved wrench and the mode in the step's log row (``observe_into``'s first part)."""
     if C.feedback_ekf:
         # the observer's input: the achieved wrench moved to the tree (eq. 3.6)
         ach3 = W.vec[W_ACH3, 0:3]
@@ -738,6 +733,26 @@ def observe_into(
             W.mat[MW_PHI],
             W.mat[MW_TMP],
         )
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def observe_into(
+    x: np.ndarray,
+    env_k: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    C: ControlArrays,
+    P: plant.PlantArrays,
+    dt: float,
+    t_next: float,
+    held_y: np.ndarray,
+    log_row: np.ndarray,
+    work: plant.PlantWork,
+    W: ControlWork,
+) -> None:
+    """After the plant's step: the observer's prediction over it (in place), from the
+    achieved wrench of the row (``thrusters_into``), and the row's plant columns."""
+    predict_from_row_into(env_k, xhat, Pc, C, dt, log_row, W)
     write_plant_row(log_row, t_next, x, held_y, env_k, P, work)
 
 
