@@ -443,7 +443,9 @@ def test_chunk_rows_are_the_numpy_forms_numbers(crane_mps, winch_mps, frame_on):
     ref, last_length, last_tip, mean_v, mean_b = _numpy_chunk_rows(S, speeds, dirs, *args)
     np.testing.assert_array_equal(env, ref)
     np.testing.assert_array_equal(out, [last_length, *last_tip, mean_v, mean_b])
-    if crane_mps > 0.0:  # the crane got there and stopped
+    if crane_mps > 0.0:  # the crane got there and stopped: tip + 1.0 * (tip_to - tip) is
+        # tip_to to two roundings of numbers below 0.5 in size (5.6e-17 each); 1e-15 is
+        # far below any step of the path (0.4 m/s x 0.01 s)
         np.testing.assert_allclose(out[1:4], tip_to, rtol=0.0, atol=1e-15)
     if winch_mps > 0.0:  # 0.05 m at 0.2 m/s: there after 25 of the 73 steps
         assert out[0] == 97.2 + 0.05
