@@ -345,51 +345,87 @@ def correct_into(
     S = P[rows, rows] + R, K = P[:, rows] S^-1 (S^-1 in closed form), and the Joseph form
     (I - K H) P (I - K H)^T + K R K^T as rank-m updates. The same algebra as the dense
     products, in a different summation order (the last bits differ)."""
+    if m == 1:
+        return _correct_one_into(x, P, z0, row0, r0, angle_row == 0, k0, A), 0.0
     e0 = z0 - x[row0]
-    e1 = z1 - x[row1] if m == 2 else 0.0
+    e1 = z1 - x[row1]
     if angle_row == 0:
         e0 = ssa_scalar(e0)
     elif angle_row == 1:
         e1 = ssa_scalar(e1)
     # innovation covariance and its inverse
     s00 = P[row0, row0] + r0
-    if m == 1:
-        i00, i01, i10, i11 = 1.0 / s00, 0.0, 0.0, 0.0
-        s11 = 1.0
-    else:
-        s01 = P[row0, row1]
-        s10 = P[row1, row0]
-        s11 = P[row1, row1] + r1
-        det = s00 * s11 - s01 * s10
-        i00, i01, i10, i11 = s11 / det, -s01 / det, -s10 / det, s00 / det
-    # gain K (9, m), as two columns
+    s01 = P[row0, row1]
+    s10 = P[row1, row0]
+    s11 = P[row1, row1] + r1
+    det = s00 * s11 - s01 * s10
+    i00, i01, i10, i11 = s11 / det, -s01 / det, -s10 / det, s00 / det
+    # gain K (9, 2), as two columns
     for i in range(N_X):
-        if m == 1:
-            k0[i] = P[i, row0] * i00
-            k1[i] = 0.0
-        else:
-            k0[i] = P[i, row0] * i00 + P[i, row1] * i10
-            k1[i] = P[i, row0] * i01 + P[i, row1] * i11
+        k0[i] = P[i, row0] * i00 + P[i, row1] * i10
+        k1[i] = P[i, row0] * i01 + P[i, row1] * i11
     for i in range(N_X):
         x[i] = x[i] + (k0[i] * e0 + k1[i] * e1)
     # Joseph form: A = (I - K H) P, then P+ = A (I - K H)^T + K R K^T (A is all of the old P
     # that P+ needs, so P+ is written over P)
-    rr1 = r1 if m == 2 else 0.0
-    c1 = row1 if m == 2 else row0
     for i in range(N_X):
         for j in range(N_X):
-            A[i, j] = P[i, j] - (k0[i] * P[row0, j] + k1[i] * P[c1, j])
+            A[i, j] = P[i, j] - (k0[i] * P[row0, j] + k1[i] * P[row1, j])
     for i in range(N_X):
         for j in range(N_X):
             P[i, j] = (
                 A[i, j]
-                - (A[i, row0] * k0[j] + A[i, c1] * k1[j])
-                + (k0[i] * r0 * k0[j] + k1[i] * rr1 * k1[j])
+                - (A[i, row0] * k0[j] + A[i, row1] * k1[j])
+                + (k0[i] * r0 * k0[j] + k1[i] * r1 * k1[j])
             )
+    _symmetrise(P)
+    return e0 * e0 / s00, e1 * e1 / s11
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _symmetrise(P: np.ndarray) -> None:
+    """P = (P + P^T) / 2, element by element, in place."""
     for i in range(N_X):
         for j in range(i):
             v = 0.5 * (P[i, j] + P[j, i])
             P[i, j] = v
             P[j, i] = v
-    nis1 = e1 * e1 / s11 if m == 2 else 0.0
-    return e0 * e0 / s00, nis1
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _correct_one_into(
+    x: np.ndarray,
+    P: np.ndarray,
+    z0: float,
+    row0: int,
+    r0: float,
+    angle: bool,
+    k: np.ndarray,
+    A: np.ndarray,
+) -> float:
+    """``correct_into`` for one measured row (the gyro's yaw rate every step, the compass):
+    the same operations in the same order without the second row's terms, which for m = 1
+    are products with an exact zero gain (x + 0 y = x for finite y: the same bits, checked
+    against the two-row form in ``tests/test_ekf_correct.py``). About half the arithmetic:
+    70 against 128 ns a call (docs/speed.md, tenth pass).
+    Returns the normalised innovation squared."""
+    e0 = z0 - x[row0]
+    if angle:
+        e0 = ssa_scalar(e0)
+    s00 = P[row0, row0] + r0
+    i00 = 1.0 / s00
+    for i in range(N_X):
+        k[i] = P[i, row0] * i00
+    for i in range(N_X):
+        x[i] = x[i] + k[i] * e0
+    for i in range(N_X):
+        ki = k[i]
+        for j in range(N_X):
+            A[i, j] = P[i, j] - ki * P[row0, j]
+    for i in range(N_X):
+        a_ir = A[i, row0]
+        kr = k[i] * r0
+        for j in range(N_X):
+            P[i, j] = A[i, j] - a_ir * k[j] + kr * k[j]
+    _symmetrise(P)
+    return e0 * e0 / s00

@@ -318,7 +318,8 @@ def _observe_into(
                 C.q_rate,
                 C.q_frozen,
                 C.q_var,
-                sensors.Y_SENSOR,
+                sensors.Y_FIRST,
+                sensors.Y_END,
             )
         accepted[k] = 1.0 if ok else 0.0
     ne = W.vec[W_NE, 0:2]

@@ -22,7 +22,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from sim.gnc import JIT, ssa_scalar
-from sim.sensors import N_SENSORS, N_Y, Y_SENSOR
+from sim.sensors import N_SENSORS, Y_SENSOR
 
 RANGE, WILD, FROZEN, VARIANCE = 0, 1, 2, 3
 CHECK_NAMES = ("range", "wild_point", "frozen", "variance")
@@ -80,16 +80,17 @@ def check_sample(
     max_rate: np.ndarray,
     frozen_count: np.ndarray,
     var_limit: np.ndarray,
-    y_sensor: np.ndarray,
+    y_first: np.ndarray,
+    y_end: np.ndarray,
 ) -> bool:
-    """Check a fresh sample of sensor k (entries of y with y_sensor == k). Updates the check
-    state in place (last accepted values, their time, repeat count, difference history,
-    counters (5, 4)) and returns True when the sample may go to the observer."""
+    """Check a fresh sample of sensor k (its entries ``y[y_first[k]:y_end[k]]``,
+    ``sim.sensors.Y_FIRST``, ``Y_END``). Updates the check state in place (last accepted
+    values, their time, repeat count, difference history, counters (5, 4)) and returns True
+    when the sample may go to the observer."""
+    a, b = y_first[k], y_end[k]
     ok = True
     same = True
-    for i in range(N_Y):
-        if y_sensor[i] != k:
-            continue
+    for i in range(a, b):
         if y[i] < lo[i] or y[i] > hi[i]:
             ok = False
         if y[i] != last[i]:
@@ -97,11 +98,10 @@ def check_sample(
     if not ok:
         counters[k, RANGE] += 1
         return False
-    if last_t[k] >= 0.0:
+    seen = last_t[k] >= 0.0
+    if seen:
         gap = t - last_t[k]
-        for i in range(N_Y):
-            if y_sensor[i] != k:
-                continue
+        for i in range(a, b):
             d = ssa_scalar(y[i] - last[i]) if i == 4 else y[i] - last[i]
             if abs(d) > wild[i] + max_rate[i] * gap:
                 counters[k, WILD] += 1
@@ -110,21 +110,19 @@ def check_sample(
     if frozen_count[k] > 0 and repeat[k] >= frozen_count[k]:
         counters[k, FROZEN] += 1
         return False
-    # variance of first differences over the last WINDOW accepted samples
+    # variance of first differences over the last WINDOW accepted samples; then the sample
+    # becomes the last accepted one
     flagged = False
-    for i in range(N_Y):
-        if y_sensor[i] != k:
-            continue
+    for i in range(a, b):
         d = ssa_scalar(y[i] - last[i]) if i == 4 else y[i] - last[i]
+        h = hist[i]
         for j in range(WINDOW - 1):
-            hist[i, j] = hist[i, j + 1]
-        hist[i, WINDOW - 1] = d if last_t[k] >= 0.0 else 0.0
-        if hist[i].var() > var_limit[i]:
+            h[j] = h[j + 1]
+        h[WINDOW - 1] = d if seen else 0.0
+        if h.var() > var_limit[i]:
             flagged = True
+        last[i] = y[i]
     if flagged:
         counters[k, VARIANCE] += 1
-    for i in range(N_Y):
-        if y_sensor[i] == k:
-            last[i] = y[i]
     last_t[k] = t
     return True

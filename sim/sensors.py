@@ -35,6 +35,12 @@ Y_DVL = slice(5, 8)
 Y_GYRO = slice(8, 11)
 # Which sensor feeds each entry of y.
 Y_SENSOR = np.array([POSITION] * 3 + [DEPTH, COMPASS] + [DVL] * 3 + [GYRO] * 3)
+# Each sensor's entries lie side by side, in the sensors' order: sensor k feeds
+# y[Y_FIRST[k]:Y_END[k]] (the signal checks loop over those instead of all of y).
+Y_FIRST = np.searchsorted(Y_SENSOR, np.arange(N_SENSORS), side="left")
+Y_END = np.searchsorted(Y_SENSOR, np.arange(N_SENSORS), side="right")
+assert all((Y_SENSOR[Y_FIRST[k] : Y_END[k]] == k).all() for k in range(N_SENSORS))
+assert int((Y_END - Y_FIRST).sum()) == N_Y
 
 
 @dataclass(frozen=True)

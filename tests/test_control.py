@@ -12,7 +12,7 @@ from control.simulation import Simulation
 from control.startup import check_mount_vector
 from sim import params
 from sim.gnc import Hmtrx
-from sim.sensors import SENSOR_NAMES, Y_SENSOR
+from sim.sensors import SENSOR_NAMES, Y_END, Y_FIRST
 from tests.helpers import steady_current
 
 MODEL = params.load("model-scale")
@@ -186,7 +186,8 @@ def test_signal_checks_count_each_failure():
             cfg.max_rate,
             cfg.frozen_count,
             cfg.variance_limit,
-            Y_SENSOR,
+            Y_FIRST,
+            Y_END,
         )
 
     y = np.zeros(11)

@@ -63,3 +63,56 @@ def test_correction_refuses_more_than_two_rows():
     P = np.eye(9)
     with pytest.raises(ValueError, match="at most 2 measured rows"):
         ekf.correct(np.zeros(9), P, np.zeros(3), np.array([0, 1, 2]), np.ones(3), -1)
+
+
+def _two_row_form_with_a_zero_row(x, P, z0, row0, r0, angle):
+    """The correction as the two-row code wrote it for one row before the one-row form had a
+    function of its own (eleven sessions of figures were recorded with it): the second gain
+    column exactly zero and its terms still added, in the same order. Plain Python floats, so
+    the arithmetic is IEEE double without contraction, as in the compiled code."""
+    x, P = x.copy(), P.copy()
+    e0 = z0 - x[row0]
+    if angle:
+        e0 = (e0 + np.pi) % (2 * np.pi) - np.pi
+    s00 = P[row0, row0] + r0
+    i00 = 1.0 / s00
+    k0 = [float(P[i, row0] * i00) for i in range(9)]
+    k1 = [0.0] * 9
+    for i in range(9):
+        x[i] = x[i] + (k0[i] * e0 + k1[i] * 0.0)
+    A = np.empty((9, 9))
+    for i in range(9):
+        for j in range(9):
+            A[i, j] = P[i, j] - (k0[i] * P[row0, j] + k1[i] * P[row0, j])
+    for i in range(9):
+        for j in range(9):
+            P[i, j] = (
+                A[i, j]
+                - (A[i, row0] * k0[j] + A[i, row0] * k1[j])
+                + (k0[i] * r0 * k0[j] + k1[i] * 0.0 * k1[j])
+            )
+    for i in range(9):
+        for j in range(i):
+            v = 0.5 * (P[i, j] + P[j, i])
+            P[i, j] = v
+            P[j, i] = v
+    return x, P, e0 * e0 / s00
+
+
+@pytest.mark.parametrize("row0, angle", [(5, False), (2, True), (0, False)])
+def test_one_row_correction_gives_the_bits_of_the_two_row_form(row0, angle):
+    """The one-row correction (the gyro every step, the compass) leaves out the zero second
+    row: the same bits as with it, over many random covariances (the observer's figures must
+    not move by one ulp)."""
+    rng = np.random.default_rng(row0)
+    for _ in range(200):
+        P = _covariance(rng) * 10.0 ** rng.uniform(-6, 2)
+        x = rng.normal(size=9)
+        z0 = x[row0] + rng.normal(scale=0.3) + (2 * np.pi if angle else 0.0)
+        r0 = 10.0 ** rng.uniform(-6, 0)
+        want = _two_row_form_with_a_zero_row(x, P, z0, row0, r0, angle)
+        rows, r_var = np.array([row0]), np.array([r0])
+        got = ekf.correct(x, P, np.array([z0]), rows, r_var, 0 if angle else -1)
+        assert np.array_equal(got[0], want[0])
+        assert np.array_equal(got[1], want[1])
+        assert got[2][0] == want[2]
