@@ -40,6 +40,7 @@ from control.batchkernel import (
     plants_into,
     quality_view,
     row_at,
+    steps_to_first_end,
 )
 from control.columns import N_LOG
 from sim import batch_plant, plant, sensors
@@ -82,14 +83,8 @@ def timed_steps(
     m = CS.f_lo.shape[1]
     tau6 = W.vec[loop.W_TAU6, 0:6]
     f = W.vec[loop.W_F, 0:m]
-    half_l, half_w = 0.5 * P0.tree_footprint[0], 0.5 * P0.tree_footprint[1]
-    hh = P0.tree_half_height
-    reach = max(np.sqrt(half_l * half_l + half_w * half_w + hh * hh), hh + P0.dock_post_height)
-    reach += batch_plant.CONTACT_MARGIN_M
-    h = 0
-    for r in range(n_runs):
-        if pos[r] < length[r] and (h == 0 or length[r] - pos[r] < h):
-            h = length[r] - pos[r]
+    reach = batch_plant.contact_reach(P0)
+    h = steps_to_first_end(pos, length)
     for _ in range(h):
         for r in range(n_runs):
             active[r] = pos[r] < length[r]

@@ -224,6 +224,17 @@ def plants_into(
             plant.rk4_step_inline(x[r], x[r], n_rps[r, 0:m], env[r, pos[r]], P, dt, work)
 
 
+@njit(inline="always", **JIT_NOALLOC)
+def steps_to_first_end(pos: np.ndarray, length: np.ndarray) -> int:
+    """The steps until the first run with a chunk under way (``pos[r] < length[r]``) ends it
+    (0 when none is under way): how far ``batch_steps`` goes in one call."""
+    h = 0
+    for r in range(pos.shape[0]):
+        if pos[r] < length[r] and (h == 0 or length[r] - pos[r] < h):
+            h = length[r] - pos[r]
+    return h
+
+
 @njit(**JIT_NOALLOC)
 def batch_steps(
     pos: np.ndarray,
@@ -274,10 +285,7 @@ def batch_steps(
     m = CS.f_lo.shape[1]
     tau6 = W.vec[loop.W_TAU6, 0:6]
     f = W.vec[loop.W_F, 0:m]
-    h = 0
-    for r in range(n_runs):
-        if pos[r] < length[r] and (h == 0 or length[r] - pos[r] < h):
-            h = length[r] - pos[r]
+    h = steps_to_first_end(pos, length)
     for _ in range(h):
         for r in range(n_runs):
             active[r] = pos[r] < length[r]

@@ -252,6 +252,16 @@ def phi_times_into(out: np.ndarray, phi: np.ndarray, A: np.ndarray, transposed: 
 
 
 @njit(inline="always", **JIT_NOALLOC)
+def _symmetrise(P: np.ndarray) -> None:
+    """P = (P + P^T) / 2, element by element, in place."""
+    for i in range(N_X):
+        for j in range(i):
+            v = 0.5 * (P[i, j] + P[j, i])
+            P[i, j] = v
+            P[j, i] = v
+
+
+@njit(inline="always", **JIT_NOALLOC)
 def predict_into(
     x: np.ndarray,
     P: np.ndarray,
@@ -284,11 +294,7 @@ def predict_into(
     for i in range(9):
         for j in range(9):
             P[i, j] += GQG[i, j]
-    for i in range(9):
-        for j in range(i):
-            v = 0.5 * (P[i, j] + P[j, i])
-            P[i, j] = v
-            P[j, i] = v
+    _symmetrise(P)
 
 
 @njit(inline="always", **JIT)
@@ -380,16 +386,6 @@ def correct_into(
             )
     _symmetrise(P)
     return e0 * e0 / s00, e1 * e1 / s11
-
-
-@njit(inline="always", **JIT_NOALLOC)
-def _symmetrise(P: np.ndarray) -> None:
-    """P = (P + P^T) / 2, element by element, in place."""
-    for i in range(N_X):
-        for j in range(i):
-            v = 0.5 * (P[i, j] + P[j, i])
-            P[i, j] = v
-            P[j, i] = v
 
 
 @njit(inline="always", **JIT_NOALLOC)

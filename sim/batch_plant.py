@@ -394,6 +394,17 @@ above the posts while it is aligned over them), 2-3 % of a batch's time."""
 
 
 @njit(inline="always", **JIT_NOALLOC)
+def contact_reach(P: PlantArrays) -> float:
+    """[m] How far below its centre the tree (its bottom corners, or its bottom and the
+    posts' height) can touch anything, plus ``CONTACT_MARGIN_M``: a run whose centre's depth
+    plus this is above the landing surface has no contact."""
+    half_l, half_w = 0.5 * P.tree_footprint[0], 0.5 * P.tree_footprint[1]
+    hh = P.tree_half_height
+    reach = max(np.sqrt(half_l * half_l + half_w * half_w + hh * hh), hh + P.dock_post_height)
+    return reach + CONTACT_MARGIN_M
+
+
+@njit(inline="always", **JIT_NOALLOC)
 def _contact_runs(
     tau: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork
 ) -> None:
@@ -407,10 +418,7 @@ def _contact_runs(
     first test). It gets the scalar code's ``tau += 0.0`` as a select over the row. The
     others (near the frame, or not finite) get the scalar ``plant.contact_wrench_into`` on a
     copy of their column (the same arithmetic)."""
-    half_l, half_w = 0.5 * P.tree_footprint[0], 0.5 * P.tree_footprint[1]
-    hh = P.tree_half_height
-    reach = max(np.sqrt(half_l * half_l + half_w * half_w + hh * hh), hh + P.dock_post_height)
-    reach += CONTACT_MARGIN_M
+    reach = contact_reach(P)
     n = tau.shape[1]
     any_near = False
     for r in range(n):

@@ -67,9 +67,9 @@ def test_correction_refuses_more_than_two_rows():
 
 def _two_row_form_with_a_zero_row(x, P, z0, row0, r0, angle):
     """The correction as the two-row code wrote it for one row before the one-row form had a
-    function of its own (eleven sessions of figures were recorded with it): the second gain
-    column exactly zero and its terms still added, in the same order. Plain Python floats, so
-    the arithmetic is IEEE double without contraction, as in the compiled code."""
+    function of its own (``tests/corpus/same_figures.json`` was recorded with it): the second
+    gain column exactly zero and its terms still added, in the same order. Plain Python
+    floats, so the arithmetic is IEEE double without contraction, as in the compiled code."""
     x, P = x.copy(), P.copy()
     e0 = z0 - x[row0]
     if angle:
