@@ -17,6 +17,7 @@ import pytest
 
 from app.server import RunningServer
 from tests.browser import button, click, field, tab, unlock, wait_for
+from web.panels import _gain_row_text
 
 
 def _text(pg) -> str:
@@ -124,6 +125,33 @@ def test_typed_gains_inside_the_band_are_applied(page, server: RunningServer, ap
     )
     click(page, "Preset gains")
     wait_for(lambda: api.get("/api/gains").json() == before, 10.0, "preset gains back")
+
+
+def test_a_typed_value_is_not_written_over_before_its_edit_callback_runs(
+    page, server: RunningServer, api: httpx.Client
+):
+    """Defect (CI on a loaded machine: the typed kp never reached the server's panel): viser
+    sets an input's value when the browser sends it and only then queues the input's
+    callbacks on a thread pool; a refresh of the panel in between found "not editing" and
+    wrote the live gains over what the operator had typed. Played here without a browser
+    race: the value set as viser sets it, no callback run, then the refresh."""
+    unlock(page, server.token)
+    tab(page, "Control")
+    panel = next(iter(server.app.state.view._panels.values()))
+    box = panel.gain_rows["kp"]
+    wait_for(lambda: not panel._editing("gains"), 5.0, "the gains shown live")
+    typed = "1234, 2000, 1000"
+    box._impl.value = typed  # viser's _handle_gui_updates: the value first, callbacks later
+    panel._update_controls(panel.console.loop.snapshot)
+    assert box.value == typed
+    assert panel._editing("gains"), "held as an edit from then on"
+    # once the gains are sent the row follows the live values again
+    click(page, "Preset gains")
+    wait_for(
+        lambda: box.value == _gain_row_text(api.get("/api/gains").json()["kp"]),
+        10.0,
+        "the row back on the live gains",
+    )
 
 
 def test_operations_log_names_who_paused(page, server: RunningServer, api: httpx.Client):

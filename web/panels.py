@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -86,6 +86,8 @@ class ClientPanel:
         self._camera_pending = True
         self._guarded: list[Any] = []
         self._edited: dict[str, float] = {}
+        self._inputs: dict[str, list[Any]] = {}  # the live inputs of each group
+        self._put_in: dict[int, Any] = {}  # what this panel last put in each live input
         self.last_error = ""
         """What went wrong with the last command this browser sent ('' when it was done)."""
         self._status_wall = 0.0
@@ -168,10 +170,28 @@ class ClientPanel:
                 self._edited[group] = time.monotonic()
 
         handle.on_update(edited)
+        self._inputs.setdefault(group, []).append(handle)
+        self._put_in[id(handle)] = handle.value
         return self._guard(handle)
 
     def _editing(self, group: str) -> bool:
         return time.monotonic() - self._edited.get(group, -math.inf) < EDIT_HOLD_S
+
+    def _follow(self, group: str, live: Sequence[tuple[Any, Any]]) -> None:
+        """Show the live values (input, value) in a group's inputs unless the operator is
+        editing them. An input that holds neither what this panel last showed in it was typed
+        in by a viewer whose edit callback has not run yet (viser sets the value, then queues
+        the callbacks on its thread pool, which under load lags by seconds): an edit as well,
+        not something to write over."""
+        if self._editing(group):
+            return
+        if any(h.value != self._put_in[id(h)] for h, _ in live):
+            self._edited[group] = time.monotonic()
+            return
+        for handle, value in live:
+            if handle.value != value:
+                handle.value = value
+            self._put_in[id(handle)] = handle.value
 
     def _build_run(self) -> None:
         gui = self.gui
@@ -412,6 +432,8 @@ class ClientPanel:
             else:
                 feedback.content = ""
                 self._edited.pop(done, None)
+                for handle in self._inputs.get(done, ()):  # sent: live values again
+                    self._put_in[id(handle)] = handle.value
 
         button.on_click(clicked)
 
@@ -736,11 +758,14 @@ class ClientPanel:
 
     def _update_controls(self, snap: Snapshot) -> None:
         """Keep inputs in step with changes made elsewhere (API, missions, other browsers)."""
-        if snap.gains is not None and not self._editing("gains"):
-            for term, handle in self.gain_rows.items():
-                text = _gain_row_text(getattr(snap.gains, term))
-                if handle.value != text:
-                    handle.value = text
+        if snap.gains is not None:
+            self._follow(
+                "gains",
+                [
+                    (handle, _gain_row_text(getattr(snap.gains, term)))
+                    for term, handle in self.gain_rows.items()
+                ],
+            )
             band = _gain_band_text(snap.scene.preset_gains)
             if self.gain_md.content != band:
                 self.gain_md.content = band
@@ -781,11 +806,7 @@ class ClientPanel:
             ),
         }
         for group, pairs in live.items():
-            if self._editing(group):
-                continue
-            for handle, value in pairs:
-                if handle.value != value:
-                    handle.value = value
+            self._follow(group, pairs)
 
     def _update_replay(self, snap: Snapshot) -> None:
         rp = snap.replay if snap.source == "replay" else None
