@@ -9,8 +9,11 @@ import json
 import math
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks.control_benchmark import (
     _per_call,

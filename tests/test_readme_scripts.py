@@ -1,0 +1,43 @@
+"""Every script the README tells a reader to run as ``.venv/bin/python <path>.py`` starts as
+written there: run from the repository root by its path (not as a module), with ``--help``,
+it imports what it needs and prints its usage. (``benchmarks/plant_benchmark.py`` once failed
+at its first import this way, while ``scripts/readme_figures.py`` ran it with ``-m`` and
+never saw it.)"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = re.compile(r"\.venv/bin/python ((?:benchmarks|scripts)/[A-Za-z0-9_]+\.py)")
+
+
+def readme_scripts() -> list[str]:
+    """The script paths the README names after ``.venv/bin/python``, each once, in order."""
+    text = (ROOT / "README.md").read_text()
+    return list(dict.fromkeys(SCRIPT.findall(text)))
+
+
+def test_the_readme_names_the_benchmarks() -> None:
+    found = readme_scripts()
+    assert "benchmarks/plant_benchmark.py" in found
+    assert "benchmarks/batch_benchmark.py" in found
+    assert all((ROOT / path).is_file() for path in found), found
+
+
+@pytest.mark.parametrize("path", readme_scripts())
+def test_a_readme_script_starts_as_written(path: str) -> None:
+    done = subprocess.run(
+        [sys.executable, path, "--help"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, f"{path} --help failed:\n{done.stderr[-2000:]}"
+    assert "usage:" in done.stdout, done.stdout[:500]
