@@ -25,6 +25,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from benchmarks import machine
 from benchmarks.campaign_benchmark import CAMPAIGN
 from control.batch import run_together
 from missions import campaign as cm
@@ -171,6 +172,7 @@ def main() -> None:
     figures = {
         "runs": runs,
         "cores": os.cpu_count(),
+        "machine": machine.describe(),
         "load_before": load,
         "repeat": args.repeat,
         "alone_one_core": best(sim_a, walls["alone_one_core"]),
@@ -180,7 +182,8 @@ def main() -> None:
     if args.json:
         print(json.dumps(figures))
         return
-    print(f"{runs} full-scale docking runs, {os.cpu_count()} cores, load before {load}")
+    where = machine.text(figures["machine"])
+    print(f"{runs} full-scale docking runs on {where}, load before {load}")
     for name in ("alone_one_core", "batch_one_core", "batch_two_processes"):
         f = figures[name]
         print(

@@ -23,6 +23,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from app.campaign import runner, store
+from benchmarks import machine
 from missions import campaign as cm
 
 CAMPAIGN = """format_version = 1
@@ -67,7 +68,7 @@ def main() -> None:
     load_before = os.getloadavg()
     one_run = one_run_in_process(campaign, base)
     if not args.json:
-        print(f"cores: {os.cpu_count()}, load average before: {load_before}")
+        print(f"{machine.text(machine.describe())}, load average before: {load_before}")
         print(f"one run in this process: {one_run:.0f} simulated s/s")
         header = ("workers", "runs", "failed", "simulated s", "wall s", "sim s/s")
         print(" ".join(f"{h:>{w}}" for h, w in zip(header, (7, 5, 6, 12, 8, 8), strict=True)))
@@ -103,6 +104,7 @@ def main() -> None:
             json.dumps(
                 {
                     "cores": os.cpu_count(),
+                    "machine": machine.describe(),
                     "load_average_before": list(load_before),
                     "load_average_after": list(os.getloadavg()),
                     "one_run_simulated_s_per_s": one_run,

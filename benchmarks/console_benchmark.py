@@ -39,6 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from app.console import ConsoleSettings
 from app.server import serve_in_thread
+from benchmarks import machine
 from tests import browser
 
 CHROMIUM = str(browser.CHROMIUM)
@@ -262,6 +263,7 @@ def main() -> None:
         result = run(args.clients, args.seconds, args.mission, args.browser_nice)
         who = f"{result['clients']} browsers (nice {result['browser_nice']})"
     result["load_average"] = [round(v, 2) for v in os.getloadavg()]
+    result["machine"] = machine.describe()
     if args.json:
         print(json.dumps(result, indent=2))
         return

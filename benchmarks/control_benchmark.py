@@ -13,10 +13,14 @@ import math
 import os
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from numba import njit
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from benchmarks import machine
 from control import ekf, loop, pid, refkernel
 from control.config import ControlSettings
 from control.simulation import Simulation
@@ -216,6 +220,7 @@ def figures(steps: int, simulated_s: float, wall_s: float, cost: dict[str, float
         "us_per_step": wall_s / steps * 1e6,
         "per_call_us": cost,
         "load_average": [round(v, 2) for v in os.getloadavg()],
+        "machine": machine.describe(),
     }
 
 
@@ -235,7 +240,9 @@ def plant_costs(sim: Simulation) -> dict[str, float]:
 
 def load_text() -> str:
     """The machine's load average (1, 5, 15 min): timings under load are upper bounds."""
-    return "load average {:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
+    return "load average {:.2f} {:.2f} {:.2f}; ".format(*os.getloadavg()) + machine.text(
+        machine.describe()
+    )
 
 
 def main() -> None:

@@ -453,13 +453,27 @@ def compute_speed() -> Results:
     }
 
 
+def machine_text(machine: Results | None) -> str:
+    """'AMD EPYC (znver3, AVX2, 2 cores)' (``benchmarks.machine``); '' for figures stored
+    before the benchmarks recorded their machine."""
+    if not machine:
+        return ""
+    return f"{machine['cpu']} ({machine['llvm_cpu']}, {machine['simd']}, {machine['cores']} cores)"
+
+
 def render_speed(res: Results) -> str:
     b, plant, loop = SPEED_BEFORE, res["plant"], res["loop"]
 
     def load(r: Results) -> str:
         return ", ".join(f"{v:.1f}" for v in r["load_average"])
 
+    where = machine_text(plant.get("machine"))
     rows = [
+        *(
+            [f"Measured on {where} (the before column: on the machine of its day).", ""]
+            if where
+            else []
+        ),
         "| per 10 ms step | before | now | load average (1, 5, 15 min) |",
         "|---|---|---|---|",
         f"| full-scale plant alone (`plant_benchmark`) | {b['plant_us_per_step']:.1f} us, "
@@ -511,8 +525,9 @@ def render_campaign(res: Results) -> str:
             "Throughput: `.venv/bin/python benchmarks/campaign_benchmark.py --runs 200 "
             f"--workers 1,2` ({first['runs']} full-scale docking runs, "
             f"{first['simulated_s']:,.0f} simulated s in all, the current at random in "
-            f"0.1-0.5 m/s; {first['failed']} of them did not land), on this 2-core machine "
-            f"(load average {res['load_average_before'][0]:.1f} before):"
+            f"0.1-0.5 m/s; {first['failed']} of them did not land), on "
+            + (f"{machine_text(res['machine'])}" if res.get("machine") else "this 2-core machine")
+            + f" (load average {res['load_average_before'][0]:.1f} before):"
         ),
         "",
         "| workers | wall s | simulated s per wall s | when the campaign tool was built |",

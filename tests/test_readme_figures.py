@@ -120,3 +120,65 @@ def test_batch_figures_timed_several_times_show_the_best_and_every_time():
         "| two processes, a batch of half the runs each | 5.00 | 6,118 | 6,118, 5,200, 4,100 |"
         in text
     )
+
+
+MACHINE = {"cpu": "AMD EPYC", "llvm_cpu": "znver3", "simd": "AVX2", "cores": 2}
+
+
+def _speed_results(machine: dict | None) -> dict:
+    loop = {
+        "us_per_step": 5.4,
+        "steps_per_s": 186_374,
+        "real_time_factor": 1_864,
+        "per_call_us": {"EKF predict": 0.31},
+        "load_average": [1.0, 1.1, 1.2],
+    }
+    plant = {
+        "us_per_step": 4.1,
+        "steps_per_s": 243_000,
+        "real_time_factor": 2_430,
+        "load_average": [1.0, 1.1, 1.2],
+    }
+    if machine is not None:
+        plant["machine"] = loop["machine"] = machine
+    console = {
+        "jitter_median_ms": 0.1,
+        "jitter_p99_ms": 0.5,
+        "jitter_max_ms": 1.5,
+        "overruns": 0,
+        "simulated_s_per_wall_s": 1.0,
+        "load_average": [0.8],
+    }
+    return {"plant": plant, "loop": loop, "console": {"1x": console}}
+
+
+def test_speed_block_names_the_machine_its_figures_were_measured_on():
+    text = rf.render_speed(_speed_results(MACHINE))
+    assert text.startswith("Measured on AMD EPYC (znver3, AVX2, 2 cores) ")
+    assert "| 4.1 us, 243,000 steps/s, 2,430x |" in text
+    # figures stored before the benchmarks recorded their machine keep their old wording
+    old = rf.render_speed(_speed_results(None))
+    assert old.startswith("| per 10 ms step |")
+    assert "Measured on" not in old
+
+
+def test_campaign_block_names_the_machine_its_figures_were_measured_on():
+    campaign = {
+        "workers": 2,
+        "runs": 200,
+        "failed": 21,
+        "simulated_s": 94_816.0,
+        "wall_s": 40.0,
+        "simulated_s_per_wall_s": 2_370.0,
+    }
+    res = {
+        "load_average_before": [1.8],
+        "one_run_simulated_s_per_s": 1_100.0,
+        "campaigns": [campaign],
+        "machine": MACHINE,
+    }
+    assert "on AMD EPYC (znver3, AVX2, 2 cores) (load average 1.8 before)" in " ".join(
+        rf.render_campaign(res).split()
+    )
+    del res["machine"]
+    assert "on this 2-core machine (load average" in " ".join(rf.render_campaign(res).split())

@@ -41,3 +41,19 @@ def test_a_readme_script_starts_as_written(path: str) -> None:
     )
     assert done.returncode == 0, f"{path} --help failed:\n{done.stderr[-2000:]}"
     assert "usage:" in done.stdout, done.stdout[:500]
+
+
+def test_benchmarks_name_their_machine(tmp_path: Path) -> None:
+    sys.path.insert(0, str(ROOT))
+    from benchmarks import machine
+
+    info = tmp_path / "cpuinfo"
+    info.write_text("processor\t: 0\nvendor_id\t: AuthenticAMD\nmodel name\t: AMD EPYC 7B13\n")
+    assert machine.cpu_model(info) == "AMD EPYC 7B13"
+    assert machine.cpu_model(tmp_path / "missing") != ""
+    assert machine.simd_of({"avx2": True, "avx512f": True}) == "AVX-512"
+    assert machine.simd_of({"avx2": True, "avx512f": False}) == "AVX2"
+    here = machine.describe()
+    assert set(here) == {"cpu", "llvm_cpu", "simd", "cores"}
+    assert here["cores"] >= 1
+    assert machine.text(here).endswith(f"{here['simd']}, {here['cores']} cores)")
