@@ -85,8 +85,26 @@ def station_keeping_mission(params: str, depth_m: float) -> schema.Mission:
 
 
 def prepare_run(mission: schema.Mission, run_legs: bool = True) -> PreparedRun:
-    """Build the simulation for a mission's set-up (call off the loop task)."""
+    """Build the simulation for a mission's set-up (call off the loop task), with the compiled
+    kernels of its first chunk loaded (``load_first_chunk``)."""
+    load_first_chunk(mission)
     return PreparedRun(mission, build_simulation(mission), run_legs)
+
+
+def load_first_chunk(mission: schema.Mission) -> None:
+    """Load the compiled kernels a chunk of this set-up calls (the closed or open loop's chunk
+    kernel, the environment rows, the current's walk) by running one step of a second
+    simulation of the same set-up, thrown away; the run handed to the loop is not touched.
+
+    numba loads a kernel from its on-disk cache on its first call: for the closed loop's chunk
+    kernel that took 0.2 s on the AMD Zen 3 of docs/speed.md's eleventh pass, long enough to
+    count as an overrun at 50x when it fell on the paced loop's first tick. Here it happens
+    away from the loop, and only the first time per process (a few milliseconds after). A
+    step that fails here is left to the live run to report on its own first tick."""
+    try:
+        build_simulation(mission).step(1)
+    except (SimulationDiverged, ValueError):
+        pass
 
 
 SCORES_DB = "scores.sqlite"
