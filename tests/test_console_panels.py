@@ -10,6 +10,7 @@ Its own server and browser (the module fixtures of ``tests/browser.py``).
 from __future__ import annotations
 
 import math
+import threading
 import time
 
 import httpx
@@ -203,3 +204,29 @@ def test_finished_mission_shows_its_table_counters_and_five_thruster_bars(
     assert math.isfinite(rms)
     api.post("/api/run/reset", json={"params": "full-scale"}).raise_for_status()
     wait_for(lambda: bars.count() == 4, 20.0, "four bars again at full scale")
+
+
+def test_the_publisher_sends_no_camera_pose_while_a_preset_is_being_sent(
+    page, server: RunningServer
+):
+    """Defect (CI on a slower machine, tests/test_console_replay.py): a preset pressed while
+    the overview followed the scene left the page looking at the seabed edge-on; the viser
+    callback sending the preset and the publisher thread sending the overview's next pose
+    interleaved their position, look-at and up direction. A panel's frame now waits while a
+    preset is being sent (played here by holding the panel's camera lock as ``_on_camera``
+    holds it), and goes on once it is sent."""
+    unlock(page, server.token)
+    panel = next(iter(server.app.state.view._panels.values()))
+    framed = threading.Event()
+
+    def frame() -> None:
+        panel.update(panel.console.loop.snapshot)
+        framed.set()
+
+    with panel._camera_lock:
+        panel._camera_pending = True
+        publisher = threading.Thread(target=frame, daemon=True)
+        publisher.start()
+        assert not framed.wait(0.5), "a frame went out while a preset was being sent"
+    assert framed.wait(10.0), "the frame never went out after the preset"
+    publisher.join(timeout=1.0)

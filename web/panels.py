@@ -10,6 +10,7 @@ answer. ``update`` is called by the view's publisher thread with each new snapsh
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, Literal
@@ -84,6 +85,14 @@ class ClientPanel:
         self.unlocked = False
         self.camera_mode = "Overview"
         self._camera_pending = True
+        self._camera_lock = threading.Lock()
+        """Held while a pose is chosen and sent to this browser's camera: a preset pressed (a
+        viser callback thread) and the publisher thread's following of the scene each send
+        whole poses, one after the other. Interleaved, one's position went out with the
+        other's look-at point and up direction (viser carries the look-at along with each
+        position it sets), and a page pressed to "Top-down" while its overview was
+        following showed the seabed edge-on (CI on a slower machine,
+        tests/test_console_replay.py)."""
         self._guarded: list[Any] = []
         self._edited: dict[str, float] = {}
         self._inputs: dict[str, list[Any]] = {}  # the live inputs of each group
@@ -475,11 +484,12 @@ class ClientPanel:
         return f"viewer {self.client.client_id}" + (f" ({name})" if name else "")
 
     def _on_camera(self, event: Any) -> None:
-        self.camera_mode = str(self.camera_buttons.value)
-        self._camera_pending = True
-        self._camera_settle = time.monotonic() + CAMERA_SETTLE_S
-        self.camera_md.content = ""
-        self._apply_camera(self.console.loop.snapshot)
+        with self._camera_lock:
+            self.camera_mode = str(self.camera_buttons.value)
+            self._camera_pending = True
+            self._camera_settle = time.monotonic() + CAMERA_SETTLE_S
+            self.camera_md.content = ""
+            self._apply_camera(self.console.loop.snapshot)
 
     def _on_camera_moved(self, camera: viser.CameraHandle) -> None:
         """The browser reports its camera: one that matches none of the poses sent lately
@@ -608,6 +618,7 @@ class ClientPanel:
 
     # ================================================================== updates
     def _apply_camera(self, snap: Snapshot) -> None:
+        """Send the pose of the present camera preset (call with ``_camera_lock`` held)."""
         info = snap.scene
         size = max(info.tree_dimensions_m)
         tree = np.array(snap.tree_eta_n)
@@ -660,8 +671,9 @@ class ClientPanel:
         """Refresh from a snapshot (the publisher thread): the live one, or this browser's
         replay drawn in its own scene (the inputs follow the live run either way)."""
         view = self._shown(snap)
-        if self._camera_pending:
-            self._apply_camera(view)
+        with self._camera_lock:
+            if self._camera_pending:
+                self._apply_camera(view)
         now = time.monotonic()
         if now >= self._status_wall:
             self._status_wall = _next_due(self._status_wall, STATUS_EVERY_S, now)
