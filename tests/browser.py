@@ -77,14 +77,31 @@ def api(server: RunningServer) -> Iterator[httpx.Client]:
 
 
 # ---------------------------------------------------------------------- helpers
+HIDE_NOTICES = """
+(() => {
+  if (document.getElementById("tests-hide-notices")) return;
+  const style = document.createElement("style");
+  style.id = "tests-hide-notices";
+  style.textContent = ".mantine-Notification-root { display: none !important; }";
+  document.head.appendChild(style);
+})()
+"""
+"""A style rule that keeps viser's notices out of the page's pictures from then on (the
+console itself shows none; viser's own 'software WebGL' notice is the only one)."""
+
+
 def _dismiss_notifications(pg) -> None:
-    """Close viser's 'software WebGL' notice so it does not cover the scene."""
+    """Close viser's 'software WebGL' notice so it does not cover the scene, and keep any that
+    comes back hidden: on a loaded machine a click on its close button could miss it (the
+    notice stood over page A's scene and failed test_console_replay's comparison of two
+    identical scenes in a full run, after the camera race was fixed)."""
     time.sleep(1.0)
     for button in pg.locator(".mantine-Notification-root button").all():
         try:
             button.click(timeout=1000)
         except Exception:
             pass
+    pg.evaluate(HIDE_NOTICES)
 
 
 def field(pg, label: str):
