@@ -453,12 +453,12 @@ def compute_speed() -> Results:
     }
 
 
-def machine_text(machine: Results | None) -> str:
-    """'AMD EPYC (znver3, AVX2, 2 cores)' (``benchmarks.machine``); '' for figures stored
-    before the benchmarks recorded their machine."""
-    if not machine:
-        return ""
-    return f"{machine['cpu']} ({machine['llvm_cpu']}, {machine['simd']}, {machine['cores']} cores)"
+def machine_text(recorded: Results | None) -> str:
+    """``benchmarks.machine.text`` of the machine the figures were measured on; '' for figures
+    stored before the benchmarks recorded their machine."""
+    from benchmarks import machine
+
+    return machine.text(recorded) if recorded else ""
 
 
 def render_speed(res: Results) -> str:
@@ -526,7 +526,7 @@ def render_campaign(res: Results) -> str:
             f"--workers 1,2` ({first['runs']} full-scale docking runs, "
             f"{first['simulated_s']:,.0f} simulated s in all, the current at random in "
             f"0.1-0.5 m/s; {first['failed']} of them did not land), on "
-            + (f"{machine_text(res['machine'])}" if res.get("machine") else "this 2-core machine")
+            + (machine_text(res.get("machine")) or "this 2-core machine")
             + f" (load average {res['load_average_before'][0]:.1f} before):"
         ),
         "",
