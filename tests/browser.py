@@ -59,11 +59,10 @@ def page(server: RunningServer, tmp_path_factory: pytest.TempPathFactory):
             headless=True,
             viewport={"width": 1400, "height": 900},
         )
+        context.add_init_script(WATCH_SHADERS)
         try:
             pg = context.new_page()
-            pg.goto(server.view_url)
-            pg.get_by_text("Unlock controls").wait_for(timeout=60_000)
-            time.sleep(1.0)
+            open_console(pg, server.view_url)
             _dismiss_notifications(pg)
             yield pg
         finally:
@@ -77,6 +76,63 @@ def api(server: RunningServer) -> Iterator[httpx.Client]:
 
 
 # ---------------------------------------------------------------------- helpers
+WATCH_SHADERS = """
+(() => {
+  window.__glPrograms = 0;
+  window.__glLastCompileMs = -1;
+  for (const proto of [WebGLRenderingContext.prototype, WebGL2RenderingContext.prototype]) {
+    const link = proto.linkProgram;
+    const status = proto.getProgramParameter;
+    proto.linkProgram = function (...args) {
+      window.__glPrograms += 1;
+      window.__glLastCompileMs = performance.now();
+      return link.apply(this, args);
+    };
+    proto.getProgramParameter = function (...args) {
+      const out = status.apply(this, args);
+      window.__glLastCompileMs = performance.now();
+      return out;
+    };
+  }
+})()
+"""
+"""Counts the WebGL programs a page links and notes when it last linked or asked after one.
+Chromium without a GPU compiles shaders in software, and the page's main thread waits on
+each: in this machine's measurements a fresh console page answered nothing for 7-8 s, three
+to ten seconds after its panel appeared, while it compiled the scene's programs (19 in all,
+arriving in three groups), and 20 s under load; a click sent then timed out (CI, 2026-11-26)."""
+SHADERS_QUIET_S = 4.0
+"""Seconds without a shader compile after which a page counts as settled: the groups of
+programs above came at most 2.5 s apart."""
+
+
+def settle(pg, timeout_s: float = 120.0) -> None:
+    """Wait until the page has compiled its scene's shaders (see ``WATCH_SHADERS``), so that
+    what a test does next is not held behind them."""
+    deadline = time.monotonic() + timeout_s
+    programs, quiet_ms = 0, 0.0
+    while time.monotonic() < deadline:
+        programs, quiet_ms = pg.evaluate(
+            "[window.__glPrograms ?? -1, performance.now() - (window.__glLastCompileMs ?? 0)]"
+        )
+        if programs < 0:
+            raise AssertionError("the page was opened without WATCH_SHADERS")
+        if programs > 0 and quiet_ms > 1000 * SHADERS_QUIET_S:
+            return
+        time.sleep(0.25)
+    raise AssertionError(
+        f"the page still compiled shaders after {timeout_s} s "
+        f"({programs} programs, the last {quiet_ms / 1000:.1f} s ago)"
+    )
+
+
+def open_console(pg, url: str) -> None:
+    """Load the console in ``pg`` and wait until its panel is there and its scene drawn."""
+    pg.goto(url)
+    pg.get_by_text("Unlock controls").wait_for(timeout=60_000)
+    settle(pg)
+
+
 HIDE_NOTICES = """
 (() => {
   if (document.getElementById("tests-hide-notices")) return;

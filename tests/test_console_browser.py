@@ -24,6 +24,7 @@ from tests.browser import (
     click,
     field,
     image,
+    open_console,
     save,
     scene_part,
     tab,
@@ -236,8 +237,7 @@ def test_recording_from_the_panel_is_written_and_replayed(
 def test_several_browsers_watch_the_same_session(page, server: RunningServer) -> None:
     other = page.context.new_page()
     try:
-        other.goto(server.view_url)
-        other.get_by_text("Unlock controls").wait_for(timeout=60_000)
+        open_console(other, server.view_url)
         wait_for(lambda: server.app.state.view.clients >= 2, 10.0, "two clients")
         other.get_by_text("live").first.wait_for(timeout=10_000)
         assert button(other, "Pause").is_disabled(), "unlocking one browser must not unlock another"

@@ -17,7 +17,7 @@ import httpx
 import pytest
 
 from app.server import RunningServer
-from tests.browser import button, click, field, tab, unlock, wait_for
+from tests.browser import button, click, field, open_console, tab, unlock, wait_for
 from web.panels import _gain_row_text
 
 
@@ -159,8 +159,7 @@ def test_operations_log_names_who_paused(page, server: RunningServer, api: httpx
     """Defect: a second viewer's pause stopped everyone's run with no sign of who did it."""
     other = page.context.new_page()
     try:
-        other.goto(server.view_url)
-        other.get_by_text("Unlock controls").wait_for(timeout=60_000)
+        open_console(other, server.view_url)
         field(other, "Your name").fill("Bjorn")
         time.sleep(0.2)
         unlock(other, server.token)

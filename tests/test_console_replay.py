@@ -27,6 +27,7 @@ from tests.browser import (
     click,
     field,
     image,
+    open_console,
     save,
     scene_part,
     tab,
@@ -89,8 +90,7 @@ def test_replay_is_per_browser_while_the_live_run_goes_on(
     other = page.context.new_page()
     try:
         other.set_viewport_size({"width": 1400, "height": 900})
-        other.goto(server.view_url)
-        other.get_by_text("Unlock controls").wait_for(timeout=60_000)
+        open_console(other, server.view_url)
         _dismiss_notifications(other)
         for pg in (page, other):
             unlock(pg, server.token)

@@ -21,7 +21,7 @@ from PIL import Image
 
 from app.server import RunningServer
 from tests import browser as tb
-from tests.browser import click, save, scene_part, unlock, wait_for
+from tests.browser import click, open_console, save, scene_part, unlock, wait_for
 
 MOVE_NORTH_M = 18.0
 """How far the uploaded mission carries the tree: five lengths of the full-scale tree."""
@@ -115,8 +115,7 @@ def test_no_scene_warnings_with_a_still_or_changed_current(
         api.put(
             "/api/environment/current", json={"speed_mps": 0.0, "direction_deg": 0.0}
         ).raise_for_status()
-        other.goto(server.view_url)
-        other.get_by_text("Unlock controls").wait_for(timeout=60_000)
+        open_console(other, server.view_url)
         time.sleep(2.0)
         for speed, direction in ((0.1, 225.0), (0.0, 0.0), (0.3, 90.0), (0.0, 0.0), (0.1, 225.0)):
             api.put(

@@ -12,7 +12,7 @@ import pytest
 
 from app.console import ConsoleSettings
 from app.server import RunningServer, serve_in_thread
-from tests.browser import button, choose, click, field, save, tab, wait_for
+from tests.browser import button, choose, click, field, open_console, save, tab, wait_for
 
 INSTRUCTOR = "browser-instructor-1"
 
@@ -58,8 +58,7 @@ def test_instructor_injects_a_compass_bias_and_a_trainee_does_not_see_it(
     assert api.put("/api/run/speed", json={"speed": 2.0}).is_success  # the trainee acts
     trainee = page.context.new_page()
     try:
-        trainee.goto(server.view_url)
-        trainee.get_by_text("Unlock controls").wait_for(timeout=60_000)
+        open_console(trainee, server.view_url)
         trainee.get_by_text("Operations log").first.click()
         trainee.get_by_text("set speed: speed 2").first.wait_for(timeout=15_000)
         html = trainee.content()
