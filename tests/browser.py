@@ -60,6 +60,7 @@ def page(server: RunningServer, tmp_path_factory: pytest.TempPathFactory):
             viewport={"width": 1400, "height": 900},
         )
         context.add_init_script(WATCH_SHADERS)
+        context.add_init_script(SLOW_FRAMES)
         try:
             pg = context.new_page()
             open_console(pg, server.view_url)
@@ -101,6 +102,39 @@ Chromium without a GPU compiles shaders in software, and the page's main thread 
 each: in this machine's measurements a fresh console page answered nothing for 7-8 s, three
 to ten seconds after its panel appeared, while it compiled the scene's programs (19 in all,
 arriving in three groups), and 20 s under load; a click sent then timed out (CI, 2026-11-26)."""
+FRAME_EVERY_MS = 400
+"""The least time between two frames of a test page's 3D view (``SLOW_FRAMES``)."""
+SLOW_FRAMES = """
+(() => {
+  const DELAY_MS = FRAME_EVERY_MS;
+  const native = window.requestAnimationFrame.bind(window);
+  const cancelNative = window.cancelAnimationFrame.bind(window);
+  const pending = new Map();  // id -> timer (>= 0) or -(native frame id)
+  let next = 1;
+  window.requestAnimationFrame = (callback) => {
+    const id = next++;
+    const timer = setTimeout(() => {
+      pending.set(id, -native((t) => { pending.delete(id); callback(t); }));
+    }, DELAY_MS);
+    pending.set(id, timer);
+    return id;
+  };
+  window.cancelAnimationFrame = (id) => {
+    const handle = pending.get(id);
+    if (handle === undefined) return;
+    pending.delete(id);
+    if (handle < 0) cancelNative(-handle); else clearTimeout(handle);
+  };
+})()
+""".replace("FRAME_EVERY_MS", str(FRAME_EVERY_MS))
+"""Draws the page's 3D view at most every 400 ms (2.5 frames per second) instead of whenever
+the scene moves. Without a GPU, Chromium draws the console's live scene in software, each
+frame some 0.25 s of a core at 1400x900, as fast as the scene changes: one console page kept
+1.5 of this machine's 2 cores busy (6.7 frames per second), which starved the other test
+worker and the page's own input (clicks and fills that timed out after 30 s in a full run).
+Throttled, a page takes about half of that (0.78 of a core, measured). Playwright's own
+checks (an element is stable over two frames) run in its own isolated world and keep the
+browser's real frames."""
 SHADERS_QUIET_S = 4.0
 """Seconds without a shader compile after which a page counts as settled: the groups of
 programs above came at most 2.5 s apart."""
