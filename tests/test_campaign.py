@@ -577,3 +577,26 @@ def test_a_rerun_differs_when_its_stored_figures_were_changed(tmp_path):
     assert result.exit_code == 1
     assert "DIFFERS" in result.output and "NOT reproduced" in result.output
     assert math.isfinite(row["rms_north_m"])
+
+
+def _worker_settings(dask_worker) -> tuple[str | None, bool]:
+    """The worker's trim threshold and whether it samples its tasks' stacks."""
+    return os.environ.get("MALLOC_TRIM_THRESHOLD_"), "profile" in dask_worker.periodic_callbacks
+
+
+def test_the_embedded_clusters_workers_run_without_the_profiler_or_the_trim_threshold():
+    """Dask's defaults (a stack sample every 10 ms, glibc told to hand back freed memory above
+    64 KiB) cost a campaign worker some 15 % (runner.LOCAL_WORKER_CONFIG); a worker the nanny
+    starts again after a crash must get the same settings, and this process keeps Dask's."""
+    import dask
+
+    client, cluster = runner._cluster_client(None, 1)
+    try:
+        assert list(client.run(_worker_settings).values()) == [(None, False)]
+        client.restart()
+        assert list(client.run(_worker_settings).values()) == [(None, False)]
+    finally:
+        client.close()
+        cluster.close()
+    assert dask.config.get("distributed.worker.profile.enabled") is True
+    assert dask.config.get("distributed.nanny.pre-spawn-environ")["MALLOC_TRIM_THRESHOLD_"] == 65536
