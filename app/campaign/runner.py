@@ -45,7 +45,9 @@ page) and ``MALLOC_TRIM_THRESHOLD_=65536`` (glibc hands freed memory back to the
 above 64 KiB and faults it in again for the next chunk's arrays; unset, glibc adapts its
 thresholds). Measured on 96 docking runs with one worker (``benchmarks/campaign_benchmark.py``
 configuration, this machine's Zen 3): 887x and 898x with Dask's defaults,
-970x without the profiler, 992x without the trim threshold, 991x and 1,040x without both."""
+970x without the profiler, 992x without the trim threshold, 991x and 1,040x without both.
+A threshold in the calling process's own environment still reaches the workers (they inherit
+it): the user's own, or one that a nanny with Dask's settings exported there earlier."""
 
 
 def runs_per_task(todo: int, workers: int) -> int:
