@@ -221,8 +221,20 @@ def test_recording_from_the_panel_is_written_and_replayed(
     save(page.screenshot(), "console-replay.png")
     click(page, "Pause replay")
     wait_for(lambda: not panel.replay.status().playing, 10.0, "the replay to pause")
-    field(page, "Replay time s").fill(f"{replay.start_s + 1.0:.1f}")
-    field(page, "Replay time s").press("Enter")
+    # type once the page shows where the replay stopped, as a person would: viser applies
+    # the server's updates once per drawn frame (400 ms apart in these tests), and a late
+    # update of this field landing on the typed value before the page sent it can turn the
+    # seek into one to where the replay already is (the likely cause of a timeout here in
+    # one full run; not reproduced alone)
+    time_box = field(page, "Replay time s")
+    wait_for(
+        lambda: abs(float(time_box.input_value() or "nan") - panel.replay.status().t_s) < 0.15,
+        10.0,
+        "the page to show where the replay paused",
+    )
+    time_box.fill(f"{replay.start_s + 1.0:.1f}")
+    time.sleep(0.2)  # viser sends an input's value at most every 50 ms
+    time_box.press("Enter")
     wait_for(
         lambda: abs(panel.replay.status().t_s - replay.start_s - 1.0) < 0.5,
         10.0,
