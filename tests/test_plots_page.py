@@ -106,6 +106,16 @@ def test_plots_draw_and_keep_their_window_after_folding(page, api: httpx.Client)
         page.wait_for_selector('iframe[title="plots"]', state="hidden", timeout=30_000)
         folder.click()  # and unfold: ``_frame`` waits for them to be shown again
         frame = _frame(page)
+        # drawn again once the unfolded panel gives the canvases their size (the page's
+        # ResizeObserver); the panel opens over several frames, 400 ms apart in these tests
+        wait_for(
+            lambda: frame.evaluate(
+                "() => { const s = window.__plots;"
+                " return s.ticks.length === 3 && s.widths.every((w) => w > 100); }"
+            ),
+            30.0,
+            "the three plots drawn at the panel's width",
+        )
         stats = frame.evaluate("() => window.__plots")
         assert len(stats["ticks"]) == 3
         for ticks, width in zip(stats["ticks"], stats["widths"], strict=True):
