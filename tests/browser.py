@@ -143,21 +143,16 @@ programs above came at most 2.5 s apart."""
 def settle(pg, timeout_s: float = 120.0) -> None:
     """Wait until the page has compiled its scene's shaders (see ``WATCH_SHADERS``), so that
     what a test does next is not held behind them."""
-    deadline = time.monotonic() + timeout_s
-    programs, quiet_ms = 0, 0.0
-    while time.monotonic() < deadline:
+
+    def quiet() -> bool:
         programs, quiet_ms = pg.evaluate(
             "[window.__glPrograms ?? -1, performance.now() - (window.__glLastCompileMs ?? 0)]"
         )
         if programs < 0:
             raise AssertionError("the page was opened without WATCH_SHADERS")
-        if programs > 0 and quiet_ms > 1000 * SHADERS_QUIET_S:
-            return
-        time.sleep(0.25)
-    raise AssertionError(
-        f"the page still compiled shaders after {timeout_s} s "
-        f"({programs} programs, the last {quiet_ms / 1000:.1f} s ago)"
-    )
+        return programs > 0 and quiet_ms > 1000 * SHADERS_QUIET_S
+
+    wait_for(quiet, timeout_s, f"{SHADERS_QUIET_S:g} s without a shader compile")
 
 
 def open_console(pg, url: str) -> None:

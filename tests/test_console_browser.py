@@ -227,6 +227,8 @@ def test_recording_from_the_panel_is_written_and_replayed(
     # seek into one to where the replay already is (the likely cause of a timeout here in
     # one full run; not reproduced alone)
     time_box = field(page, "Replay time s")
+    # 0.15 s: the panel shows the replay's time rounded to 0.1 s, and moves the bar only
+    # when it is more than 0.05 s off (web/panels.py _update_replay)
     wait_for(
         lambda: abs(float(time_box.input_value() or "nan") - panel.replay.status().t_s) < 0.15,
         10.0,
