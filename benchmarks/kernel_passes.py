@@ -43,7 +43,7 @@ from control.batchkernel import (
     steps_to_first_end,
 )
 from control.columns import N_LOG
-from sim import batch_plant, plant, sensors
+from sim import plant, sensors
 
 
 def _cycles(typingctx: Any) -> Any:
@@ -83,7 +83,7 @@ def timed_steps(
     m = CS.f_lo.shape[1]
     tau6 = W.vec[loop.W_TAU6, 0:6]
     f = W.vec[loop.W_F, 0:m]
-    reach = batch_plant.contact_reach(P0)
+    reach = plant.contact_reach(P0)
     h = steps_to_first_end(pos, length)
     for _ in range(h):
         for r in range(n_runs):

@@ -56,7 +56,8 @@ from sim.plant import (
     N_STATE,
     PlantArrays,
     PlantWork,
-    contact_wrench_into,
+    contact_reach,
+    contact_wrench_trig_into,
     make_work,
 )
 from sim.thrusters import thrust_of_one
@@ -385,25 +386,6 @@ def _wire_force_rows(
         f[2, r] = env[E_FWIRE + 2, r] if ext else f2
 
 
-CONTACT_MARGIN_M = 0.01
-"""[m] A run whose tree is more than its reach plus this above the landing surface cannot
-touch it (see ``_contact_runs``). The depths compared (some 400 m) carry rounding errors of
-about 1e-13 m, eleven orders below this margin; a margin of 1 m had the scalar contact
-computed for 26 % of a docking run's steps instead of 18 % (the tree hangs a few decimetres
-above the posts while it is aligned over them), 2-3 % of a batch's time."""
-
-
-@njit(inline="always", **JIT_NOALLOC)
-def contact_reach(P: PlantArrays) -> float:
-    """[m] How far below its centre the tree (its bottom corners, or its bottom and the
-    posts' height) can touch anything, plus ``CONTACT_MARGIN_M``: a run whose centre's depth
-    plus this is above the landing surface has no contact."""
-    half_l, half_w = 0.5 * P.tree_footprint[0], 0.5 * P.tree_footprint[1]
-    hh = P.tree_half_height
-    reach = max(np.sqrt(half_l * half_l + half_w * half_w + hh * hh), hh + P.dock_post_height)
-    return reach + CONTACT_MARGIN_M
-
-
 @njit(inline="always", **JIT_NOALLOC)
 def _contact_runs(
     tau: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork
@@ -415,9 +397,10 @@ def _contact_runs(
     plus the farthest its bottom corners reach, or plus half its height and the posts'
     height, plus ``CONTACT_MARGIN_M``, still above the surface) has a contact wrench of
     exactly zero: no corner penetrates and every post is free (``post_penetration_into``'s
-    first test). It gets the scalar code's ``tau += 0.0`` as a select over the row. The
-    others (near the frame, or not finite) get the scalar ``plant.contact_wrench_into`` on a
-    copy of their column (the same arithmetic)."""
+    first test). It gets the scalar code's ``tau += 0.0`` as a select over the row (the
+    scalar plant skips such a tree's contact too: ``plant.contact_reach``). The others (near
+    the frame, or not finite) get the scalar ``plant.contact_wrench_trig_into`` on a copy of
+    their column, with their sines and cosines from ``work.trig`` (the same arithmetic)."""
     reach = contact_reach(P)
     n = tau.shape[1]
     any_near = False
@@ -443,7 +426,20 @@ def _contact_runs(
         for i in range(3):
             for j in range(3):
                 col_R[i, j] = R[i, j, r]
-        contact_wrench_into(col_cw, col_x, col_env, P, col_R, work.plant)
+        trig = work.trig
+        contact_wrench_trig_into(
+            col_cw,
+            col_x,
+            col_env,
+            P,
+            col_R,
+            work.plant,
+            trig[T_SPHI, r],
+            trig[T_CPHI, r],
+            trig[T_CTH, r],
+            trig[T_SPSI, r],
+            trig[T_CPSI, r],
+        )
         for i in range(6):
             tau[i, r] += col_cw[i]
 

@@ -16,7 +16,7 @@ import pytest
 
 from missions import schema
 from missions.setup import build_simulation
-from sim import batch_plant, plant
+from sim import plant
 from sim.batch_plant import make_batch_work, rk4_batch, rk4_batch_into
 
 
@@ -70,7 +70,7 @@ def _batch_inputs(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
             # contact margin under the tree's bottom (skipped as out of reach, just)
             env[plant.E_WMASS, r] = rng.uniform(100.0, 2000.0)
             env[plant.E_WDAMP, r] = rng.uniform(1e3, 1e5)
-            reach = half_h + P.dock_post_height + 2.0 * batch_plant.CONTACT_MARGIN_M
+            reach = half_h + P.dock_post_height + 2.0 * plant.CONTACT_MARGIN_M
             env[plant.E_LAND, r] = x[2, r] + reach
             env[plant.E_FRAME : plant.E_FRAME + 2, r] = x[0:2, r]
         elif case in (4, 5, 6):  # landing: the bottom plane 2-8 cm above the tree's bottom
@@ -86,7 +86,7 @@ def _batch_inputs(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
             # for the contact code, which finds nothing)
             x[5, r] += 2.0e5
             x[17, r] -= 3.0e5
-            margin = 0.5 * batch_plant.CONTACT_MARGIN_M
+            margin = 0.5 * plant.CONTACT_MARGIN_M
             env[plant.E_LAND, r] = x[2, r] + half_h + P.dock_post_height + margin
             env[plant.E_FRAME : plant.E_FRAME + 2, r] = x[0:2, r]
     return x, n_rps, env

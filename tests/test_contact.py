@@ -221,3 +221,42 @@ def test_capture_within_tolerance_ends_on_the_frame(scale, direction_deg, headin
     assert abs(chk.heading_error_deg) <= math.degrees(lay.heading_clearance_rad) + 0.05
     # on the landing surface: sunk in by its 2 % static penetration, not on the post tops
     assert bottom == pytest.approx(400.0 + 0.02 * float(ps.tree.dimensions_m[2]), abs=0.01)
+
+
+@pytest.mark.parametrize("scale", SCALES)
+def test_tree_wrench_skips_the_contact_only_where_it_is_exactly_zero(scale):
+    """The tree's wrench computes the contact only for a tree within ``contact_reach`` of the
+    landing surface (speed: a docking run hangs far above the frame most of the time). Across
+    that edge, and into contact, it is bit for bit the wrench without a landing surface plus
+    ``contact_wrench`` (which always computes the corners and posts): so skipping changed no
+    number. The depths sweep from 1 m above the reach down to the corners 5 cm in, tilted,
+    turning and moving, so that a wrong reach (too short: a corner or post skipped while it
+    touches) or a skip that left out the ``+ 0.0`` of the zero wrench would show."""
+    ps = SCALES[scale]
+    P = plant.plant_arrays(ps)
+    env = _frame_env(ps, 0.0)
+    off = env.copy()
+    off[plant.E_LAND] = 0.0
+    reach = plant.contact_reach(P)
+    h = float(ps.tree.dimensions_m[2])
+    edge = LAND_M - reach  # the centre's depth at the edge of reach
+    depths = [edge - 1.0, edge - 1e-3, edge, edge + 0.5 * plant.CONTACT_MARGIN_M]
+    depths += list(np.linspace(edge + plant.CONTACT_MARGIN_M, LAND_M - h / 2 + 0.05, 9))
+    touched = 0
+    rng = np.random.default_rng(3)
+    for depth in depths:
+        x = np.zeros(plant.N_STATE)
+        x[0:2] = rng.uniform(-0.3, 0.3, 2)
+        x[2] = depth
+        x[3:5] = rng.uniform(-0.02, 0.02, 2)
+        x[5] = FRAME_PSI + rng.uniform(-0.05, 0.05)
+        x[6:12] = rng.uniform(-0.05, 0.05, 6)
+        R_t = Rzyx(x[3], x[4], x[5])
+        cw = plant.contact_wrench(x, env, P, R_t)
+        expected = plant.tree_wrench(x, off, P, R_t) + cw
+        got = plant.tree_wrench(x, env, P, R_t)
+        assert np.array_equal(got, expected), (depth, got - expected)
+        touched += bool(np.any(cw != 0.0))
+        if depth < edge:
+            assert not np.any(cw != 0.0)
+    assert touched >= 3  # the sweep reached into contact
