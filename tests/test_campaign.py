@@ -579,17 +579,23 @@ def test_a_rerun_differs_when_its_stored_figures_were_changed(tmp_path):
     assert math.isfinite(row["rms_north_m"])
 
 
-def _worker_settings(dask_worker) -> tuple[str | None, bool]:
-    """The worker's trim threshold and whether it samples its tasks' stacks."""
-    return os.environ.get("MALLOC_TRIM_THRESHOLD_"), "profile" in dask_worker.periodic_callbacks
+def _worker_settings(dask_worker) -> tuple[str | None, bool, float]:
+    """The worker's trim threshold, whether it samples its tasks' stacks, and how often its
+    event loop's tick runs [ms]."""
+    return (
+        os.environ.get("MALLOC_TRIM_THRESHOLD_"),
+        "profile" in dask_worker.periodic_callbacks,
+        dask_worker.periodic_callbacks["tick"].callback_time,
+    )
 
 
 def test_the_embedded_clusters_workers_run_without_the_profiler_or_the_trim_threshold(
     monkeypatch,
 ):
     """Dask's defaults (a stack sample every 10 ms, glibc told to hand back freed memory above
-    64 KiB) cost a campaign worker some 15 % (runner.LOCAL_WORKER_CONFIG); a worker the nanny
-    starts again after a crash must get the same settings, and this process keeps Dask's."""
+    64 KiB, the event loop's tick every 20 ms) cost a campaign worker some 15 % in all
+    (runner.LOCAL_WORKER_CONFIG); a worker the nanny starts again after a crash must get the
+    same settings, and this process keeps Dask's."""
     import dask
 
     # a nanny with Dask's settings exports the threshold into its own process too, and every
@@ -598,11 +604,12 @@ def test_the_embedded_clusters_workers_run_without_the_profiler_or_the_trim_thre
     monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
     client, cluster = runner._cluster_client(None, 1)
     try:
-        assert list(client.run(_worker_settings).values()) == [(None, False)]
+        assert list(client.run(_worker_settings).values()) == [(None, False, 1000.0)]
         client.restart()
-        assert list(client.run(_worker_settings).values()) == [(None, False)]
+        assert list(client.run(_worker_settings).values()) == [(None, False, 1000.0)]
     finally:
         client.close()
         cluster.close()
     assert dask.config.get("distributed.worker.profile.enabled") is True
+    assert dask.config.get("distributed.admin.tick.interval") == "20ms"
     assert dask.config.get("distributed.nanny.pre-spawn-environ")["MALLOC_TRIM_THRESHOLD_"] == 65536

@@ -33,7 +33,10 @@ POLL_S = 0.1
 """How often the client looks for finished runs [s]."""
 LOST_RETRIES = 3
 """Times a run whose worker was lost is submitted again before it counts as an error."""
-LOCAL_WORKER_CONFIG: dict[str, Any] = {"distributed.worker.profile.enabled": False}
+LOCAL_WORKER_CONFIG: dict[str, Any] = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+}
 LOCAL_WORKER_ENVIRON: dict[str, Any] = {
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None
 }
@@ -46,6 +49,12 @@ above 64 KiB and faults it in again for the next chunk's arrays; unset, glibc ad
 thresholds). Measured on 96 docking runs with one worker (``benchmarks/campaign_benchmark.py``
 configuration, this machine's Zen 3): 887x and 898x with Dask's defaults,
 970x without the profiler, 992x without the trim threshold, 991x and 1,040x without both.
+The third is the event loop's tick (``distributed.admin.tick.interval``, 20 ms): a check of its
+own responsiveness, for a warning when the loop was stuck for 3 s or more
+(``distributed.admin.tick.limit``), that takes the interpreter lock from the task 50 times a
+second. Once a second is plenty for a 3 s warning; a block of 32 runs in one worker, two
+rounds each way: 1,093x and 1,127x with the 20 ms tick, 1,141x and 1,192x with 1 s, 1,216x
+and 1,222x in a plain process (``docs/speed.md``, thirteenth pass).
 A threshold in the calling process's own environment still reaches the workers (they inherit
 it): the user's own, or one that a nanny with Dask's settings exported there earlier."""
 
