@@ -8,16 +8,24 @@ of two.
 The wall time counts from submitting the first run to the last row on disk, cluster start-up
 included (printed apart), as a user waits for it. On a shared machine the numbers follow the
 load: the script prints the load average before and after.
+
+``--plain N`` also runs the same runs, in the same blocks as the campaign tool makes for N
+workers (``runner.runs_per_task``, ``missions.campaign.run_block``), in N plain processes
+without Dask (a ``ProcessPoolExecutor``), timed from starting the processes: what Dask itself
+costs the campaign, with the same runs and the same start-up (each process imports the
+packages and loads the compiled kernels).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import os
 import sys
 import tempfile
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -57,10 +65,43 @@ def one_run_in_process(campaign: cm.Campaign, base) -> float:
     return best
 
 
+def _plain_block(text: str, indices: list[int]) -> float:
+    """Simulated seconds of one block of runs, run in this process as a campaign task runs it."""
+    campaign, base = cm.parse_text(text, "<benchmark>")
+    return sum(float(r["simulated_s"] or 0.0) for r in cm.run_block(campaign, base, indices))
+
+
+def plain_processes(text: str, runs: int, processes: int) -> dict:
+    """The campaign's runs in ``processes`` plain processes (no Dask), in the campaign tool's
+    blocks; wall time from starting the processes to the last block's end."""
+    size = runner.runs_per_task(runs, processes)
+    blocks = [list(range(k, min(k + size, runs))) for k in range(0, runs, size)]
+    t0 = time.perf_counter()
+    spawn = multiprocessing.get_context("spawn")  # as Dask's nannies start their workers
+    with ProcessPoolExecutor(processes, mp_context=spawn) as pool:
+        simulated = sum(pool.map(_plain_block, [text] * len(blocks), blocks))
+    wall = time.perf_counter() - t0
+    return {
+        "processes": processes,
+        "runs": runs,
+        "runs_per_task": size,
+        "simulated_s": simulated,
+        "wall_s": wall,
+        "simulated_s_per_wall_s": simulated / wall,
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=200, help="docking runs per campaign")
     parser.add_argument("--workers", default="1,2", help="worker counts to try, e.g. 1,2")
+    parser.add_argument(
+        "--plain",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also run the same runs in N plain processes without Dask (0: not)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args()
     text = CAMPAIGN.format(runs=args.runs)
@@ -99,6 +140,13 @@ def main() -> None:
                 f"{n:7d} {len(rows):5d} {p.failed:6d} {simulated:12.0f} {wall:8.1f} "
                 f"{simulated / wall:8.0f}   (in the run loop {p.wall_s:.1f} s)"
             )
+    plain = plain_processes(text, args.runs, args.plain) if args.plain > 0 else None
+    if plain is not None and not args.json:
+        print(
+            f"the same runs in {plain['processes']} plain processes (no Dask, blocks of "
+            f"{plain['runs_per_task']}): {plain['wall_s']:.1f} s, "
+            f"{plain['simulated_s_per_wall_s']:.0f} simulated s/s"
+        )
     if args.json:
         print(
             json.dumps(
@@ -109,6 +157,7 @@ def main() -> None:
                     "load_average_after": list(os.getloadavg()),
                     "one_run_simulated_s_per_s": one_run,
                     "campaigns": results,
+                    "plain_processes": plain,
                 }
             )
         )

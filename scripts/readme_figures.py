@@ -512,7 +512,9 @@ speed passes), by number of workers. Kept as measured then: the old code is not 
 
 
 def compute_campaign() -> Results:
-    res = _benchmark_json("benchmarks/campaign_benchmark.py", "--runs", "200", "--workers", "1,2")
+    res = _benchmark_json(
+        "benchmarks/campaign_benchmark.py", "--runs", "200", "--workers", "1,2", "--plain", "2"
+    )
     res["batch"] = _benchmark_json("benchmarks/batch_benchmark.py", "--runs", "64", "--repeat", "3")
     return res
 
@@ -523,7 +525,8 @@ def render_campaign(res: Results) -> str:
     rows = [
         para(
             "Throughput: `.venv/bin/python benchmarks/campaign_benchmark.py --runs 200 "
-            f"--workers 1,2` ({first['runs']} full-scale docking runs, "
+            f"--workers 1,2{' --plain 2' if res.get('plain_processes') else ''}` "
+            f"({first['runs']} full-scale docking runs, "
             f"{first['simulated_s']:,.0f} simulated s in all, the current at random in "
             f"0.1-0.5 m/s; {first['failed']} of them did not land), on "
             + (machine_text(res.get("machine")) or "this 2-core machine")
@@ -537,8 +540,14 @@ def render_campaign(res: Results) -> str:
             f"| {CAMPAIGN_BEFORE.get(w, math.nan):,.0f} |"
             for w, c in runs.items()
         ),
-        "",
     ]
+    plain = res.get("plain_processes")
+    if plain:
+        rows.append(
+            f"| {plain['processes']} plain processes, no Dask | {plain['wall_s']:.1f} "
+            f"| {plain['simulated_s_per_wall_s']:,.0f} | |"
+        )
+    rows.append("")
     if "1" in runs and "2" in runs:
         gain = runs["1"]["wall_s"] / runs["2"]["wall_s"]
         rows.append(
@@ -547,6 +556,14 @@ def render_campaign(res: Results) -> str:
                 "the runs are independent and each worker process has a core. One run alone in "
                 "the benchmark's own process (best of three): "
                 f"{res['one_run_simulated_s_per_s']:,.0f} simulated s/s."
+                + (
+                    f" The last row runs the same {plain['runs']} runs in the same blocks of "
+                    f"{plain['runs_per_task']} (`missions.campaign.run_block`) in "
+                    f"{plain['processes']} plain processes, their start counted as the "
+                    "cluster's is: what Dask's scheduler, nannies and client cost the campaign."
+                    if plain
+                    else ""
+                )
             )
         )
     batch = res.get("batch")
