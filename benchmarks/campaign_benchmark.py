@@ -75,7 +75,7 @@ def plain_processes(text: str, runs: int, processes: int) -> dict:
     """The campaign's runs in ``processes`` plain processes (no Dask), in the campaign tool's
     blocks; wall time from starting the processes to the last block's end."""
     size = runner.runs_per_task(runs, processes)
-    blocks = [list(range(k, min(k + size, runs))) for k in range(0, runs, size)]
+    blocks = runner.blocks_of(list(range(runs)), size)
     t0 = time.perf_counter()
     spawn = multiprocessing.get_context("spawn")  # as Dask's nannies start their workers
     with ProcessPoolExecutor(processes, mp_context=spawn) as pool:

@@ -589,7 +589,7 @@ def _worker_settings(dask_worker) -> tuple[str | None, bool, float]:
     )
 
 
-def test_the_embedded_clusters_workers_run_without_the_profiler_or_the_trim_threshold(
+def test_the_embedded_clusters_workers_run_without_the_profiler_trim_threshold_or_fast_tick(
     monkeypatch,
 ):
     """Dask's defaults (a stack sample every 10 ms, glibc told to hand back freed memory above

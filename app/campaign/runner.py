@@ -42,14 +42,15 @@ LOCAL_WORKER_ENVIRON: dict[str, Any] = {
 }
 """Dask settings of the embedded cluster's workers (an existing cluster keeps its own). Dask's
 defaults suit workers holding large, changing data; a campaign worker steps small arrays in
-a tight loop, and two of them cost it time: the statistical profiler (every 10 ms a thread
+a tight loop, and three of them cost it time: the statistical profiler (every 10 ms a thread
 takes the interpreter lock to sample the running task's stack, for the dashboard's profile
-page) and ``MALLOC_TRIM_THRESHOLD_=65536`` (glibc hands freed memory back to the system
+page), ``MALLOC_TRIM_THRESHOLD_=65536`` (glibc hands freed memory back to the system
 above 64 KiB and faults it in again for the next chunk's arrays; unset, glibc adapts its
-thresholds). Measured on 96 docking runs with one worker (``benchmarks/campaign_benchmark.py``
-configuration, this machine's Zen 3): 887x and 898x with Dask's defaults,
-970x without the profiler, 992x without the trim threshold, 991x and 1,040x without both.
-The third is the event loop's tick (``distributed.admin.tick.interval``, 20 ms): a check of its
+thresholds) and the event loop's tick (below). The first two, measured on 96 docking runs
+with one worker (``benchmarks/campaign_benchmark.py`` configuration, this machine's Zen 3):
+887x and 898x with Dask's defaults, 970x without the profiler, 992x without the trim
+threshold, 991x and 1,040x without both.
+The tick (``distributed.admin.tick.interval``, 20 ms) is the event loop's check of its
 own responsiveness, for a warning when the loop was stuck for 3 s or more
 (``distributed.admin.tick.limit``), that takes the interpreter lock from the task 50 times a
 second. Once a second is plenty for a 3 s warning; a block of 32 runs in one worker, two
@@ -57,6 +58,11 @@ rounds each way: 1,093x and 1,127x with the 20 ms tick, 1,141x and 1,192x with 1
 and 1,222x in a plain process (``docs/speed.md``, thirteenth pass).
 A threshold in the calling process's own environment still reaches the workers (they inherit
 it): the user's own, or one that a nanny with Dask's settings exported there earlier."""
+
+
+def blocks_of(todo: list[int], size: int) -> list[list[int]]:
+    """The runs ``todo`` cut into tasks of ``size`` runs, in order (the last may be shorter)."""
+    return [todo[k : k + size] for k in range(0, len(todo), size)]
 
 
 def runs_per_task(todo: int, workers: int) -> int:
@@ -151,7 +157,7 @@ def run_campaign(
     try:
         n_workers = len(client.scheduler_info().get("workers", {})) or workers or 1
         size = per_task or runs_per_task(len(todo), n_workers)
-        blocks = [todo[k : k + size] for k in range(0, len(todo), size)]
+        blocks = blocks_of(todo, size)
         with _progress_bar(show_progress, campaign.name, progress) as bar:
             futures = {
                 client.submit(
