@@ -12,6 +12,12 @@ simulated time), a little slower for the counter's reads and the extra bookkeepi
 between the passes is what it is for. It also counts how many runs are within reach of the
 landing surface at each step (those take the scalar contact in the plant pass) and what the
 plant pass costs with and without them. Compiling the copy takes two to three minutes.
+
+``--again`` also runs each step's structure-of-arrays plant step a second time at once, on a
+copy of its result with the same inputs and work space (the result thrown away): the same
+arithmetic with its data just used, so the difference to the pass itself is what the rest of
+the kernel's step costs the plant pass in the processor's caches (the copy's own runs go as
+without it; only the time around them grows).
 """
 
 from __future__ import annotations
@@ -43,7 +49,7 @@ from control.batchkernel import (
     steps_to_first_end,
 )
 from control.columns import N_LOG
-from sim import plant, sensors
+from sim import batch_plant, plant, sensors
 
 
 def _cycles(typingctx: Any) -> Any:
@@ -70,15 +76,18 @@ PASSES = (
     "log row's plant columns",
 )
 # acc[k] for k < 8: cycles per pass; then these counters
-RUN_STEPS, FAR_STEPS, FAR_CYCLES, NEAR_STEPS, NEAR_CYCLES, NEAR_RUNS, ACTIVE = range(8, 15)
+RUN_STEPS, FAR_STEPS, FAR_CYCLES, NEAR_STEPS, NEAR_CYCLES, NEAR_RUNS, ACTIVE, AGAIN = range(8, 16)
+N_ACC = 16
 
 
 @njit(error_model="numpy", _nrt=False, cache=True)
 def timed_steps(
     pos, length, ok, active, k0, x, held_y, xhat, Pc, cs, target, n_rps, env, noise, fresh,
-    PS, CS, QS, dt, log_at, work, W, same_plant, P0, x_sb, n_sb, env_sb, bwork, acc,
+    PS, CS, QS, dt, log_at, work, W, same_plant, P0, x_sb, n_sb, env_sb, bwork, acc, x_again, again,
 ):  # fmt: skip
-    """``batch_steps`` with the cycles of each pass added into ``acc`` (see ``PASSES``)."""
+    """``batch_steps`` with the cycles of each pass added into ``acc`` (see ``PASSES``); with
+    ``again``, the structure-of-arrays plant step run once more on ``x_again`` (a copy of the
+    pass's result) and its cycles into ``acc[AGAIN]``."""
     n_runs = pos.shape[0]
     m = CS.f_lo.shape[1]
     tau6 = W.vec[loop.W_TAU6, 0:6]
@@ -129,6 +138,13 @@ def timed_steps(
         )
         spent = cycles() - c0
         acc[5] += spent
+        if again:
+            for i in range(x_sb.shape[0]):
+                for r in range(n_runs):
+                    x_again[i, r] = x_sb[i, r]
+            c0 = cycles()
+            batch_plant.rk4_batch_into(x_again, n_sb, env_sb, P0, dt, bwork)
+            acc[AGAIN] += cycles() - c0
         if near == 0:
             acc[FAR_STEPS] += 1
             acc[FAR_CYCLES] += spent
@@ -170,14 +186,15 @@ def _counter_hz() -> float:
     return (_now() - a) / (time.perf_counter() - t0)
 
 
-def measure(runs: int) -> dict:
-    acc = np.zeros(15, np.int64)
+def measure(runs: int, again: bool = False) -> dict:
+    acc = np.zeros(N_ACC, np.int64)
 
     def steps(s: batch._Slots) -> int:
         return timed_steps(
             s.pos, s.length, s.ok, s.active, s.k0, s.x, s.held_y, s.xhat, s.Pc, s.cs, s.target,
             s.n_rps, s.env, s.noise, s.fresh, s.PS, s.CS, s.QS, s.dt_s, s.log_at, s.work, s.W,
-            s.same_plant, s.P0, s.x_sb, s.n_sb, s.env_sb, s.bwork, acc,
+            s.same_plant, s.P0, s.x_sb, s.n_sb, s.env_sb, s.bwork, acc, np.empty_like(s.x_sb),
+            again,
         )  # fmt: skip
 
     bb._warm(runs)
@@ -210,6 +227,10 @@ def measure(runs: int) -> dict:
         "steps_with_runs_near": float(acc[NEAR_STEPS] / batch_steps),
         "runs_near_when_any": float(acc[NEAR_RUNS] / max(1, acc[NEAR_STEPS])),
         "counter_ghz": hz / 1e9,
+        "plant_pass_ns_per_batch_step": float(acc[5] / hz * 1e9 / batch_steps),
+        "plant_step_again_ns_per_batch_step": (
+            float(acc[AGAIN] / hz * 1e9 / batch_steps) if again else None
+        ),
     }
 
 
@@ -217,10 +238,15 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=32, help="runs in the batch (default 32)")
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.add_argument(
+        "--again",
+        action="store_true",
+        help="run each plant step once more at once, its data just used (see the docstring)",
+    )
     args = parser.parse_args()
     if args.runs < 2:
         parser.error("--runs must be at least 2")
-    out = measure(args.runs)
+    out = measure(args.runs, args.again)
     if args.json:
         print(json.dumps(out, indent=2))
         return
@@ -239,6 +265,12 @@ def main() -> None:
         f"{100 * out['steps_with_runs_near']:.0f} % of the steps); "
         f"{out['active_runs_per_step']:.1f} runs active per step"
     )
+    if args.again:
+        print(
+            f"plant pass {out['plant_pass_ns_per_batch_step'] / 1e3:.1f} us per batch step; its "
+            f"structure-of-arrays step again at once, its data just used: "
+            f"{out['plant_step_again_ns_per_batch_step'] / 1e3:.1f} us"
+        )
 
 
 if __name__ == "__main__":

@@ -442,3 +442,28 @@ def test_a_seek_is_not_undone_by_a_frame_update_that_comes_before_its_callback()
     assert bar.value == 5.0
     frame(7.3)  # playing again: the bar follows the replay
     assert bar.value == 7.3
+
+
+def test_a_publisher_error_says_where_it_was_raised() -> None:
+    """The console view's ``errors`` name the line that raised (a rare error seen once in a
+    full run, "deque mutated during iteration", said nothing of where)."""
+    import json
+
+    from web.view import _where
+
+    def ours() -> None:
+        raise RuntimeError("ours")
+
+    def through_a_library() -> None:
+        json.loads("{")
+
+    try:
+        ours()
+    except RuntimeError as err:
+        text = _where(err)
+    assert "test_console_view_model.py" in text and "in ours)" in text and "; from" not in text
+    try:
+        through_a_library()
+    except ValueError as err:
+        text = _where(err)
+    assert "json" in text and "from " in text and "in through_a_library)" in text

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import threading
 import time
+import traceback
 from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -134,7 +135,7 @@ class ConsoleView:
                     panel.update(snap)
             except Exception as err:
                 if len(self.errors) < 100:
-                    self.errors.append(f"{type(err).__name__}: {err}")
+                    self.errors.append(f"{type(err).__name__}: {err}{_where(err)}")
                 continue
             end = time.perf_counter()
             self.frame_ms.append((1e3 * (scene_done - start), 1e3 * (end - scene_done)))
@@ -210,3 +211,19 @@ def _host_name(header: str) -> str:
     if header.startswith("["):
         return header[1 : header.find("]")] if "]" in header else header
     return header.rsplit(":", 1)[0] if header.count(":") == 1 else header
+
+
+def _where(err: BaseException) -> str:
+    """Where an error was raised: the innermost frame, and the innermost of this repository's
+    own when that is another (one line each, for whoever reads ``errors``)."""
+    frames = traceback.extract_tb(err.__traceback__)
+    if not frames:
+        return ""
+    last = frames[-1]
+    ours = [
+        f for f in frames if "site-packages" not in f.filename and "/lib/python" not in f.filename
+    ]
+    text = f" (at {last.filename}:{last.lineno} in {last.name}"
+    if ours and ours[-1] is not last:
+        text += f"; from {ours[-1].filename}:{ours[-1].lineno} in {ours[-1].name}"
+    return text + ")"
