@@ -103,12 +103,36 @@ def _due_pattern(decimation: tuple[int, ...], phase: int, n: int) -> NDArray[np.
 
 
 def draw_noise(cfg: SensorConfig, rng: np.random.Generator, first_step: int, n: int) -> NoiseChunk:
-    """Draw the noise and the sample/dropout pattern for n steps."""
+    """Draw the noise and the sample/dropout pattern for n steps: n x N_SENSORS uniforms (a
+    sample is kept where its uniform is at least the sensor's dropout probability), then
+    n x N_Y standard normals scaled by each output's noise standard deviation."""
     decimation, period = cfg.pattern_key
     due = _due_pattern(decimation, first_step % period, n)
-    kept = rng.random((n, N_SENSORS)) >= cfg.dropout_probability[None, :]
-    noise = rng.standard_normal((n, N_Y)) * cfg.noise_std[None, :]
-    return NoiseChunk(noise=noise, fresh=due & kept)
+    uniforms = rng.random((n, N_SENSORS))
+    noise = rng.standard_normal((n, N_Y))
+    fresh = np.empty((n, N_SENSORS), dtype=np.bool_)
+    _scale_and_keep(noise, fresh, uniforms, due, cfg.noise_std, cfg.dropout_probability)
+    return NoiseChunk(noise=noise, fresh=fresh)
+
+
+@njit(**JIT_NOALLOC)
+def _scale_and_keep(
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    uniforms: np.ndarray,
+    due: np.ndarray,
+    noise_std: np.ndarray,
+    dropout: np.ndarray,
+) -> None:
+    """``draw_noise``'s arithmetic on its draws in one compiled call (three numpy operations
+    and their temporaries cost a single run's closed loop some 0.08 us a step): the normals
+    scaled in place, ``noise[k, i] * noise_std[i]`` (the product numpy's broadcast makes), and
+    ``fresh = due & (uniforms >= dropout)``."""
+    for k in range(noise.shape[0]):
+        for i in range(noise.shape[1]):
+            noise[k, i] = noise[k, i] * noise_std[i]
+        for j in range(fresh.shape[1]):
+            fresh[k, j] = due[k, j] and uniforms[k, j] >= dropout[j]
 
 
 @njit(**JIT)

@@ -669,3 +669,37 @@ def test_advance_current_rejects_bad_step_and_state() -> None:
         advance_current(CurrentState(0.7, 4.0), params, 0.01, 10, rng)
     with pytest.raises(ValueError, match="speed_fold_sign"):
         CurrentState(0.1, 4.0, speed_fold_sign=0)
+
+
+@pytest.mark.parametrize(
+    "params",
+    [
+        CurrentParams(0.3, 0.5, 0.1, 0.5, -1.0, 2.0, 0.02, 0.01),  # inside its band
+        CurrentParams(0.1, 1.0, 0.05, 0.15, 0.9, 1.1, 0.05, 0.05),  # folds many times
+    ],
+    ids=["inside", "folding"],
+)
+def test_current_walk_is_the_numpy_form_bit_for_bit(params: CurrentParams) -> None:
+    """Both walks go in one compiled call; the numbers are those of the numpy form it
+    replaced: increments ``sigma sqrt(dt) * normal``, summed in order (``cumsum``), from the
+    state with its fold sign, reflected into the band where they leave it."""
+    state = CurrentState(params.speed_mps, params.direction_rad, -1, 1)
+    got = advance_current(state, params, 0.01, 500, np.random.default_rng(5))
+    normals = np.random.default_rng(5).standard_normal((500, 2))
+    walks = (
+        (params.speed_walk_mps_per_sqrt_s, state.speed_mps, -1),
+        (params.direction_walk_rad_per_sqrt_s, state.direction_rad, 1),
+    )
+    bands = (
+        (params.speed_min_mps, params.speed_max_mps),
+        (params.direction_min_rad, params.direction_max_rad),
+    )
+    samples = (got.speeds_mps, got.directions_rad)
+    ends = (got.state.speed_mps, got.state.direction_rad)
+    for k in range(2):
+        sigma, start, sign = walks[k]
+        steps = sigma * math.sqrt(0.01) * normals[:, k]
+        free = start + sign * np.concatenate(([0.0], np.cumsum(steps)))
+        path, _ = environment._fold_into_band(free, *bands[k])
+        assert np.array_equal(samples[k].view(np.int64), path[:-1].view(np.int64))
+        assert ends[k] == path[-1]

@@ -36,3 +36,20 @@ def test_hold_noise_and_dropouts_over_a_run():
     assert gyro_err.std() == pytest.approx(MODEL.spec.sensors.gyro.noise_std, rel=0.03)
     # compass is wrapped into [-pi, pi)
     assert np.all(y[:, 4] >= -np.pi) and np.all(y[:, 4] < np.pi)
+
+
+@pytest.mark.parametrize("first_step", [0, 7, 12_345])
+def test_drawn_noise_is_the_numpy_forms_bit_for_bit(first_step: int) -> None:
+    """``draw_noise`` scales the normals and masks the samples in one compiled call; the
+    numbers are those of the numpy forms it replaced (the same draws, in the same order)."""
+    spec = params.load("full-scale").sensors
+    cfg = sensors.sensor_config(spec, 0.01)
+    cfg = sensors.SensorConfig(cfg.decimation, cfg.noise_std, np.linspace(0.0, 0.4, 5))
+    got = sensors.draw_noise(cfg, np.random.default_rng(3), first_step, 100)
+    rng = np.random.default_rng(3)
+    due = (first_step + np.arange(100))[:, None] % cfg.decimation[None, :] == 0
+    kept = rng.random((100, sensors.N_SENSORS)) >= cfg.dropout_probability[None, :]
+    noise = rng.standard_normal((100, sensors.N_Y)) * cfg.noise_std[None, :]
+    assert np.array_equal(got.noise.view(np.int64), noise.view(np.int64))
+    assert np.array_equal(got.fresh, due & kept)
+    assert 0 < got.fresh.sum() < got.fresh.size, "some samples dropped, some kept"
