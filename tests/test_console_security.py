@@ -172,6 +172,15 @@ def test_settings_refuse_short_tokens_and_accept_loopback_spellings() -> None:
         ConsoleSettings(host="10.0.0.1")
 
 
+def test_settings_take_the_recordings_folder_as_text_or_path_and_refuse_other_things() -> None:
+    """Defect: a folder given as text was kept as text and failed later, in the server's
+    thread, with "'str' object has no attribute 'is_dir'"."""
+    assert ConsoleSettings(recordings_dir="runs/today").recordings_dir == Path("runs/today")
+    assert ConsoleSettings(recordings_dir=Path("x")).recordings_dir == Path("x")
+    with pytest.raises(ValueError, match="recordings_dir must be a folder's path, got int 3"):
+        ConsoleSettings(recordings_dir=3)  # type: ignore[arg-type]
+
+
 def test_the_view_port_checks_host_and_origin(served) -> None:
     """The 3D view's own port: a page served under another name (DNS rebinding) or a
     WebSocket opened by another web page is refused; the console's own address works."""

@@ -48,6 +48,14 @@ class ConsoleSettings:
     """Print the addresses and the token once serving (the serve command)."""
 
     def __post_init__(self) -> None:
+        if isinstance(self.recordings_dir, str):
+            # a path given as text (a script's settings): a Path, as the CLI makes it
+            object.__setattr__(self, "recordings_dir", Path(self.recordings_dir))
+        if not isinstance(self.recordings_dir, Path):
+            raise ValueError(
+                f"recordings_dir must be a folder's path, got "
+                f"{type(self.recordings_dir).__name__} {self.recordings_dir!r}"
+            )
         if not is_loopback(self.host) and not self.allow_remote:
             raise ValueError(
                 f"host {self.host!r} is not a loopback address: binding to it "
