@@ -466,4 +466,6 @@ def test_a_publisher_error_says_where_it_was_raised() -> None:
         through_a_library()
     except ValueError as err:
         text = _where(err)
-    assert "json" in text and "from " in text and "in through_a_library)" in text
+    assert "json/decoder.py:" in text, "the innermost frame, in the library"
+    assert "; from " in text and "test_console_view_model.py:" in text.split("; from ")[1]
+    assert text.endswith("in through_a_library)"), "and our own innermost frame after it"
