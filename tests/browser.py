@@ -31,7 +31,7 @@ CHROMIUM_ARGS = [
     "--disable-component-update",
     "--disable-sync",
     # no multisampling of the software-drawn WebGL scene: a live console page (frames at most
-    # every 400 ms, SLOW_FRAMES) kept 1.02 of this machine's cores busy with it and 0.77
+    # every 400 ms then, SLOW_FRAMES) kept 1.02 of this machine's cores busy with it and 0.77
     # without (10 s each, the chromium processes' CPU time; 2026-11-27). Edges in the pictures
     # are a little more jagged; the tests compare pages drawn the same way.
     "--webgl-antialiasing-mode=none",
@@ -107,7 +107,7 @@ Chromium without a GPU compiles shaders in software, and the page's main thread 
 each: in this machine's measurements a fresh console page answered nothing for 7-8 s, three
 to ten seconds after its panel appeared, while it compiled the scene's programs (19 in all,
 arriving in three groups), and 20 s under load; a click sent then timed out (CI, 2026-11-26)."""
-FRAME_EVERY_MS = 400
+FRAME_EVERY_MS = 600
 """The least time between two frames of a test page's 3D view (``SLOW_FRAMES``)."""
 SLOW_FRAMES = """
 (() => {
@@ -132,13 +132,16 @@ SLOW_FRAMES = """
   };
 })()
 """.replace("FRAME_EVERY_MS", str(FRAME_EVERY_MS))
-"""Draws the page's 3D view at most every 400 ms (2.5 frames per second) instead of whenever
+"""Draws the page's 3D view at most every 600 ms (1.7 frames per second) instead of whenever
 the scene moves. Without a GPU, Chromium draws the console's live scene in software, each
-frame some 0.25 s of a core at 1400x900, as fast as the scene changes: one console page kept
-1.5 of this machine's 2 cores busy (6.7 frames per second), which starved the other test
+frame some 0.25-0.4 s of a core at 1400x900, as fast as the scene changes: one console page
+kept 1.5 of this machine's 2 cores busy (6.7 frames per second), which starved the other test
 worker and the page's own input (clicks and fills that timed out after 30 s in a full run).
-Throttled, a page takes about half of that (0.78 of a core, measured). Playwright's own
-checks (an element is stable over two frames) run in its own isolated world and keep the
+A live page's chromium CPU, measured over 10 s (2026-11-27, with the multisampling off, see
+``CHROMIUM_ARGS``): 0.77 of a core at 400 ms, 0.56 at 600 ms; a full test run took 11 min
+04 s and 10 min 04 s of pytest. At 800 ms a full run took 9 min 34 s but the replay test's
+two replays once showed too alike (its pages draw 2 s after a change), so 600. Playwright's
+own checks (an element is stable over two frames) run in its own isolated world and keep the
 browser's real frames."""
 SHADERS_QUIET_S = 4.0
 """Seconds without a shader compile after which a page counts as settled: the groups of
