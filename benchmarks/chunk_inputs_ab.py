@@ -49,6 +49,17 @@ def _old_environment():
     return module
 
 
+def closed_loop_run(
+    ps: params.ParameterSet, settings: ControlSettings, seconds: float
+) -> tuple[float, np.ndarray]:
+    """``control_benchmark``'s closed loop for ``seconds``: (us a step, its log rows)."""
+    sim = Simulation(ps, tree_depth_m=400.0, current=thesis_current(), settings=settings)
+    sim.set_target(2.0, 2.0, 0.5)
+    t0 = time.perf_counter()
+    rows = sim.run_for(seconds)
+    return (time.perf_counter() - t0) / len(rows) * 1e6, rows.data
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=11)
@@ -83,23 +94,16 @@ def main() -> None:
     ps = params.load("model-scale")
     settings = ControlSettings(feedback="ekf", allocation="priority", feedforward=True)
 
-    def run(seconds: float) -> tuple[float, np.ndarray]:
-        sim = Simulation(ps, tree_depth_m=400.0, current=thesis_current(), settings=settings)
-        sim.set_target(2.0, 2.0, 0.5)
-        t0 = time.perf_counter()
-        rows = sim.run_for(seconds)
-        return (time.perf_counter() - t0) / len(rows) * 1e6, rows.data
-
     forms = {"before": (old_noise, old_current), "after": new_forms}
     us: dict[str, list[float]] = {"before": [], "after": []}
     rows: dict[str, np.ndarray] = {}
     for label in forms:  # load both ways' kernels before timing
         sensors.draw_noise, envmod.advance_current = forms[label]
-        run(1.0)
+        closed_loop_run(ps, settings, 1.0)
     for _ in range(args.rounds):
         for label in forms:
             sensors.draw_noise, envmod.advance_current = forms[label]
-            t, rows[label] = run(args.seconds)
+            t, rows[label] = closed_loop_run(ps, settings, args.seconds)
             us[label].append(t)
     sensors.draw_noise, envmod.advance_current = new_forms
     for label, values in us.items():
