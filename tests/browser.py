@@ -30,12 +30,19 @@ CHROMIUM_ARGS = [
     "--disable-background-networking",
     "--disable-component-update",
     "--disable-sync",
+]
+"""Chromium as the benchmarks launch it (``benchmarks/page_rates.py``, ``console_benchmark.py``,
+``pilot_latency.py``): the page drawn as a person's browser draws it."""
+TEST_CHROMIUM_ARGS = [
+    *CHROMIUM_ARGS,
     # no multisampling of the software-drawn WebGL scene: a live console page (frames at most
     # every 400 ms then, SLOW_FRAMES) kept 1.02 of this machine's cores busy with it and 0.77
-    # without (10 s each, the chromium processes' CPU time; 2026-11-27). Edges in the pictures
-    # are a little more jagged; the tests compare pages drawn the same way.
+    # without (10 s each, benchmarks/browser_cpu.py; 2026-11-27). Edges in the pictures
+    # are a little more jagged; the tests compare pages drawn the same way. The benchmarks keep
+    # the multisampling: they measure what a person's page costs.
     "--webgl-antialiasing-mode=none",
 ]
+"""Chromium as the tests launch it."""
 SCREENSHOTS = Path(__file__).resolve().parents[1] / "docs" / "screenshots"
 
 
@@ -60,7 +67,7 @@ def page(server: RunningServer, tmp_path_factory: pytest.TempPathFactory):
         context = pw.chromium.launch_persistent_context(
             str(tmp_path_factory.mktemp("chromium-profile")),
             executable_path=str(CHROMIUM),
-            args=CHROMIUM_ARGS,
+            args=TEST_CHROMIUM_ARGS,
             headless=True,
             viewport={"width": 1400, "height": 900},
         )
@@ -137,12 +144,12 @@ the scene moves. Without a GPU, Chromium draws the console's live scene in softw
 frame some 0.25-0.4 s of a core at 1400x900, as fast as the scene changes: one console page
 kept 1.5 of this machine's 2 cores busy (6.7 frames per second), which starved the other test
 worker and the page's own input (clicks and fills that timed out after 30 s in a full run).
-A live page's chromium CPU, measured over 10 s (2026-11-27, with the multisampling off, see
-``CHROMIUM_ARGS``): 0.77 of a core at 400 ms, 0.56 at 600 ms; a full test run took 11 min
-04 s and 10 min 04 s of pytest. At 800 ms a full run took 9 min 34 s but the replay test's
-two replays once showed too alike (its pages draw 2 s after a change), so 600. Playwright's
-own checks (an element is stable over two frames) run in its own isolated world and keep the
-browser's real frames."""
+A live page's chromium CPU over 10 s (``benchmarks/browser_cpu.py``, 2026-11-27, with the
+multisampling off, see ``TEST_CHROMIUM_ARGS``): 0.77 of a core at 400 ms, 0.56 at 600 ms; a
+full test run took 11 min 04 s and 10 min 04 s of pytest. At 800 ms a full run took 9 min
+34 s but the replay test's two replays once showed too alike (its pages draw 2 s after a
+change), so 600. Playwright's own checks (an element is stable over two frames) run in its
+own isolated world and keep the browser's real frames."""
 SHADERS_QUIET_S = 4.0
 """Seconds without a shader compile after which a page counts as settled: the groups of
 programs above came at most 2.5 s apart."""

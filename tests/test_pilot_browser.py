@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from app.server import RunningServer
-from tests.browser import CHROMIUM, CHROMIUM_ARGS, wait_for
+from tests.browser import CHROMIUM, TEST_CHROMIUM_ARGS, wait_for
 
 NAME = "Test Pilot"
 
@@ -26,7 +26,7 @@ def pilot(server: RunningServer) -> Iterator:
     sync_api = pytest.importorskip("playwright.sync_api")
     with sync_api.sync_playwright() as pw:
         browser = pw.chromium.launch(
-            executable_path=str(CHROMIUM), args=CHROMIUM_ARGS, headless=True
+            executable_path=str(CHROMIUM), args=TEST_CHROMIUM_ARGS, headless=True
         )
         try:
             pg = browser.new_page(viewport={"width": 1200, "height": 800})
