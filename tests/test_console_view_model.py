@@ -469,3 +469,86 @@ def test_a_publisher_error_says_where_it_was_raised() -> None:
     assert "json/decoder.py:" in text, "the innermost frame, in the library"
     assert "; from " in text and "test_console_view_model.py:" in text.split("; from ")[1]
     assert text.endswith("in through_a_library)"), "and our own innermost frame after it"
+
+
+def _raised_through(files: list[str], message: str) -> RuntimeError:
+    """A RuntimeError raised through one frame in each of ``files`` (outermost first), the last
+    raising it: the traceback viser's event race leaves, without the race."""
+
+    def call(i: int):
+        if i == len(files) - 1:
+            code = compile(f"def f(_):\n    raise RuntimeError({message!r})\n", files[i], "exec")
+        else:
+            code = compile("def f(next_call):\n    return next_call()\n", files[i], "exec")
+        space: dict = {}
+        exec(code, space)
+        return space["f"](lambda: call(i + 1))
+
+    try:
+        call(0)
+    except RuntimeError as err:
+        return err
+    raise AssertionError("nothing raised")
+
+
+RACE_FILES = [
+    "/repo/web/scene.py",
+    "/venv/site-packages/viser/_scene_handles.py",
+    "/venv/site-packages/viser/infra/_async_message_buffer.py",
+    "/python/lib/python3.11/asyncio/locks.py",
+]
+
+
+def test_viser_event_race_is_told_from_other_errors() -> None:
+    """Only viser's own race (its message buffer setting an asyncio.Event from the sending
+    thread, raised in asyncio's locks during a scene update) is healed rather than reported."""
+    from web.view import _viser_event_race
+
+    race = "deque mutated during iteration"
+    assert _viser_event_race(_raised_through(RACE_FILES, race))
+    panel = ["/repo/web/panels.py", *RACE_FILES[1:]]
+    assert not _viser_event_race(_raised_through(panel, race)), "a panel's: an error"
+    assert not _viser_event_race(_raised_through(RACE_FILES, "another error")), "other words"
+    ours = [*RACE_FILES[:3], "/repo/web/scene.py"]
+    assert not _viser_event_race(_raised_through(ours, race)), "raised in our code"
+    assert not _viser_event_race(ValueError(race)), "another type"
+
+
+def test_the_publisher_heals_a_viser_event_race_and_reports_other_errors(tmp_path) -> None:
+    """A scene update cut short by viser's race is not an error: the scene is drawn whole on
+    the next frame and the race is counted. Any other error is reported as before."""
+    import time
+
+    from app.console import ConsoleSettings
+    from app.server import serve_in_thread
+
+    settings = ConsoleSettings(port=0, viser_port=0, recordings_dir=tmp_path, speed=5.0)
+    with serve_in_thread(settings) as running:
+        view = running.app.state.view
+        update, redraw = view.scene.update, view.scene.redraw
+        raised: list[str] = []
+        redraws: list[int] = []
+        updates_after: list[int] = []
+
+        def failing_update(snap) -> None:
+            if len(raised) == 0:
+                raised.append("race")
+                raise _raised_through(RACE_FILES, "deque mutated during iteration")
+            if len(raised) == 1 and redraws:
+                raised.append("other")
+                raise _raised_through(["/repo/web/scene.py"], "something else")
+            if len(raised) == 2:
+                updates_after.append(snap.seq)
+            update(snap)
+
+        def counted_redraw() -> None:
+            redraws.append(1)
+            redraw()
+
+        view.scene.update, view.scene.redraw = failing_update, counted_redraw
+        deadline = time.monotonic() + 20.0
+        while len(updates_after) < 3 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert view.viser_event_races == 1 and len(redraws) == 1
+        assert len(view.errors) == 1 and view.errors[0].startswith("RuntimeError: something else")
+        assert len(updates_after) >= 3, "the publisher goes on after both"

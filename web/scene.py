@@ -264,6 +264,12 @@ class SceneView:
             self._current_label.text = arrow.label
 
     # ----------------------------------------------------------------- per frame
+    def redraw(self) -> None:
+        """Send the moving parts and the current's arrow again at the next ``update``, however
+        little they moved: an update cut short by an error sent only some of them."""
+        self._last_pose = None
+        self._current_key = None
+
     def update(self, snap: Snapshot) -> None:
         if snap.scene.version != self._version:
             self._build(snap.scene)
