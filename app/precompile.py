@@ -135,8 +135,11 @@ def compile_all(part: str | None = None) -> None:
                         feedforward=True,
                     )
                     Simulation(ps, tree_depth_m=100.0, settings=settings).step(2)
+        # a request of several chunks: each writes into the request's rows (run_chunk_into)
+        Simulation(ps, tree_depth_m=100.0, chunk_steps=1).step(2)
     if other:
         Simulation(ps, tree_depth_m=100.0, control=False).step(2)
+        Simulation(ps, tree_depth_m=100.0, control=False, chunk_steps=1).step(2)
     # what the console does to a running simulation: every mode, every allocation in each,
     # the grip, the pilot's demand, and the readings its snapshot takes. Some of these call
     # kernels from Python with their own argument types; compiled here, they are loaded from

@@ -27,17 +27,11 @@ from sim import environment as envmod
 from sim import params
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--duration", type=float, default=600.0, help="simulated seconds")
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument("--params", default="full-scale")
-    args = parser.parse_args()
-    out = sys.stderr if args.json else sys.stdout  # --json: only the JSON on stdout
-    ps = params.load(args.params)
+def plant_current() -> envmod.CurrentParams:
+    """The benchmark's current: 0.1 m/s towards 225 deg, walking within +-0.05 m/s and
+    +-0.2 rad."""
     d = math.radians(225.0)
-    cur = envmod.CurrentParams(
+    return envmod.CurrentParams(
         speed_mps=0.1,
         direction_rad=d,
         speed_min_mps=0.05,
@@ -47,6 +41,18 @@ def main() -> None:
         speed_walk_mps_per_sqrt_s=0.002,
         direction_walk_rad_per_sqrt_s=0.002,
     )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--duration", type=float, default=600.0, help="simulated seconds")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--params", default="full-scale")
+    args = parser.parse_args()
+    out = sys.stderr if args.json else sys.stdout  # --json: only the JSON on stdout
+    ps = params.load(args.params)
+    cur = plant_current()
     t0 = time.perf_counter()
     Simulation(ps, tree_depth_m=400.0, current=cur, control=False).run_for(1.0)
     print(

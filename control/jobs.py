@@ -40,18 +40,18 @@ class ChunkJob:
     noise: np.ndarray  # sensor noise rows
     fresh: np.ndarray  # which sensors have a fresh sample at each step
     out: np.ndarray | None = None
-    """Where the chunk's log rows go, (n, N_LOG): a slice of its request's rows; None, a new
-    array. (A batch copies the rows from its slot there; ``run`` returns a new array and
-    the run copies it.)"""
+    """Where the chunk's log rows go, (n, N_LOG): a slice of its request's rows (C-contiguous);
+    None, a new array. A batch's kernel and ``run`` (``loop.run_chunk_into``) write the rows
+    straight there."""
 
     @property
     def n(self) -> int:
         return int(self.env.shape[0])
 
     def run(self) -> ChunkResult:
-        """Run the chunk alone, now."""
+        """Run the chunk alone, now (its rows straight into ``out`` when given)."""
         s = self.sim
-        return loop.run_chunk(
+        args = (
             s.step_index,
             s.x,
             s.held_y,
@@ -67,6 +67,10 @@ class ChunkJob:
             s.Q,
             s.dt_s,
         )
+        if self.out is None:
+            return loop.run_chunk(*args)
+        x, held_y, xhat, P_cov, cs, n_done = loop.run_chunk_into(*args, self.out)
+        return x, held_y, xhat, P_cov, cs, self.out, n_done
 
 
 def run_jobs(gen: Generator[ChunkJob, ChunkResult, T]) -> T:

@@ -776,10 +776,38 @@ def run_chunk(
 ):
     """Advance len(env) steps with the target held. Returns
     (x, held_y, xhat, Pc, cs, log (n, N_LOG), n_done); n_done < n when the plant diverged."""
-    n = env.shape[0]
-    log = np.zeros((n, N_LOG))
-    # the states are advanced in place (``_closed_steps``): copies, so the caller's arrays are
-    # left as they were
+    log = np.empty((env.shape[0], N_LOG))  # zeroed by ``run_chunk_into``
+    x, held_y, xhat, Pc, cs, n_done = run_chunk_into(
+        k0, x, held_y, xhat, Pc, cs, target, env, noise, fresh, P, C, Q, dt, log
+    )
+    return x, held_y, xhat, Pc, cs, log, n_done
+
+
+@njit(**JIT)
+def run_chunk_into(
+    k0: int,
+    x: np.ndarray,
+    held_y: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    cs: np.ndarray,
+    target: np.ndarray,
+    env: np.ndarray,
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    P: plant.PlantArrays,
+    C: ControlArrays,
+    Q: QualityState,
+    dt: float,
+    log: np.ndarray,
+):
+    """``run_chunk`` writing its rows into the caller's ``log`` (len(env), N_LOG), zeroed here
+    first, instead of into a new array: a request of several chunks hands each chunk its own
+    rows of the request's array (``Simulation.step_jobs``), which saves a copy of every row
+    (920 bytes a step) and the new array's zeroing. Returns (x, held_y, xhat, Pc, cs, n_done),
+    the states new arrays (the caller's are left as they were)."""
+    _zero_rows(log)
+    # the states are advanced in place (``_closed_steps``): copies
     x = x.copy()
     held_y = held_y.copy()
     xhat = xhat.copy()
@@ -790,7 +818,16 @@ def run_chunk(
         k0, x, held_y, xhat, Pc, cs, target, env, noise, fresh, P, C, Q, dt, log, work,
         make_control_work(),
     )  # fmt: skip
-    return x, held_y, xhat, Pc, cs, log, n_done
+    return x, held_y, xhat, Pc, cs, n_done
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _zero_rows(log: np.ndarray) -> None:
+    """Every number of ``log`` (rows, N_LOG) to 0.0 (the columns a step leaves unwritten stay
+    zero, as in a new array of zeros)."""
+    for j in range(log.shape[0]):
+        for i in range(log.shape[1]):
+            log[j, i] = 0.0
 
 
 @njit(**JIT_NOALLOC)
@@ -896,13 +933,32 @@ def run_open_chunk(
     """The plant with control off: len(env) steps at fixed propeller speeds ``n_rps``, sensors
     sampled at the end of each step. Returns (x, held_y, log (n, N_LOG), n_done); n_done < n
     when the plant diverged."""
-    n = env.shape[0]
-    log = np.zeros((n, N_LOG))
-    x = x.copy()  # advanced in place (see run_chunk)
+    log = np.empty((env.shape[0], N_LOG))  # zeroed by ``run_open_chunk_into``
+    x, held_y, n_done = run_open_chunk_into(k0, x, held_y, n_rps, env, noise, fresh, P, dt, log)
+    return x, held_y, log, n_done
+
+
+@njit(**JIT)
+def run_open_chunk_into(
+    k0: int,
+    x: np.ndarray,
+    held_y: np.ndarray,
+    n_rps: np.ndarray,
+    env: np.ndarray,
+    noise: np.ndarray,
+    fresh: np.ndarray,
+    P: plant.PlantArrays,
+    dt: float,
+    log: np.ndarray,
+):
+    """``run_open_chunk`` writing its rows into the caller's ``log`` (len(env), N_LOG), zeroed
+    here first (see ``run_chunk_into``). Returns (x, held_y, n_done)."""
+    _zero_rows(log)
+    x = x.copy()  # advanced in place (see run_chunk_into)
     held_y = held_y.copy()
     work = plant.make_work(n_rps.shape[0])
     n_done = _open_steps(k0, x, held_y, n_rps, env, noise, fresh, P, dt, log, work)
-    return x, held_y, log, n_done
+    return x, held_y, n_done
 
 
 @njit(**JIT_NOALLOC)

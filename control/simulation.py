@@ -731,8 +731,8 @@ class Simulation:
                 # most requests: one chunk, whose own fresh rows are the answer
                 out = yield from self._chunk(k)
             else:
-                # several chunks: each writes its rows straight into the request's (a
-                # batch copies them there from its slot; no join of the parts afterwards)
+                # several chunks: each writes its rows straight into the request's (the
+                # kernels' ``*_into`` forms, a batch's kernel too; no join of the parts)
                 if out is None:
                     out = np.empty((n, N_LOG))
                 yield from self._chunk(k, out[done : done + k])
@@ -988,7 +988,7 @@ class Simulation:
             self._sync_site()
         env, noise = self._chunk_inputs(n)
         if not self.control_on:
-            x, held, log, ok = loop.run_open_chunk(
+            args = (
                 self.step_index,
                 self.x,
                 self.held_y,
@@ -999,6 +999,11 @@ class Simulation:
                 self.arrays,
                 self.dt_s,
             )
+            if out is None:
+                x, held, log, ok = loop.run_open_chunk(*args)
+            else:  # the rows straight into the request's (no copy of them afterwards)
+                x, held, ok = loop.run_open_chunk_into(*args, out)
+                log = out
         elif self.C.alloc_kind == loop.ALLOC_EXTERNAL:
             x, held, self.xhat, self.P_cov, self.cs, log, ok = self._chunk_qp(env, noise)
         else:

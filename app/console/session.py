@@ -102,7 +102,12 @@ def load_first_chunk(mission: schema.Mission) -> None:
     away from the loop, and only the first time per process (a few milliseconds after). A
     step that fails here is left to the live run to report on its own first tick."""
     try:
-        build_simulation(mission).step(1)
+        sim = build_simulation(mission)
+        sim.step(1)
+        # and the form that writes a request of several chunks into the request's rows
+        # (``loop.run_chunk_into``: a tick's steps cut at a fault's edge)
+        sim.chunk_steps = 1
+        sim.step(2)
     except (SimulationDiverged, ValueError):
         pass
 
