@@ -3,7 +3,8 @@
 per wall second.
 
     .venv/bin/python benchmarks/batch_benchmark.py [--runs 64] [--repeat 3] [--json]
-    .venv/bin/python benchmarks/batch_benchmark.py --sizes 8,16,32,64 | --split 32 [--vary-mass]
+    .venv/bin/python benchmarks/batch_benchmark.py --sizes 8,16,32,64 [--repeat 3] [--vary-mass]
+    .venv/bin/python benchmarks/batch_benchmark.py --split 32 [--vary-mass]
 
 Three ways over the same runs: one after the other alone in this process (one core), all in
 one batch in this process (``control.batch.run_together``, one core), and split over two
@@ -18,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -139,13 +141,21 @@ def main() -> None:
         return
     _warm(runs)
     if args.sizes:
+        sizes = [int(v) for v in args.sizes.split(",")]
         sim_a, wall_a = alone(runs, indices)
         print(f"{runs} docking runs on one core, load before {load}")
         print(f"  alone          {sim_a / wall_a:7,.0f}x")
-        for size in (int(v) for v in args.sizes.split(",")):
-            parts = [together(runs, indices[k : k + size]) for k in range(0, runs, size)]
-            rate = sum(s for s, _ in parts) / sum(w for _, w in parts)
-            print(f"  batches of {size:3d} {rate:7,.0f}x")
+        rates: dict[int, list[float]] = {size: [] for size in sizes}
+        for _ in range(args.repeat):  # the sizes interleaved, round after round
+            for size in sizes:
+                parts = [together(runs, indices[k : k + size]) for k in range(0, runs, size)]
+                rates[size].append(sum(s for s, _ in parts) / sum(w for _, w in parts))
+        for size, r in rates.items():
+            every = ", ".join(f"{v:,.0f}" for v in r)
+            print(
+                f"  batches of {size:3d} best {max(r):7,.0f}x, median "
+                f"{statistics.median(r):7,.0f}x ({every})"
+            )
         return
     halves = [indices[: runs // 2], indices[runs // 2 :]]
     walls: dict[str, list[float]] = {"alone_one_core": [], "batch_one_core": [], "batch_two": []}
