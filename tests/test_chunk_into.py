@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from control import loop
+from control.columns import LAYOUT, M_MAX
 from control.simulation import Simulation
 from sim import environment as envmod
 from sim import params
@@ -66,8 +67,9 @@ def _chunk_args(sim: Simulation, env: np.ndarray) -> tuple:
 
 
 def test_the_rows_written_into_an_array_are_zeroed_first() -> None:
-    """Columns no step writes (the thruster slots beyond the ROV's) are 0.0 in a new array of
-    zeros; written into an array full of NaN they must come out 0.0 as well."""
+    """The thruster slots beyond the ROV's (and other columns a step leaves alone) are never
+    written by a step; written into an array full of NaN they must come out 0.0, as in a new
+    array of zeros, and every other number as ``run_chunk`` gives it."""
     sim = _sim(True)
     sim.step(3)
     env = sim._environment_chunk(20)
@@ -75,6 +77,9 @@ def test_the_rows_written_into_an_array_are_zeroed_first() -> None:
     into = np.full((20, loop.N_LOG), np.nan)
     x_into, _, _, _, _, done_into = loop.run_chunk_into(*_chunk_args(sim, env), into)
     assert done_new == done_into == 20
-    assert np.count_nonzero(log_new == 0.0) > 0  # some columns are unwritten: 0.0
+    assert not np.isnan(into).any()
+    unused = LAYOUT.take(into, "thruster_force")[:, sim.n_thrusters :]
+    assert unused.shape == (20, M_MAX - sim.n_thrusters) and unused.size > 0
+    assert np.all(unused == 0.0)
     assert np.array_equal(into, log_new)
     assert np.array_equal(x_into, x_new)
