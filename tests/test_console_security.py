@@ -158,7 +158,16 @@ def test_telemetry_refuses_foreign_origins_and_too_many_clients(served) -> None:
                 pass
         async with websockets.connect(uri, origin=served.base_url) as ws:
             assert "t_s" in await ws.recv()
+        # the server counts a client until its stream notices the close (up to one send
+        # period later): under a full test run's load the 16 below once connected inside that
+        # window, the 16th was refused and the extra one let in
+        deadline = time.monotonic() + 10.0
+        while served.app.state.telemetry_clients and time.monotonic() < deadline:
+            await asyncio.sleep(0.01)
+        assert served.app.state.telemetry_clients == 0, "a closed client still counted"
         clients = [await websockets.connect(uri) for _ in range(MAX_TELEMETRY_CLIENTS)]
+        for ws in clients:  # each one is streamed to, none was refused
+            assert "t_s" in await ws.recv()
         # the clients read what they are sent, as viewers do: a client that reads nothing is
         # dropped by the server in time (measured: all 16 gone within 45 s, and a 17th let in;
         # a full test run once took long enough between the first client and the extra one)
@@ -175,6 +184,24 @@ def test_telemetry_refuses_foreign_origins_and_too_many_clients(served) -> None:
             await asyncio.gather(*readers)
 
     asyncio.run(scenario())
+
+
+def test_a_closed_telemetry_client_frees_its_place_at_once(served) -> None:
+    """At 0.5 Hz the stream waits 2 s between sends; a client that closes is let go when it
+    closes, not at the next send (it counted towards MAX_TELEMETRY_CLIENTS until then)."""
+    uri = served.base_url.replace("http", "ws") + "/api/telemetry?rate_hz=0.5"
+
+    async def scenario() -> float:
+        async with websockets.connect(uri) as ws:
+            assert "t_s" in await ws.recv()
+            assert served.app.state.telemetry_clients == 1
+        closed = time.monotonic()
+        while served.app.state.telemetry_clients and time.monotonic() - closed < 5.0:
+            await asyncio.sleep(0.005)
+        return time.monotonic() - closed
+
+    # 1 s: half the send period, far above a local close's few milliseconds
+    assert asyncio.run(scenario()) < 1.0
 
 
 def test_settings_refuse_short_tokens_and_accept_loopback_spellings() -> None:

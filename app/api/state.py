@@ -74,7 +74,8 @@ async def _stream(
             if seq != last:
                 await asyncio.wait_for(websocket.send_text(text), SEND_TIMEOUT_S)
                 last = seq
-            await asyncio.sleep(1.0 / rate_hz)
+            # wait one send period, or less if the client goes: its place is free at once
+            await asyncio.wait({receiver}, timeout=1.0 / rate_hz)
     except (TimeoutError, WebSocketDisconnect, RuntimeError, OSError):
         pass
     finally:
