@@ -24,6 +24,8 @@ echo "test: ruff check, ruff format --check, mypy" >&2
 .venv/bin/ruff check "${code[@]}"
 .venv/bin/ruff format --check "${code[@]}"
 .venv/bin/mypy
-# two workers (this is a 2-core machine); a test module stays on one worker, because the
-# browser modules share one server and one Chromium per module. TEST_WORKERS=0 runs serially.
-exec .venv/bin/python -m pytest -n "${TEST_WORKERS:-2}" --dist loadfile "$@"
+# two workers (this is a 2-core machine); a test module stays on one worker (its module
+# fixtures: the browser modules share one server and one Chromium per module), and the browser
+# modules all on one worker, one after the other (tests/conftest.py says why and how).
+# TEST_WORKERS=0 runs serially.
+exec .venv/bin/python -m pytest -n "${TEST_WORKERS:-2}" --dist loadfile --no-loadscope-reorder "$@"
