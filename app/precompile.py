@@ -68,13 +68,15 @@ def main(argv: list[str] | None = None) -> None:
 
 PARTS = ("closed-loop", "open-loop-and-qp", "batch")
 """Three parts of the compile that share no large kernel, so that separate processes compile
-them at once: the closed loop's chunk kernel (``loop.run_chunk``) with the plant's own
-kernels as Python calls them (``plant.rk4_step_into``, ``rhs``, ...); the open loop's
+them at once: the closed loop's chunk kernel (``loop.run_chunk``); the open loop's
 (``loop.run_open_chunk``) with the QP allocation's step (``loop.control_step`` and
-``loop.finish_step``); and the batch kernel of campaigns
-(``control.batchkernel.batch_steps``) with the batch plant. Each part alone took 3-5 min
-on a quiet machine (each kernel that inlines the plant's or the control's step takes about a
-minute); side by side on two cores, 6-7 min."""
+``loop.finish_step``, which calls ``plant.rk4_step_into``) and the plant's own kernels as
+Python calls them (``plant.rk4_step_into``, ``rhs``, ...); and the batch kernel of campaigns
+(``control.batchkernel.batch_steps``) with the batch plant. On this repository's Zen 3 (2
+cores, the three side by side, 2026-11-27) the parts took 699 s, 978 s and 1 254 s when the
+plant's own kernels were in the closed loop's part (390 s of it, and ``rk4_step_into``
+compiled in two parts); each kernel that inlines the plant's step takes minutes
+(``loop._closed_steps`` 830 s of the closed loop's part, ``loop._open_steps`` 460 s)."""
 
 
 def compile_parts_at_once() -> None:
@@ -115,16 +117,18 @@ def compile_all(part: str | None = None) -> None:
         batch_plant.rk4_batch(
             np.zeros((plant.N_STATE, 2)), np.zeros((m, 2)), np.zeros((plant.N_ENV, 2)), arrays, 0.01
         )
-    if closed:
+    if other:
         # the plant's own kernels as tools, benchmarks and tests call them from Python (one
         # step, the right-hand side, a run of steps): compiled here rather than by the first
-        # test run (rk4_step_into is the step the other kernels call; rhs inlines the
-        # right-hand side once more)
+        # test run (rk4_step_into is the step the QP path's finish_step and the other kernels
+        # call, so this part compiles it once for both; rhs inlines the right-hand side once
+        # more)
         plant.rk4_step_into(x.copy(), x, n, env, arrays, 0.01, plant.make_work(m))
         plant.rk4_step(x, n, env, arrays, 0.01)
         plant.rhs_into(np.zeros(plant.N_STATE), x, np.zeros(6), env, arrays, plant.make_work(m))
         plant.rhs(x, n, env, arrays)
         plant.advance(x, n, env[None, :], arrays, 0.01)
+    if closed:
         for feedback in ("perfect", "ekf"):
             for allocation in ("pinv", "priority"):
                 for reference in ("first", "third"):
