@@ -73,7 +73,8 @@ them at once: the closed loop's chunk kernel (``loop.run_chunk``); the open loop
 ``loop.finish_step``, which calls ``plant.rk4_step_into``) and the plant's own kernels as
 Python calls them (``plant.rk4_step_into``, ``rhs``, ...); and the batch kernel of campaigns
 (``control.batchkernel.batch_steps``) with the batch plant. On this repository's Zen 3 (2
-cores, the three side by side, 2026-11-27) the parts took 699 s, 978 s and 1 254 s when the
+cores, the three side by side, numba's compile events recorded per function, 2026-11-27;
+docs/speed.md, seventeenth pass) the parts took 699 s, 978 s and 1 254 s when the
 plant's own kernels were in the closed loop's part (390 s of it, and ``rk4_step_into``
 compiled in two parts); each kernel that inlines the plant's step takes minutes
 (``loop._closed_steps`` 830 s of the closed loop's part, ``loop._open_steps`` 460 s)."""

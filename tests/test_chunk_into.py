@@ -15,7 +15,7 @@ from control import loop
 from control.columns import LAYOUT, M_MAX
 from control.simulation import Simulation
 from sim import environment as envmod
-from sim import params
+from sim import params, sensors
 
 CURRENT = envmod.CurrentParams(
     speed_mps=0.2,
@@ -59,7 +59,8 @@ def _chunk_args(sim: Simulation, env: np.ndarray) -> tuple:
     signal checks' state (the kernel updates that in place)."""
     n = env.shape[0]
     quality = type(sim.Q)(*(a.copy() for a in sim.Q))
-    noise, fresh = np.zeros((n, 11)), np.ones((n, 5), dtype=np.bool_)
+    noise = np.zeros((n, sensors.N_Y))  # noiseless samples, every sensor fresh every step
+    fresh = np.ones((n, sensors.N_SENSORS), dtype=np.bool_)
     return (
         sim.step_index, sim.x, sim.held_y, sim.xhat, sim.P_cov, sim.cs, sim.target, env, noise,
         fresh, sim.arrays, sim.C, quality, sim.dt_s,

@@ -147,6 +147,14 @@ async def _read_all(ws) -> None:
             pass
 
 
+async def _no_telemetry_clients(served, timeout_s: float = 10.0) -> None:
+    """Wait until the server counts no telemetry client (each closed one let go)."""
+    deadline = time.monotonic() + timeout_s
+    while served.app.state.telemetry_clients and time.monotonic() < deadline:
+        await asyncio.sleep(0.005)
+    assert served.app.state.telemetry_clients == 0, "a closed client still counted"
+
+
 def test_telemetry_refuses_foreign_origins_and_too_many_clients(served) -> None:
     from app.api.guards import MAX_TELEMETRY_CLIENTS
 
@@ -158,13 +166,10 @@ def test_telemetry_refuses_foreign_origins_and_too_many_clients(served) -> None:
                 pass
         async with websockets.connect(uri, origin=served.base_url) as ws:
             assert "t_s" in await ws.recv()
-        # the server counts a client until its stream notices the close (up to one send
-        # period later): under a full test run's load the 16 below once connected inside that
-        # window, the 16th was refused and the extra one let in
-        deadline = time.monotonic() + 10.0
-        while served.app.state.telemetry_clients and time.monotonic() < deadline:
-            await asyncio.sleep(0.01)
-        assert served.app.state.telemetry_clients == 0, "a closed client still counted"
+        # the server lets a client go once its stream has seen the close, a moment after it:
+        # the 16 below must not connect inside that moment (a full test run once had the 16th
+        # refused and the extra one let in, when the moment was a whole send period)
+        await _no_telemetry_clients(served)
         clients = [await websockets.connect(uri) for _ in range(MAX_TELEMETRY_CLIENTS)]
         for ws in clients:  # each one is streamed to, none was refused
             assert "t_s" in await ws.recv()
@@ -192,6 +197,7 @@ def test_a_closed_telemetry_client_frees_its_place_at_once(served) -> None:
     uri = served.base_url.replace("http", "ws") + "/api/telemetry?rate_hz=0.5"
 
     async def scenario() -> float:
+        await _no_telemetry_clients(served)  # the module's other tests' clients let go
         async with websockets.connect(uri) as ws:
             assert "t_s" in await ws.recv()
             assert served.app.state.telemetry_clients == 1
