@@ -12,8 +12,6 @@ from typing import Annotated
 
 import typer
 
-from app.recording import check_session, export_csv
-
 EXIT_COMPLETE, EXIT_TRUNCATED, EXIT_UNREADABLE = 0, 1, 2
 
 log_app = typer.Typer(
@@ -71,6 +69,8 @@ def check(
 ) -> None:
     """Say what is in a session log and whether it is complete (exit 0), cut off but readable
     (exit 1) or unreadable (exit 2)."""
+    from app.recording import check_session
+
     try:
         report = check_session(file)
     except ValueError as err:
@@ -96,6 +96,8 @@ def export(
 ) -> None:
     """Write the numeric channels as CSV: session_log.csv (every log column, exact), one file
     per plot channel, events.csv."""
+    from app.recording import export_csv
+
     try:
         written = export_csv(file, csv, overwrite=force)
     except (ValueError, FileExistsError) as err:

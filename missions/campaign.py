@@ -44,6 +44,7 @@ from control.config import ALLOCATIONS, FEEDBACKS
 from control.simulation import Simulation
 from missions import schema
 from missions.driver import MissionDriver
+from missions.limits import MAX_RUNS_PER_TASK as MAX_RUNS_PER_TASK
 from missions.scoring import MissionResult
 from missions.setup import build_simulation
 from sim import params as params_mod
@@ -768,13 +769,6 @@ def run_one(c: Campaign, base: schema.Mission, index: int) -> dict:
     except Exception as err:  # any failure of one run is that run's outcome
         return failed_row(inputs, f"{type(err).__name__}: {err}")
     return {**input_row(inputs), **outcome_row(result, sim.t_s, time.perf_counter() - t0)}
-
-
-MAX_RUNS_PER_TASK = 32
-"""Most runs of a campaign stepped together in one batch (one Dask task, ``run_block``).
-Measured on 64 docking runs on one core (``benchmarks/batch_benchmark.py --sizes
-8,16,32,64``, load 0.6): batches of 16 and 32 ran 3,358x and 3,492x against 2,337x alone, a
-batch of 64 2,978x (the control steps, still run by run, then go out of cache)."""
 
 
 def run_block(c: Campaign, base: schema.Mission, indices: Sequence[int]) -> list[dict]:

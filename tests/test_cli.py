@@ -37,3 +37,33 @@ def test_serve_says_what_a_token_needs():
     proc = cli("serve", "--token", "short")
     assert proc.returncode == 2
     assert "at least 16 printable characters" in proc.stderr and "Traceback" not in proc.stderr
+
+
+HEAVY = ("numba", "scipy", "control", "missions.campaign", "app.recording", "dask")
+"""What the simulation and the campaigns load (some 1.4 s on this machine): the command line's
+help and its option checks answer without them, and a command loads them when it runs."""
+
+
+def test_the_command_line_starts_without_the_simulation():
+    """Defect: ``rov-console --help`` took 2.2 s, the campaign and log subcommands importing
+    the campaign runner and the log reader (numba, scipy, the control core) at start-up."""
+    probe = "import sys, app.cli; print(' '.join(m for m in HEAVY if m in sys.modules))"
+    proc = subprocess.run(
+        [sys.executable, "-c", f"HEAVY = {HEAVY!r}\n{probe}"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "", f"loaded at start-up: {proc.stdout.strip()}"
+
+
+def test_runs_per_task_states_and_checks_its_range():
+    from missions import campaign
+
+    out = " ".join(cli("campaign", "run", "--help").stdout.split())
+    assert f"at most {campaign.MAX_RUNS_PER_TASK}) [1<=x<={campaign.MAX_RUNS_PER_TASK}]" in out
+    proc = cli("campaign", "run", "missing.toml", "--runs-per-task", "33")
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    said = " ".join(proc.stderr.split())
+    assert "'--runs-per-task': Input should be less than or equal to 32" in said

@@ -18,7 +18,7 @@ from typing import Annotated, Any
 import typer
 from typer.core import TyperGroup
 
-from missions import campaign as cm
+from missions.limits import MAX_RUNS_PER_TASK
 
 
 class _RunByDefault(TyperGroup):
@@ -71,14 +71,15 @@ def run_command(
         int | None,
         typer.Option(
             min=1,
-            max=cm.MAX_RUNS_PER_TASK,
+            max=MAX_RUNS_PER_TASK,
             help="runs stepped together in one batch per task (default: a quarter of the "
-            f"runs per worker, at most {cm.MAX_RUNS_PER_TASK})",
+            f"runs per worker, at most {MAX_RUNS_PER_TASK})",
         ),
     ] = None,
 ) -> None:
     """Run every run of a campaign on Dask; rows go to Parquet as they finish; then report."""
     from app.campaign import report, runner, store
+    from missions import campaign as cm
 
     try:
         campaign, base, text = cm.load_campaign(file)
@@ -133,6 +134,7 @@ def report_command(
 ) -> None:
     """Tables and the envelope figure of a results folder (written there again)."""
     from app.campaign import report, store
+    from missions import campaign as cm
 
     try:
         campaign, _, _ = store.open_results(results)
@@ -189,6 +191,7 @@ def rerun_command(
     a figure differs."""
     from app.campaign import runner
     from app.cli import _drive, _open_recorder, _write_new_events
+    from missions import campaign as cm
     from missions.driver import MissionDriver
 
     try:
@@ -249,6 +252,8 @@ def rerun_command(
 @campaign_app.command("list")
 def list_command() -> None:
     """The library's campaign files."""
+    from missions import campaign as cm
+
     for name in cm.library_names():
         c, _, _ = cm.load_campaign(name)
         typer.echo(f"{name:30s} {c.runs:5d} runs  {c.description}")
