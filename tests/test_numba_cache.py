@@ -77,6 +77,10 @@ def test_precompile_if_needed_compiles_once_per_version_and_prunes_the_others(
     monkeypatch.setattr(precompile, "cache_dir", lambda: here)
     monkeypatch.setattr(numba_cache, "CHOSEN", here)
     calls: list[int] = []
+    parts: list[int] = []
+    # neither compiles here: what is under test is the mark and the pruning around them (the
+    # parts' subprocesses would load the whole core from the real cache, 8 s a call)
+    monkeypatch.setattr(precompile, "compile_parts_at_once", lambda: parts.append(1))
     monkeypatch.setattr(precompile, "compile_all", lambda: calls.append(1))
     precompile.main(["--if-needed"])
     assert calls == [1] and (here / precompile.DONE_MARK).is_file()
@@ -85,6 +89,8 @@ def test_precompile_if_needed_compiles_once_per_version_and_prunes_the_others(
     assert calls == [1], "compiled already: nothing to do"
     precompile.main([])
     assert calls == [1, 1], "without --if-needed it compiles again"
+    if (os.cpu_count() or 1) >= 2:
+        assert parts == [1, 1], "the parts side by side first, each time it compiles"
 
 
 def test_precompile_leaves_the_folders_beside_a_users_cache_alone(
@@ -95,6 +101,7 @@ def test_precompile_leaves_the_folders_beside_a_users_cache_alone(
     mine = tmp_path / "my-cache"
     monkeypatch.setattr(precompile, "cache_dir", lambda: mine)
     monkeypatch.setattr(numba_cache, "CHOSEN", None)  # NUMBA_CACHE_DIR set by the user
+    monkeypatch.setattr(precompile, "compile_parts_at_once", lambda: None)
     monkeypatch.setattr(precompile, "compile_all", lambda: None)
     precompile.main([])
     assert theirs.is_dir() and (mine / precompile.DONE_MARK).is_file()

@@ -1,7 +1,8 @@
 """The plant's step allocates nothing (issue 15), and its work space carries no state.
 
 The allocation count is read from numba's runtime statistics, which are only kept when the
-process starts with ``NUMBA_NRT_STATS=1``: each check runs in a fresh interpreter. The
+process starts with ``NUMBA_NRT_STATS=1``: each probe runs in a fresh interpreter (all its
+cases in one). The
 compiled loop below calls a step 1 and 201 times; the two calls of the loop allocate the same
 number of blocks (its own set-up only) when the step allocates nothing. The same probe on the
 allocating wrapper ``plant.rk4_step`` must see its three arrays per step, so the instrument
@@ -9,6 +10,7 @@ is shown to see allocations."""
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import subprocess
@@ -43,41 +45,45 @@ def steps_wrapper(x, n, env, P, work, row, y, noise, fresh, reps):
     for k in range(reps):
         x = plant.rk4_step(x, n, env, P, 0.01)
 
-P = plant.plant_arrays(params.load(sys.argv[1]))
-m = P.thr_T.shape[1]
-x = np.zeros(plant.N_STATE)
-x[2] = x[14] = 5.0
-env = np.zeros(plant.N_ENV)
-env[plant.E_KH], env[plant.E_KZ], env[plant.E_LREST] = 1e3, 1e5, 4.0
-env[plant.E_GRIP] = 1.0  # gripper spring on
-env[plant.E_LAND] = 5.0 + P.tree_half_height - 0.01  # the tree's bottom in the seabed
-env[plant.E_WMASS], env[plant.E_WDAMP] = 50.0, 1e3  # elastic wire with its mass, damped
-env[plant.E_AC] = 0.1  # wave acceleration (Froude-Krylov)
-n = np.full(m, 3.0)
-work = plant.make_work(m)
-row = np.zeros(loop.N_LOG)
-y = np.zeros(11)
-noise = np.zeros(11)
-fresh = np.ones(5, dtype=np.bool_)
 out = {}
-for name, fn in (("into", steps_into), ("wrapper", steps_wrapper)):
-    fn(x.copy(), n, env, P, work, row, y, noise, fresh, 1)  # compile
-    counts = []
-    for reps in (1, 201):
-        before = rtsys.get_allocation_stats().alloc
-        fn(x.copy(), n, env, P, work, row, y, noise, fresh, reps)
-        counts.append(rtsys.get_allocation_stats().alloc - before)
-    out[name] = (counts[1] - counts[0]) / 200
+for scale in sys.argv[1:]:
+    P = plant.plant_arrays(params.load(scale))
+    m = P.thr_T.shape[1]
+    x = np.zeros(plant.N_STATE)
+    x[2] = x[14] = 5.0
+    env = np.zeros(plant.N_ENV)
+    env[plant.E_KH], env[plant.E_KZ], env[plant.E_LREST] = 1e3, 1e5, 4.0
+    env[plant.E_GRIP] = 1.0  # gripper spring on
+    env[plant.E_LAND] = 5.0 + P.tree_half_height - 0.01  # the tree's bottom in the seabed
+    env[plant.E_WMASS], env[plant.E_WDAMP] = 50.0, 1e3  # elastic wire with its mass, damped
+    env[plant.E_AC] = 0.1  # wave acceleration (Froude-Krylov)
+    n = np.full(m, 3.0)
+    work = plant.make_work(m)
+    row = np.zeros(loop.N_LOG)
+    y = np.zeros(11)
+    noise = np.zeros(11)
+    fresh = np.ones(5, dtype=np.bool_)
+    out[scale] = {}
+    for name, fn in (("into", steps_into), ("wrapper", steps_wrapper)):
+        fn(x.copy(), n, env, P, work, row, y, noise, fresh, 1)  # compile
+        counts = []
+        for reps in (1, 201):
+            before = rtsys.get_allocation_stats().alloc
+            fn(x.copy(), n, env, P, work, row, y, noise, fresh, reps)
+            counts.append(rtsys.get_allocation_stats().alloc - before)
+        out[scale][name] = (counts[1] - counts[0]) / 200
 print(json.dumps(out))
 """
 
 
-def _allocations_per_step(probe: str, *args: str) -> dict[str, float]:
-    """Run a probe script in a fresh interpreter with numba's allocation counter on; its last
-    line: the allocations per step of each kernel it measured."""
+def _allocations_per_step(probe: str, *cases: str) -> dict[str, dict[str, float]]:
+    """Run a probe script in a fresh interpreter with numba's allocation counter on, for each
+    of ``cases`` in turn (one interpreter for all: each would otherwise start and compile the
+    probe's loops again, some 8 s); its last line: the allocations per step of each kernel it
+    measured, by case."""
     env = dict(os.environ, NUMBA_NRT_STATS="1")
     done = subprocess.run(
-        [sys.executable, "-c", probe, *args],
+        [sys.executable, "-c", probe, *cases],
         cwd=ROOT,
         env=env,
         capture_output=True,
@@ -89,9 +95,17 @@ def _allocations_per_step(probe: str, *args: str) -> dict[str, float]:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-@pytest.mark.parametrize("scale", ["full-scale", "model-scale"])
+SCALES = ("full-scale", "model-scale")
+
+
+@functools.cache
+def _plant_allocations() -> dict[str, dict[str, float]]:
+    return _allocations_per_step(_PROBE, *SCALES)
+
+
+@pytest.mark.parametrize("scale", SCALES)
 def test_plant_step_sensors_and_log_row_allocate_nothing(scale: str) -> None:
-    per_step = _allocations_per_step(_PROBE, scale)
+    per_step = _plant_allocations()[scale]
     # the allocating wrapper: its state, and the work space's two arrays, every step
     assert per_step["wrapper"] == 3.0
     assert per_step["into"] == 0.0
@@ -158,16 +172,6 @@ from control.config import ControlSettings
 from control.simulation import Simulation
 from sim import params, plant
 
-feedback, allocation, mode = sys.argv[1:4]
-settings = ControlSettings(feedback=feedback, allocation=allocation, feedforward=True)
-sim = Simulation(params.load("model-scale"), tree_depth_m=400.0, settings=settings)
-sim.set_target(2.0, 1.0, 0.3)
-sim.step(50)
-sim.set_mode(mode)
-if mode == "manual":
-    sim.set_pilot_demand(0.2, 0.0, -0.1, 0.05)
-env, noise = sim._chunk_inputs(201)
-
 @njit
 def wrapper_steps(x, y, xhat, Pc, cs, target, C, Q, fresh, reps):
     row = np.zeros(loop.N_LOG)
@@ -176,41 +180,62 @@ def wrapper_steps(x, y, xhat, Pc, cs, target, C, Q, fresh, reps):
             k * 0.01, x, y, fresh, xhat, Pc, cs, target, C, Q, 0.01, row
         )
 
-def closed(n):
-    loop._closed_steps(
-        sim.step_index, sim.x.copy(), sim.held_y.copy(), sim.xhat.copy(), sim.P_cov.copy(),
-        sim.cs.copy(), sim.target, env[:n], noise.noise[:n], noise.fresh[:n], sim.arrays,
-        sim.C, sim.Q, sim.dt_s, np.zeros((n, loop.N_LOG)), plant.make_work(sim.n_thrusters),
-        loop.make_control_work(),
-    )
-
-def wrapper(n):
-    wrapper_steps(sim.x, sim.held_y, sim.xhat, sim.P_cov, sim.cs, sim.target, sim.C, sim.Q,
-                  noise.fresh[0], n)
-
 out = {}
-for name, fn in (("closed", closed), ("wrapper", wrapper)):
-    fn(1)  # compile
-    counts = []
-    for reps in (1, 201):
-        before = rtsys.get_allocation_stats().alloc
-        fn(reps)
-        counts.append(rtsys.get_allocation_stats().alloc - before)
-    out[name] = (counts[1] - counts[0]) / 200
+for case in sys.argv[1:]:
+    feedback, allocation, mode = case.split(",")
+    settings = ControlSettings(feedback=feedback, allocation=allocation, feedforward=True)
+    sim = Simulation(params.load("model-scale"), tree_depth_m=400.0, settings=settings)
+    sim.set_target(2.0, 1.0, 0.3)
+    sim.step(50)
+    sim.set_mode(mode)
+    if mode == "manual":
+        sim.set_pilot_demand(0.2, 0.0, -0.1, 0.05)
+    env, noise = sim._chunk_inputs(201)
+
+    def closed(n):
+        loop._closed_steps(
+            sim.step_index, sim.x.copy(), sim.held_y.copy(), sim.xhat.copy(), sim.P_cov.copy(),
+            sim.cs.copy(), sim.target, env[:n], noise.noise[:n], noise.fresh[:n], sim.arrays,
+            sim.C, sim.Q, sim.dt_s, np.zeros((n, loop.N_LOG)), plant.make_work(sim.n_thrusters),
+            loop.make_control_work(),
+        )
+
+    def wrapper(n):
+        wrapper_steps(sim.x, sim.held_y, sim.xhat, sim.P_cov, sim.cs, sim.target, sim.C, sim.Q,
+                      noise.fresh[0], n)
+
+    out[case] = {}
+    for name, fn in (("closed", closed), ("wrapper", wrapper)):
+        fn(1)  # compile
+        counts = []
+        for reps in (1, 201):
+            before = rtsys.get_allocation_stats().alloc
+            fn(reps)
+            counts.append(rtsys.get_allocation_stats().alloc - before)
+        out[case][name] = (counts[1] - counts[0]) / 200
 print(json.dumps(out))
 """
 
 
-@pytest.mark.parametrize(
-    ("feedback", "allocation", "mode"),
-    [("ekf", "priority", "tree"), ("ekf", "pinv", "free"), ("perfect", "priority", "manual")],
+CLOSED_CASES = (
+    ("ekf", "priority", "tree"),
+    ("ekf", "pinv", "free"),
+    ("perfect", "priority", "manual"),
 )
+
+
+@functools.cache
+def _closed_allocations() -> dict[str, dict[str, float]]:
+    return _allocations_per_step(_CLOSED_PROBE, *(",".join(c) for c in CLOSED_CASES))
+
+
+@pytest.mark.parametrize(("feedback", "allocation", "mode"), CLOSED_CASES)
 def test_closed_loop_step_allocates_nothing(feedback: str, allocation: str, mode: str) -> None:
     """The closed loop's step (sensors, signal checks, EKF, reference, controller, allocation,
     thrusters, plant, prediction, log row: ``control.loop._closed_steps``) allocates nothing,
     in each mode; the allocating wrapper ``loop.control_step`` (fresh arrays and a fresh work
     space per call) shows that the probe sees the step's allocations."""
-    per_step = _allocations_per_step(_CLOSED_PROBE, feedback, allocation, mode)
+    per_step = _closed_allocations()[f"{feedback},{allocation},{mode}"]
     # the wrapper's copies of xhat, P, cs, its tau6 and the work space's six arrays
     assert per_step["wrapper"] == 10.0
     assert per_step["closed"] == 0.0
