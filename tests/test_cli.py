@@ -58,6 +58,26 @@ def test_the_command_line_starts_without_the_simulation():
     assert proc.stdout.strip() == "", f"loaded at start-up: {proc.stdout.strip()}"
 
 
+def test_a_missing_log_is_reported_before_the_simulation_loads(tmp_path: Path):
+    """``rov-console report`` of a file that is not there answered after loading the report's
+    imports (the whole simulation, 2.6 s); it is told at once (0.6 s)."""
+    missing = tmp_path / "none.mcap"
+    probe = (
+        "import sys\nfrom app.cli import app\n"
+        f'try:\n    app(["report", {str(missing)!r}])\n'
+        "except SystemExit as done:\n"
+        "    print(done.code, ' '.join(m for m in HEAVY if m in sys.modules))\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", f"HEAVY = {HEAVY!r}\n{probe}"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert f"no log file {missing}" in proc.stderr
+    assert proc.stdout.strip() == "2", f"exit code and what was loaded: {proc.stdout.strip()}"
+
+
 def test_runs_per_task_states_and_checks_its_range():
     from missions import campaign
 
