@@ -4,7 +4,7 @@ frame limit (``tests.browser.SLOW_FRAMES``, ``--frame-ms``) and with or without 
 multisampling (``--multisampling``: the benchmarks' ``CHROMIUM_ARGS``; without, the tests'
 ``TEST_CHROMIUM_ARGS``).
 
-    .venv/bin/python benchmarks/browser_cpu.py [--frame-ms 600] [--multisampling] [--seconds 10]
+    .venv/bin/python benchmarks/browser_cpu.py [--frame-ms 1000] [--multisampling] [--seconds 10]
 
 The test suite's browser modules run beside another test worker on this 2-core machine; what
 a page takes from it is what this prints. Also the time of a screenshot (four, in seconds).

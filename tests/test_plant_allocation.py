@@ -10,7 +10,6 @@ is shown to see allocations."""
 
 from __future__ import annotations
 
-import functools
 import json
 import os
 import subprocess
@@ -98,14 +97,16 @@ def _allocations_per_step(probe: str, *cases: str) -> dict[str, dict[str, float]
 SCALES = ("full-scale", "model-scale")
 
 
-@functools.cache
-def _plant_allocations() -> dict[str, dict[str, float]]:
+@pytest.fixture(scope="module")
+def plant_allocations() -> dict[str, dict[str, float]]:
     return _allocations_per_step(_PROBE, *SCALES)
 
 
 @pytest.mark.parametrize("scale", SCALES)
-def test_plant_step_sensors_and_log_row_allocate_nothing(scale: str) -> None:
-    per_step = _plant_allocations()[scale]
+def test_plant_step_sensors_and_log_row_allocate_nothing(
+    plant_allocations: dict[str, dict[str, float]], scale: str
+) -> None:
+    per_step = plant_allocations[scale]
     # the allocating wrapper: its state, and the work space's two arrays, every step
     assert per_step["wrapper"] == 3.0
     assert per_step["into"] == 0.0
@@ -224,18 +225,20 @@ CLOSED_CASES = (
 )
 
 
-@functools.cache
-def _closed_allocations() -> dict[str, dict[str, float]]:
+@pytest.fixture(scope="module")
+def closed_allocations() -> dict[str, dict[str, float]]:
     return _allocations_per_step(_CLOSED_PROBE, *(",".join(c) for c in CLOSED_CASES))
 
 
 @pytest.mark.parametrize(("feedback", "allocation", "mode"), CLOSED_CASES)
-def test_closed_loop_step_allocates_nothing(feedback: str, allocation: str, mode: str) -> None:
+def test_closed_loop_step_allocates_nothing(
+    closed_allocations: dict[str, dict[str, float]], feedback: str, allocation: str, mode: str
+) -> None:
     """The closed loop's step (sensors, signal checks, EKF, reference, controller, allocation,
     thrusters, plant, prediction, log row: ``control.loop._closed_steps``) allocates nothing,
     in each mode; the allocating wrapper ``loop.control_step`` (fresh arrays and a fresh work
     space per call) shows that the probe sees the step's allocations."""
-    per_step = _closed_allocations()[f"{feedback},{allocation},{mode}"]
+    per_step = closed_allocations[f"{feedback},{allocation},{mode}"]
     # the wrapper's copies of xhat, P, cs, its tau6 and the work space's six arrays
     assert per_step["wrapper"] == 10.0
     assert per_step["closed"] == 0.0
