@@ -235,10 +235,18 @@ def unlock(pg, token: str) -> None:
     """Unlock this page's controls (nothing to do when they are unlocked already)."""
     if button(pg, "Lock controls").is_visible():
         return
-    field(pg, "Token").fill(token)
-    time.sleep(0.2)  # viser sends an input's value at most every 50 ms
-    click(pg, "Unlock controls")
-    pg.get_by_text("controls unlocked").wait_for(timeout=10_000)
+    # viser sends an input's value at most every 50 ms, and under load later: a click that
+    # overtakes the token is answered "wrong token" (or not seen), so try again, waiting longer
+    for settle_s in (0.2, 1.0, 3.0):
+        field(pg, "Token").fill(token)
+        time.sleep(settle_s)
+        click(pg, "Unlock controls")
+        try:
+            pg.get_by_text("controls unlocked").wait_for(timeout=10_000)
+            return
+        except _playwright().TimeoutError:
+            said = "wrong token" if pg.get_by_text("wrong token").count() else "nothing"
+    raise AssertionError(f"controls not unlocked after three tries; the page said {said}")
 
 
 def wait_for(predicate: Callable[[], bool], timeout_s: float, what: str) -> None:

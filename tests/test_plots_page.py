@@ -97,10 +97,22 @@ def test_plots_draw_and_keep_their_window_after_folding(page, api: httpx.Client)
     api.put("/api/run/speed", json={"speed": 5.0}).raise_for_status()
     try:
         frame = _frame(page)
-        shot = page.locator('iframe[title="plots"]').screenshot()
-        save(shot, "console_plots.png")
-        blue, red = _ink(shot)
-        assert blue > 40 and red > 40, f"traces drawn: {blue} blue, {red} red pixels"
+        # the traces grow with the run's time (5x here): a page that is ready after a few
+        # simulated seconds shows short ones (a fast machine: 36 red pixels at its first
+        # screenshot), so look until they are long enough to count
+        first: dict[str, Any] = {}
+
+        def drawn() -> bool:
+            first["shot"] = page.locator('iframe[title="plots"]').screenshot()
+            first["ink"] = _ink(first["shot"])
+            return first["ink"][0] > 40 and first["ink"][1] > 40
+
+        try:
+            wait_for(drawn, 30.0, "the traces on screen")
+        except AssertionError:
+            blue, red = first["ink"]
+            raise AssertionError(f"traces drawn: {blue} blue, {red} red pixels") from None
+        save(first["shot"], "console_plots.png")
         folder = page.locator("xpath=//*[normalize-space(.)='Plots']").first
         folder.click()  # fold: the plots go out of sight
         page.wait_for_selector('iframe[title="plots"]', state="hidden", timeout=30_000)

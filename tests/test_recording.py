@@ -955,8 +955,12 @@ def test_a_viewers_replay_runs_on_its_own_clock_beside_the_live_run(session, tmp
     t0 = viewer.status().t_s
     viewer.advance(2.0, now=100.0)
     assert viewer.status().t_s == t0, "not playing: the clock stands"
-    viewer.play(True)
-    viewer.advance(2.0, now=1000.0)  # the first call after play starts the clock
+    # play and advance on the same clock: the test's own, not the machine's monotonic clock
+    # (which is the machine's uptime: played on it, a machine up less than 1 000 s saw the
+    # first advance as a stall and the replay 2 s ahead)
+    viewer.play(True, now=1000.0)
+    viewer.advance(2.0, now=1000.0)  # no wall time yet: the clock stands
+    assert viewer.status().t_s == t0
     viewer.advance(2.0, now=1000.5)  # 0.5 s of wall time at 2x: 1 s of the recording
     # rows are 20 Hz: the shown row is the last at or before the clock
     assert viewer.status().t_s == pytest.approx(t0 + 1.0, abs=0.05 + 1e-9)

@@ -112,13 +112,16 @@ class ViewerReplay:
     def name(self) -> str:
         return self._replay.name
 
-    def play(self, playing: bool) -> ReplayStatus:
+    def play(self, playing: bool, now: float | None = None) -> ReplayStatus:
+        """Play from ``now`` (the wall clock ``advance`` is given; ``time.monotonic`` unless
+        told), or pause."""
+        now = time.monotonic() if now is None else now
         with self._lock:
             rp = self._replay
             if playing and rp.at_end:
                 rp.seek(rp.start_s)
             rp.playing = playing
-            self._wall = time.monotonic() if playing else None
+            self._wall = now if playing else None
             return rp.status()
 
     def seek(self, t_s: float) -> ReplayStatus:
