@@ -93,6 +93,27 @@ def _ink(png: bytes) -> tuple[int, int]:
     return int(np.sum(b - r > 60)), int(np.sum(r - b > 60))
 
 
+def _traces_on_screen(page, timeout_s: float, what: str, failed_png: str) -> bytes:
+    """A screenshot of the plots iframe once both traces show (more than 40 pixels each),
+    looked for until ``timeout_s``; else an error with the last counts and its screenshot."""
+    last: dict[str, Any] = {}
+
+    def inked() -> bool:
+        last["shot"] = page.locator('iframe[title="plots"]').screenshot()
+        last["ink"] = _ink(last["shot"])
+        return last["ink"][0] > 40 and last["ink"][1] > 40
+
+    try:
+        wait_for(inked, timeout_s, what)
+    except AssertionError:
+        where = save(last["shot"], failed_png)
+        blue, red = last["ink"]
+        raise AssertionError(
+            f"{what}: {blue} blue, {red} red pixels; the last screenshot is {where}"
+        ) from None
+    return bytes(last["shot"])
+
+
 def test_plots_draw_and_keep_their_window_after_folding(page, api: httpx.Client) -> None:
     api.put("/api/run/speed", json={"speed": 5.0}).raise_for_status()
     try:
@@ -100,19 +121,8 @@ def test_plots_draw_and_keep_their_window_after_folding(page, api: httpx.Client)
         # the traces grow with the run's time (5x here): a page that is ready after a few
         # simulated seconds shows short ones (a fast machine: 36 red pixels at its first
         # screenshot), so look until they are long enough to count
-        first: dict[str, Any] = {}
-
-        def drawn() -> bool:
-            first["shot"] = page.locator('iframe[title="plots"]').screenshot()
-            first["ink"] = _ink(first["shot"])
-            return first["ink"][0] > 40 and first["ink"][1] > 40
-
-        try:
-            wait_for(drawn, 30.0, "the traces on screen")
-        except AssertionError:
-            blue, red = first["ink"]
-            raise AssertionError(f"traces drawn: {blue} blue, {red} red pixels") from None
-        save(first["shot"], "console_plots.png")
+        shot = _traces_on_screen(page, 30.0, "traces drawn", "console_plots_failed.png")
+        save(shot, "console_plots.png")
         folder = page.locator("xpath=//*[normalize-space(.)='Plots']").first
         folder.click()  # fold: the plots go out of sight
         page.wait_for_selector('iframe[title="plots"]', state="hidden", timeout=30_000)
@@ -136,21 +146,9 @@ def test_plots_draw_and_keep_their_window_after_folding(page, api: httpx.Client)
         # and on screen: the panel may still be opening (a screenshot of the iframe's box
         # then shows part of the scene; seen once in a full run: 0 blue pixels after the
         # ticks and widths above were right), so look again until the traces show
-        last: dict[str, Any] = {}
-
-        def inked() -> bool:
-            last["shot"] = page.locator('iframe[title="plots"]').screenshot()
-            last["ink"] = _ink(last["shot"])
-            return last["ink"][0] > 40 and last["ink"][1] > 40
-
-        try:
-            wait_for(inked, 15.0, "the traces on screen again after unfolding")
-        except AssertionError:
-            where = save(last["shot"], "console_plots_unfolded_failed.png")
-            raise AssertionError(
-                f"not drawn again after unfolding: {last['ink'][0]} blue, {last['ink'][1]} "
-                f"red pixels; the last screenshot is {where}"
-            ) from None
+        _traces_on_screen(
+            page, 15.0, "not drawn again after unfolding", "console_plots_unfolded_failed.png"
+        )
     finally:
         api.put("/api/run/speed", json={"speed": 1.0}).raise_for_status()
 
