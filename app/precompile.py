@@ -17,7 +17,9 @@ import os
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -129,6 +131,8 @@ def compile_all(part: str | None = None) -> None:
         plant.rhs_into(np.zeros(plant.N_STATE), x, np.zeros(6), env, arrays, plant.make_work(m))
         plant.rhs(x, n, env, arrays)
         plant.advance(x, n, env[None, :], arrays, 0.01)
+    if other:
+        compile_entry_points(arrays)
     if closed:
         for feedback in ("perfect", "ekf"):
             for allocation in ("pinv", "priority"):
@@ -171,6 +175,86 @@ def compile_all(part: str | None = None) -> None:
             sim.step(2)
             sim.set_grip(True)
             sim.step(2)
+
+
+def compile_entry_points(arrays: object) -> None:
+    """The small kernels that Python calls directly (not only from inside the chunk kernels,
+    which inline them): the landing plan's hold (``plant.hold_needed_xyn``), the scoring's
+    angle wrap, the site's wire offset, the allocation's thruster maps, and the plant's,
+    observer's, controller's and reference's pieces as the unit tests and tools call them.
+    Each is compiled for the argument types it is called with (``dispatcher.compile``, nothing
+    run), so a fresh clone's first docking, or first test run, does not compile them (the
+    tests spent 55-98 s on it, the eighteenth speed pass). A call with other types still
+    compiles on first use, as before."""
+    from numba import typeof, types
+    from numba.core.errors import NumbaPerformanceWarning
+
+    from control import allocation, ekf, pid, quality, refkernel
+    from sim import gnc, plant, sensors, thrusters, wire
+
+    f8, i8, b1 = types.float64, types.int64, types.boolean
+    a1, a2, a3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
+    any1 = types.float64[:]
+    ro1 = types.Array(f8, 1, "C", readonly=True)
+    i1, i2 = types.int64[::1], types.int64[:, ::1]
+    ro_i1 = types.Array(i8, 1, "C", readonly=True)
+    bools = types.boolean[::1]
+    pa = typeof(arrays)  # PlantArrays
+    signatures: list[tuple[Any, tuple[Any, ...]]] = [
+        (gnc.ssa, (f8,)),
+        (gnc.ssa, (a1,)),
+        (gnc.ssa_each, (a1,)),
+        (gnc.Tzyx, (f8, f8)),
+        (gnc.m2c, (a2, a1)),
+        (gnc.mv, (a2, a1)),
+        (gnc.cross, (a1, a1)),
+        (gnc.coriolis_force, (a2, a1)),
+        (gnc.euler_from_rotation, (a2,)),
+        (wire.horizontal_offset_c, (f8, f8, f8, f8, f8)),
+        (wire.horizontal_offset_c, (f8, f8, f8, i8, f8)),
+        (plant.hold_needed_xyn, (a2, f8, a1, pa)),
+        (plant.attachment_velocity_n, (a1, a2, a1)),
+        (plant.tree_wrench, (a1, a1, pa, a2)),
+        (plant.rov_wrench, (a1, a1, a1, pa, a2)),
+        (plant.coupling_wrench, (a1, pa, a2, a2)),
+        (plant.contact_wrench, (a1, a1, pa, a2)),
+        (plant.contact_energy, (a1, a1, pa)),
+        (plant.contact_reach, (pa,)),
+        (plant.post_penetration, (a1, pa)),
+        (plant._post_top, (a1, a1, pa, i8)),
+        (plant._post_top, (any1, any1, pa, i8)),
+        (plant._corner_body, (pa, i8)),
+        (sensors.sample_into, (a1, a1, a1, a1, bools, i1)),
+        (sensors.sample_into, (a1, a1, a1, a1, bools, ro_i1)),
+        (ekf.predict, (a1, a2, a1, f8, a2, a2, a1, a1, f8, a1, a1, a2)),
+        (ekf.correct, (a1, a2, a1, i1, a1, i8)),
+        (ekf.model_rhs, (a1, a1, a2, a2, a1, a1, f8, a1, a1)),
+        (ekf.jacobian_phi_into, (a2, a1, f8, f8, f8, a2, a2, a1, a1, f8, a1, a1)),
+        (pid.ned_to_body, (a1, f8)),
+        (pid.tree_pid, (a1,) * 9 + (b1, a2, a1, a1, f8, a1, a2, a2, a1, f8)),
+        (
+            quality.check_sample,
+            (i8, a1, f8, a1, a1, i1, a2, i2, a1, a1, a1, a1, i1, a1, i1, i1),
+        ),
+        (refkernel._first_kernel, (a1, a1, a1, f8)),
+        (refkernel.first_order_step, (a1, a1, f8, a2)),
+        (refkernel.third_order_step, (a1, a1, f8, a2)),
+        (refkernel.reference_step, (i8, a1, a1, f8, a2)),
+        (refkernel.reference_step_into, (a1, i8, a1, a1, f8, a2)),
+        (allocation._priority_forces, (a2, a3, a3, a1, a1, a1, f8)),
+    ]
+    # the thrusters' maps: the parameter sets' arrays are read-only, a caller's own are not
+    for speed_or_thrust in (thrusters.speed_from_thrust, thrusters.thrust_from_speed):
+        for first, rest in ((a1, a1), (a1, ro1), (ro1, ro1)):
+            signatures.append((speed_or_thrust, (first, rest, rest, rest)))
+    for into in (thrusters.speed_from_thrust_into, thrusters.thrust_from_speed_into):
+        for second, rest in ((a1, a1), (a1, ro1), (ro1, ro1)):
+            signatures.append((into, (a1, second, rest, rest, rest)))
+    signatures.append((thrusters.speed_from_thrust_into, (a1, ro1, a1, a1, a1)))
+    with warnings.catch_warnings():  # gnc.m2c's '@' on a block of M: a reference form, not
+        warnings.simplefilter("ignore", NumbaPerformanceWarning)  # the step's
+        for kernel, sig in signatures:
+            kernel.compile(sig)
 
 
 if __name__ == "__main__":

@@ -89,8 +89,12 @@ def _time_open_step(x, y, n, env, P, reps):
     noise = np.zeros((chunk, y.shape[0]))
     fresh = np.ones((chunk, 5), dtype=np.bool_)
     done = 0
+    # the first step's index as a typed int, as ``Simulation`` passes it: a literal 0 here
+    # had numba compile the open loop's chunk kernel again for ``Literal[int](0)``, minutes
+    # of the benchmark's first run after a fresh set-up
+    k0 = np.int64(0)
     for _ in range(reps // chunk):
-        done += loop.run_open_chunk(0, x, y, n, env_rows, noise, fresh, P, 0.01)[3]
+        done += loop.run_open_chunk(k0, x, y, n, env_rows, noise, fresh, P, 0.01)[3]
     return done
 
 
