@@ -72,8 +72,9 @@ PARTS = ("closed-loop", "open-loop-and-qp", "batch")
 """Three parts of the compile that share no large kernel, so that separate processes compile
 them at once: the closed loop's chunk kernel (``loop.run_chunk``); the open loop's
 (``loop.run_open_chunk``) with the QP allocation's step (``loop.control_step`` and
-``loop.finish_step``, which calls ``plant.rk4_step_into``) and the plant's own kernels as
-Python calls them (``plant.rk4_step_into``, ``rhs``, ...); and the batch kernel of campaigns
+``loop.finish_step``, which calls ``plant.rk4_step_into``), the plant's own kernels as
+Python calls them (``plant.rk4_step_into``, ``rhs``, ...) and the small kernels Python calls
+directly (``compile_entry_points``); and the batch kernel of campaigns
 (``control.batchkernel.batch_steps``) with the batch plant. On this repository's Zen 3 (2
 cores, the three side by side, numba's compile events recorded per function, 2026-11-27;
 docs/speed.md, seventeenth pass) the parts took 699 s, 978 s and 1 254 s when the
