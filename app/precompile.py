@@ -19,9 +19,12 @@ import sys
 import time
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from sim.plant import PlantArrays
 
 DONE_MARK = "precompiled"
 """The file written into the cache folder once every kernel is in it."""
@@ -178,14 +181,14 @@ def compile_all(part: str | None = None) -> None:
             sim.step(2)
 
 
-def compile_entry_points(arrays: object) -> None:
+def compile_entry_points(arrays: PlantArrays) -> None:
     """The small kernels that Python calls directly (not only from inside the chunk kernels,
     which inline them): the landing plan's hold (``plant.hold_needed_xyn``), the scoring's
     angle wrap, the site's wire offset, the allocation's thruster maps, and the plant's,
     observer's, controller's and reference's pieces as the unit tests and tools call them.
     Each is compiled for the argument types it is called with (``dispatcher.compile``, nothing
     run), so a fresh clone's first docking, or first test run, does not compile them (the
-    tests spent 55-98 s on it, the eighteenth speed pass). A call with other types still
+    tests spent 55-98 s on it: docs/speed.md, nineteenth pass). A call with other types still
     compiles on first use, as before."""
     from numba import typeof, types
     from numba.core.errors import NumbaPerformanceWarning
@@ -200,7 +203,7 @@ def compile_entry_points(arrays: object) -> None:
     i1, i2 = types.int64[::1], types.int64[:, ::1]
     ro_i1 = types.Array(i8, 1, "C", readonly=True)
     bools = types.boolean[::1]
-    pa = typeof(arrays)  # PlantArrays
+    pa = typeof(arrays)
     signatures: list[tuple[Any, tuple[Any, ...]]] = [
         (gnc.ssa, (f8,)),
         (gnc.ssa, (a1,)),

@@ -132,10 +132,9 @@ print(json.dumps({name: sorted(sigs) for name, sigs in used.items() if sigs}))
 
 def _kernels_used(*args: str) -> dict[str, set[str]]:
     """(kernel, argument types) a fresh process called, loaded or compiled, doing ``args``."""
-    out = subprocess.run(
-        [sys.executable, "-c", _USED, *args], capture_output=True, text=True, check=True
-    ).stdout
-    return {name: set(sigs) for name, sigs in json.loads(out.splitlines()[-1]).items()}
+    proc = subprocess.run([sys.executable, "-c", _USED, *args], capture_output=True, text=True)
+    assert proc.returncode == 0, f"{args}: {proc.stderr[-2000:]}"
+    return {name: set(sigs) for name, sigs in json.loads(proc.stdout.splitlines()[-1]).items()}
 
 
 def test_the_precompile_covers_every_kernel_a_library_mission_calls() -> None:
