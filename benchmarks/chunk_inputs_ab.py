@@ -68,11 +68,11 @@ def main() -> None:
     old_env = _old_environment()
     new_forms = (sensors.draw_noise, envmod.advance_current)
 
-    def old_noise(cfg, rng, first_step, n):
+    def old_noise(cfg, dropouts, normals, first_step, n):
         decimation, period = cfg.pattern_key
         due = sensors._due_pattern(decimation, first_step % period, n)
-        kept = rng.random((n, sensors.N_SENSORS)) >= cfg.dropout_probability[None, :]
-        noise = rng.standard_normal((n, sensors.N_Y)) * cfg.noise_std[None, :]
+        kept = dropouts.random((n, sensors.N_SENSORS)) >= cfg.dropout_probability[None, :]
+        noise = normals.standard_normal((n, sensors.N_Y)) * cfg.noise_std[None, :]
         return sensors.NoiseChunk(noise=noise, fresh=due & kept)
 
     def old_current(state, p, dt, n, rng):

@@ -92,6 +92,19 @@ GRIP_REACH_DEG = 10.0
 spring would yank the tree round (12 deg from 100 deg off, in the console defect report)."""
 
 
+REFRESH_S = 1.0
+"""How often the slow parts of the environment are brought up to date [s]: the quasi-static
+wire's stiffnesses and drag offset (from the current at that step, the payout and the crane
+tip), the control model's wire spring (its stiffness for the payout, its equilibrium under
+the crane tip), the point where the waves and the vessel's motion are evaluated, and the
+elastic wire's lumped mass. On the whole seconds of the step grid (steps 0, 1/dt, 2/dt...),
+and chunks end there, so a run gives the same numbers however it is cut into requests (the
+console's ticks, the command line's requests, a batch). A second is short beside how fast any
+of them changes: the current walks by millimetres a second, the winch pays out at most 2 m/s
+on a wire hundreds of metres long (its horizontal stiffness moves by 1 % at most), and the
+tree moves centimetres against waves hundreds of metres long."""
+
+
 class SimulationDiverged(RuntimeError):
     """The plant state stopped being finite."""
 
@@ -178,7 +191,6 @@ class Simulation:
         self.wire_model = wire
         """``quasi-static`` or ``elastic`` (see ``WIRE_MODELS``)."""
         self.wire_damping_ratio = float(wire_damping_ratio)
-        self._pivot_velocity_n = np.zeros(3)
         if not (DT_RANGE_S[0] <= dt_s <= DT_RANGE_S[1]):
             raise ValueError(
                 f"dt_s must be in [{DT_RANGE_S[0]:g}, {DT_RANGE_S[1]:g}] s, got {dt_s}"
@@ -191,6 +203,8 @@ class Simulation:
         self.plant_ps = plant_ps or ps
         self.dt_s = dt_s
         self.chunk_steps = chunk_steps
+        self.refresh_steps = max(1, round(REFRESH_S / dt_s))
+        """Steps between refreshes of the slow parts of the environment (``REFRESH_S``)."""
         self.has_rov = has_rov
         self.control_on = control
         self.vessel_motion = vessel
@@ -270,11 +284,23 @@ class Simulation:
         """The wire's and the tree's numbers behind every chunk's wire entries."""
         self._frame_entries = np.zeros(5)  # site.chunk_rows_into's ``frame``
         self._chunk_out = np.zeros(6)  # and its ``out``
-        self._k_h_memo: tuple[float, float] | None = None
-        self.rng = np.random.default_rng(seed)
+        self._wire_held = np.zeros(plant.N_ENV)  # the wire's slow entries (REFRESH_S)
+        self._site_k_h = 0.0  # the control model's wire spring at the last refresh
+        self._refresh_wire_k_h_m = math.nan  # the payout _site_k_h is for
+        self._site_p_eq = np.zeros(2)
+        self._refresh_point = np.zeros(5)  # tree north, east, depth; crane tip north, east
+        self._pivot_tops = np.zeros((0, 3))  # the elastic wire's top, the last two steps
+        self._refresh_wire_m = 0.0  # the payout at the last refresh [m]
+        # One stream per purpose, each spawned from the seed and read in step order, so the
+        # numbers a step gets do not depend on how the run is cut into chunks, nor on what
+        # else draws (a current that walks leaves the sensors' noise as it is).
+        streams = np.random.SeedSequence(seed).spawn(4)
+        self.rng_current, self.rng_dropouts, self.rng_noise, rng_waves = (
+            np.random.default_rng(s) for s in streams
+        )
         self.current_params = current or steady_current(0.0, 0.0)
         self.current_state = envmod.initial_current(self.current_params)
-        self.wave_field = envmod.make_wave_field(waves, self.rng) if waves is not None else None
+        self.wave_field = envmod.make_wave_field(waves, rng_waves) if waves is not None else None
         self.wave_load = waves.load if waves is not None else envmod.DEFAULT_WAVE_LOAD
         """How the waves load the bodies (sim.environment.WAVE_LOADS)."""
         self.crane_tip_n = finite_vector("crane_tip_n", crane_tip_n, 3)
@@ -724,7 +750,12 @@ class Simulation:
         out: FloatArray | None = None
         done = 0
         while done < n:
-            k = min(self.chunk_steps, int(n) - done, self._steps_to_fault_edge())
+            k = min(
+                self.chunk_steps,
+                int(n) - done,
+                self._steps_to_fault_edge(),
+                self.refresh_steps - self.step_index % self.refresh_steps,
+            )
             if self.mdwire is not None:
                 k = 1  # MoorDyn and the plant take turns, one step each
             if done == 0 and k == n:
@@ -742,20 +773,36 @@ class Simulation:
         out.flags.writeable = False  # shared by the joins of whoever reads them (LogRows.join)
         return LogRows(out, self.n_thrusters, self.Q.counters.copy())
 
+    def _refreshing(self) -> bool:
+        """This chunk starts on a whole second of the step grid (``REFRESH_S``)."""
+        return self.step_index % self.refresh_steps == 0
+
+    def _refresh(self) -> None:
+        """Take the slow parts' inputs at this step (``REFRESH_S``): the payout, the tree's
+        position for the waves, the crane tip's for the vessel's motion, and, with control,
+        the control model's wire spring."""
+        x, tip = self.x, self.crane_tip_n
+        self._refresh_wire_m = self.wire_length_m
+        self._refresh_point[:] = (x[0], x[1], x[2], tip[0], tip[1])
+        if self.control_on:
+            if self.wire_length_m != self._refresh_wire_k_h_m:
+                self._site_k_h = float(
+                    wm.horizontal_stiffness(
+                        self.plant_ps.wire.submerged_weight_per_length(),
+                        self.ps.tree.submerged_weight_newton,
+                        self.wire_length_m,
+                    )
+                )
+                self._refresh_wire_k_h_m = self.wire_length_m
+            self._site_p_eq = tip[0:2].copy()
+
     def _sync_site(self) -> None:
-        """The vessel's position and the wire length are known on board: keep the control
-        plant model's wire spring (equilibrium point and stiffness) up to date."""
-        if self._k_h_memo is None or self._k_h_memo[0] != self.wire_length_m:
-            k = wm.horizontal_stiffness(
-                self.plant_ps.wire.submerged_weight_per_length(),
-                self.ps.tree.submerged_weight_newton,
-                self.wire_length_m,
-            )
-            self._k_h_memo = (self.wire_length_m, float(k))
-        k_h = self._k_h_memo[1]
-        p_eq, tip = self.C.p_eq, self.crane_tip_n
-        if k_h != self.C.k_h or p_eq[0] != tip[0] or p_eq[1] != tip[1]:
-            self.C = self.C._replace(k_h=float(k_h), p_eq=self.crane_tip_n[0:2].copy())
+        """The vessel's position and the wire length are known on board: the control plant
+        model's wire spring (equilibrium point and stiffness) as at the last refresh, put
+        into its configuration again if anything (new gains, a new mode) replaced it."""
+        k_h, p_eq, now = self._site_k_h, self._site_p_eq, self.C.p_eq
+        if k_h != self.C.k_h or now[0] != p_eq[0] or now[1] != p_eq[1]:
+            self.C = self.C._replace(k_h=k_h, p_eq=p_eq.copy())
 
     def _chunk_inputs(self, n: int) -> tuple[FloatArray, sensors.NoiseChunk]:
         """Environment rows and sensor noise for the next n steps. Injected faults (sensor
@@ -763,7 +810,9 @@ class Simulation:
         if self.faults:
             self._faults_before_chunk()
         env = self._environment_chunk(n)
-        noise = sensors.draw_noise(self.sensor_cfg, self.rng, self.step_index, n)
+        noise = sensors.draw_noise(
+            self.sensor_cfg, self.rng_dropouts, self.rng_noise, self.step_index, n
+        )
         if self.faults:
             self._faults_in_chunk(env, noise)
         self._vessel_in_chunk(env, n)
@@ -810,23 +859,26 @@ class Simulation:
         env[:, plant.E_WEXT] = 1.0
 
     def _elastic_wire_in_chunk(self, env: FloatArray) -> None:
-        """The elastic wire's entries: the lumped wire mass m_wire L / 3, the dashpot
-        c = 2 zeta sqrt(k_z (M + A33 + m_wire L / 3)), and the velocity of the wire's top (the
-        crane tip's motion and the winch's pay-out) from the chunk's own rows (second-order
-        differences; a one-step chunk keeps the last velocity)."""
+        """The elastic wire's entries: the lumped wire mass m_wire L / 3 (L the payout at the
+        last refresh, ``REFRESH_S``), the dashpot c = 2 zeta sqrt(k_z (M + A33 + m_wire L / 3)),
+        and the velocity of the wire's top (the crane tip's motion and the winch's pay-out)
+        from the rows by the second-order backward difference (3 p_j - 4 p_j-1 + p_j-2) / 2 dt,
+        whose two earlier points carry over from the chunk before (the first step of a run
+        takes the top as still before it), so the velocities do not depend on the cut."""
         ps = self.plant_ps
-        m_wire = ps.wire.mass_per_length_kg_m * self.wire_length_m / 3.0
+        m_wire = ps.wire.mass_per_length_kg_m * self._refresh_wire_m / 3.0
         m_heave = ps.tree.M_rb[2, 2] + ps.tree.M_a[2, 2] + m_wire
         k_z = env[:, plant.E_KZ]
         env[:, plant.E_WMASS] = m_wire
         env[:, plant.E_WDAMP] = 2.0 * self.wire_damping_ratio * np.sqrt(k_z * m_heave)
         top = env[:, plant.E_CT : plant.E_CT + 3].copy()
         top[:, 2] += env[:, plant.E_LREST]
-        if len(env) >= 2:
-            vel = np.gradient(top, self.dt_s, axis=0)
-            self._pivot_velocity_n = vel[-1].copy()
-        else:
-            vel = self._pivot_velocity_n[None, :]
+        before = self._pivot_tops
+        if len(before) == 0:
+            before = np.vstack([top[0], top[0]])
+        tops = np.vstack([before, top])
+        vel = (3.0 * tops[2:] - 4.0 * tops[1:-1] + tops[:-2]) / (2.0 * self.dt_s)
+        self._pivot_tops = tops[-2:].copy()
         env[:, plant.E_VPIV : plant.E_VPIV + 3] = vel
 
     def _vessel_in_chunk(self, env: FloatArray, n: int) -> None:
@@ -840,8 +892,8 @@ class Simulation:
             self.wave_field,
             t,
             self.vessel_motion,
-            float(self.crane_tip_n[0]),
-            float(self.crane_tip_n[1]),
+            float(self._refresh_point[3]),
+            float(self._refresh_point[4]),
             self.vessel_ramp_s,
         )
 
@@ -984,9 +1036,9 @@ class Simulation:
     ) -> Generator[ChunkJob, ChunkResult, FloatArray]:
         """Advance n steps in one chunk; returns their rows: ``out`` (n, N_LOG) filled, when
         given, else a new array."""
+        env, noise = self._chunk_inputs(n)
         if self.control_on:
             self._sync_site()
-        env, noise = self._chunk_inputs(n)
         if not self.control_on:
             args = (
                 self.step_index,
@@ -1079,9 +1131,13 @@ class Simulation:
     # ------------------------------------------------------------------ environment rows
     def _environment_chunk(self, n: int) -> FloatArray:
         """(n, N_ENV) environment rows (sim.plant.E_*); advances the current, the winch and
-        the vessel to the end of the chunk."""
+        the vessel to the end of the chunk. A chunk that starts on a whole second refreshes
+        the slow parts first (``REFRESH_S``); any other holds them."""
+        refresh = self._refreshing()
+        if refresh:
+            self._refresh()
         self.current_state, speeds, dirs = envmod.advance_current(
-            self.current_state, self.current_params, self.dt_s, n, self.rng
+            self.current_state, self.current_params, self.dt_s, n, self.rng_current
         )
         if self.faults:
             speeds, dirs = self._faulted_current(speeds, dirs)
@@ -1109,6 +1165,8 @@ class Simulation:
             1.0 if self.gripping else 0.0,
             frame,
             self.dt_s,
+            self._wire_held,
+            refresh,
             out,
         )
         if self.mdwire is not None:
@@ -1118,11 +1176,12 @@ class Simulation:
         if self.wave_field is not None:
             # the waves' velocity and acceleration added to the current's
             t = self.t_s + self.dt_s * np.arange(n)
-            # the tree's centre, kept inside the water column (a tree in the seabed's contact
-            # spring sits a few centimetres into it)
-            depth = min(max(float(self.x[2]), 0.0), self.wave_field.water_depth_m)
+            # at the tree's centre as at the last refresh, kept inside the water column (a
+            # tree in the seabed's contact spring sits a few centimetres into it)
+            north, east, down = self._refresh_point[0:3]
+            depth = min(max(float(down), 0.0), self.wave_field.water_depth_m)
             v_w, a_w = envmod.wave_kinematics_n(
-                self.wave_field, t, depth, float(self.x[0]), float(self.x[1])
+                self.wave_field, t, depth, float(north), float(east)
             )
             env[:, plant.E_VC : plant.E_VC + 3] += v_w
             if self.wave_load != "drag":

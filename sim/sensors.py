@@ -102,14 +102,22 @@ def _due_pattern(decimation: tuple[int, ...], phase: int, n: int) -> NDArray[np.
     return due
 
 
-def draw_noise(cfg: SensorConfig, rng: np.random.Generator, first_step: int, n: int) -> NoiseChunk:
-    """Draw the noise and the sample/dropout pattern for n steps: n x N_SENSORS uniforms (a
-    sample is kept where its uniform is at least the sensor's dropout probability), then
-    n x N_Y standard normals scaled by each output's noise standard deviation."""
+def draw_noise(
+    cfg: SensorConfig,
+    dropouts: np.random.Generator,
+    normals: np.random.Generator,
+    first_step: int,
+    n: int,
+) -> NoiseChunk:
+    """Draw the noise and the sample/dropout pattern for n steps: n x N_SENSORS uniforms from
+    ``dropouts`` (a sample is kept where its uniform is at least the sensor's dropout
+    probability) and n x N_Y standard normals from ``normals``, scaled by each output's noise
+    standard deviation. Each generator is read in step order, so n steps drawn at once or in
+    pieces get the same numbers (the simulator gives each purpose a stream of its own)."""
     decimation, period = cfg.pattern_key
     due = _due_pattern(decimation, first_step % period, n)
-    uniforms = rng.random((n, N_SENSORS))
-    noise = rng.standard_normal((n, N_Y))
+    uniforms = dropouts.random((n, N_SENSORS))
+    noise = normals.standard_normal((n, N_Y))
     fresh = np.empty((n, N_SENSORS), dtype=np.bool_)
     _scale_and_keep(noise, fresh, uniforms, due, cfg.noise_std, cfg.dropout_probability)
     return NoiseChunk(noise=noise, fresh=fresh)

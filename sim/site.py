@@ -183,21 +183,26 @@ def chunk_rows_into(
     grip: float,
     frame: np.ndarray,
     dt: float,
+    held: np.ndarray,
+    refresh: bool,
     out: np.ndarray,
 ) -> None:
     """A chunk's environment rows (n, N_ENV) into ``env`` in one call (the simulator makes
     them for every chunk; a dozen Python and numpy calls cost more than the arithmetic).
 
-    Every row carries the wire's entries for the chunk's mean current speed and direction
-    (``wire_entries_into`` at the payout ``wire_m`` and crane tip ``crane_tip_n`` where the
-    chunk starts), the ``push_n``, the ``grip`` and the docking frame (``frame``: [on (1/0),
-    north, east, heading, landing depth]); row j then its own current velocity
-    [V cos(beta), V sin(beta), 0], no water acceleration, the rest length of the payout after
-    j + 1 steps of the winch (towards ``wire_target_m`` at ``winch_mps``) plus the stretch
-    at the chunk's start, and the crane tip after j + 1 steps towards ``crane_target_n`` at
-    ``crane_mps`` along the straight line. Waves are added to the rows afterwards.
-    ``out`` (6,) gets [payout at the end, crane tip at the end (3), mean speed, mean
-    direction]. The means are plain sums in order over n."""
+    Every row carries the wire's slow entries held in ``held`` (N_ENV,): its horizontal and
+    vertical stiffness and its drag offset (``wire_entries_into``). With ``refresh`` they are
+    made anew first, from the current at the chunk's first step and the payout ``wire_m`` and
+    crane tip ``crane_tip_n`` where the chunk starts; the simulator refreshes them at every
+    whole second of the step grid and holds them in between, so they do not depend on where
+    a run's chunks begin. Every row also carries the ``push_n``, the ``grip`` and the docking
+    frame (``frame``: [on (1/0), north, east, heading, landing depth]); row j then its own
+    current velocity [V cos(beta), V sin(beta), 0], no water acceleration, the rest length of
+    the payout after j + 1 steps of the winch (towards ``wire_target_m`` at ``winch_mps``)
+    plus that payout's self-weight stretch, and the crane tip after j + 1 steps towards
+    ``crane_target_n`` at ``crane_mps`` along the straight line. Waves are added to the rows
+    afterwards. ``out`` (6,) gets [payout at the end, crane tip at the end (3), mean speed,
+    mean direction over the chunk] (the means plain sums in order over n)."""
     n = env.shape[0]
     sum_v = 0.0
     sum_b = 0.0
@@ -206,8 +211,11 @@ def chunk_rows_into(
         sum_b += directions_rad[j]
     mean_v = sum_v / n
     mean_b = sum_b / n
+    if refresh:
+        wire_entries_into(held, S, wire_m, crane_tip_n, speeds_mps[0], directions_rad[0])
     base = env[0]
-    wire_entries_into(base, S, wire_m, crane_tip_n, mean_v, mean_b)
+    for i in range(base.shape[0]):
+        base[i] = held[i]
     for i in range(3):
         base[plant.E_PUSH + i] = push_n[i]
     base[plant.E_GRIP] = grip
@@ -216,7 +224,6 @@ def chunk_rows_into(
         base[plant.E_FRAME + 1] = frame[2]
         base[plant.E_FRAME_PSI] = frame[3]
         base[plant.E_LAND] = frame[4]
-    stretch = _stretch(S.w, S.EA, wire_m)
     d0 = crane_target_n[0] - crane_tip_n[0]
     d1 = crane_target_n[1] - crane_tip_n[1]
     d2 = crane_target_n[2] - crane_tip_n[2]
@@ -233,7 +240,8 @@ def chunk_rows_into(
         row[plant.E_AC] = 0.0
         row[plant.E_AC + 1] = 0.0
         row[plant.E_AC + 2] = 0.0
-        row[plant.E_LREST] = _ramp_at(wire_m, wire_target_m, winch_mps, dt, j) + stretch
+        payout = _ramp_at(wire_m, wire_target_m, winch_mps, dt, j)
+        row[plant.E_LREST] = payout + _stretch(S.w, S.EA, payout)
         if still:
             row[plant.E_CT] = crane_tip_n[0]
             row[plant.E_CT + 1] = crane_tip_n[1]

@@ -46,8 +46,10 @@ def test_a_request_of_several_chunks_gives_the_rows_of_its_chunks_run_one_by_one
 ) -> None:
     whole, parts = _sim(control), _sim(control)
     whole.chunk_steps = parts.chunk_steps = 40
-    rows = whole.step(130)  # chunks of 40, 40, 40, 10 into one array of 130 rows
-    pieces = [parts.step(k).data for k in (40, 40, 40, 10)]  # each chunk its own new array
+    # chunks of 40, 40, 20 (a chunk ends on the whole second, REFRESH_S) and 30 into one
+    # array of 130 rows
+    rows = whole.step(130)
+    pieces = [parts.step(k).data for k in (40, 40, 20, 30)]  # each chunk its own new array
     assert rows.data.shape == (130, loop.N_LOG)
     assert np.array_equal(rows.data, np.vstack(pieces))
     assert np.array_equal(whole.plant_state, parts.plant_state)

@@ -192,11 +192,19 @@ def test_run_command_rejects_a_bad_file_with_exit_2(tmp_path):
 def test_table_4_1_control_suppresses_the_long_period_motion():
     """Thesis 4.1.3: with T = 30 s, Hs = 8 m the controller cuts the north and heading RMS.
     The uncontrolled heading is measured about its running mean (it wanders: about the mean
-    it once made this ratio look 5 times better); measured 1.17 against 3.89 deg."""
-    unc, ctl = studies.wave_case(30.0, 8.0, duration_s=200.0, seed=0)
-    assert ctl.ours[0] < 0.7 * unc.ours[0]
-    assert ctl.ours[2] < 0.5 * unc.ours[2]
-    assert np.all(np.isfinite(unc.ours + ctl.ours))
+    it once made this ratio look 5 times better). 200 s hold under seven peak periods, so one
+    sea's ratio is itself random: over seeds 0-7 the heading's ran from 0.22 to 0.66, the
+    north's from 0.32 to 0.52. The claim is checked on the RMS pooled over four seas (the
+    root of the summed squares): measured 0.34 for north and 0.35 for heading."""
+    squares = np.zeros((2, 3))
+    for seed in range(4):
+        unc, ctl = studies.wave_case(30.0, 8.0, duration_s=200.0, seed=seed)
+        assert np.all(np.isfinite(unc.ours + ctl.ours))
+        squares[0] += np.asarray(unc.ours) ** 2
+        squares[1] += np.asarray(ctl.ours) ** 2
+    ratio = np.sqrt(squares[1] / squares[0])
+    assert ratio[0] < 0.7
+    assert ratio[2] < 0.5
 
 
 def test_killed_run_leaves_a_readable_log(tmp_path):

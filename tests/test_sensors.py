@@ -45,11 +45,30 @@ def test_drawn_noise_is_the_numpy_forms_bit_for_bit(first_step: int) -> None:
     spec = params.load("full-scale").sensors
     cfg = sensors.sensor_config(spec, 0.01)
     cfg = sensors.SensorConfig(cfg.decimation, cfg.noise_std, np.linspace(0.0, 0.4, 5))
-    got = sensors.draw_noise(cfg, np.random.default_rng(3), first_step, 100)
-    rng = np.random.default_rng(3)
+    got = sensors.draw_noise(
+        cfg, np.random.default_rng(3), np.random.default_rng(4), first_step, 100
+    )
     due = (first_step + np.arange(100))[:, None] % cfg.decimation[None, :] == 0
-    kept = rng.random((100, sensors.N_SENSORS)) >= cfg.dropout_probability[None, :]
-    noise = rng.standard_normal((100, sensors.N_Y)) * cfg.noise_std[None, :]
+    uniforms = np.random.default_rng(3).random((100, sensors.N_SENSORS))
+    kept = uniforms >= cfg.dropout_probability[None, :]
+    noise = np.random.default_rng(4).standard_normal((100, sensors.N_Y)) * cfg.noise_std[None, :]
     assert np.array_equal(got.noise.view(np.int64), noise.view(np.int64))
     assert np.array_equal(got.fresh, due & kept)
     assert 0 < got.fresh.sum() < got.fresh.size, "some samples dropped, some kept"
+
+
+def test_drawn_noise_in_pieces_is_the_noise_drawn_at_once() -> None:
+    """Each generator is read in step order: 100 steps drawn as 1 + 36 + 63 are the 100 drawn
+    at once, number for number (the simulator cuts a run into chunks wherever its requests
+    end, and the draws must not depend on where)."""
+    cfg = sensors.sensor_config(params.load("full-scale").sensors, 0.01)
+    cfg = sensors.SensorConfig(cfg.decimation, cfg.noise_std, np.linspace(0.1, 0.4, 5))
+    whole = sensors.draw_noise(cfg, np.random.default_rng(5), np.random.default_rng(6), 0, 100)
+    d, g = np.random.default_rng(5), np.random.default_rng(6)
+    parts = []
+    first = 0
+    for n in (1, 36, 63):
+        parts.append(sensors.draw_noise(cfg, d, g, first, n))
+        first += n
+    assert np.array_equal(whole.noise, np.vstack([p.noise for p in parts]))
+    assert np.array_equal(whole.fresh, np.vstack([p.fresh for p in parts]))

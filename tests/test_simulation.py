@@ -374,18 +374,16 @@ def test_grip_closes_only_within_reach_of_the_mount():
 
 
 def _numpy_chunk_rows(
-    S, speeds, dirs, wire, wire_to, winch, tip, tip_to, crane, push, grip, frame, dt
+    S, speeds, dirs, wire, wire_to, winch, tip, tip_to, crane, push, grip, frame, dt, held
 ):
-    """``site.chunk_rows_into``'s rows made the way the simulator made them before it (numpy
-    arrays a column at a time: the ramps, the crane's straight path, a repeat of the base
-    row), with the means and the crane's distance summed in order as the compiled call does;
-    the wire's entries from ``site.wire_entries_into`` (checked against the closed forms in
-    ``tests/test_wire.py``)."""
+    """``site.chunk_rows_into``'s rows made with numpy a column at a time (the ramps, the
+    crane's straight path, a repeat of the base row), with the means and the crane's distance
+    summed in order as the compiled call does; the wire's entries ``held`` (from
+    ``site.wire_entries_into``, checked against the closed forms in ``tests/test_wire.py``)."""
     n = len(speeds)
     mean_v = sum(float(v) for v in speeds) / n
     mean_b = sum(float(b) for b in dirs) / n
-    base = np.empty(plant.N_ENV)
-    site.wire_entries_into(base, S, wire, tip, mean_v, mean_b)
+    base = held.copy()
     base[plant.E_PUSH : plant.E_PUSH + 3] = push
     base[plant.E_GRIP] = grip
     if frame[0] > 0.5:
@@ -411,22 +409,30 @@ def _numpy_chunk_rows(
     ref[:, plant.E_VC + 2] = 0.0
     ref[:, plant.E_AC : plant.E_AC + 3] = 0.0
     lengths = ramp(wire, wire_to, winch)
-    ref[:, plant.E_LREST] = lengths + 0.5 * S.w * (wire * wire) / S.EA
+    ref[:, plant.E_LREST] = lengths + 0.5 * S.w * (lengths * lengths) / S.EA
     ref[:, plant.E_CT : plant.E_CT + 3] = path
     return ref, lengths[-1], path[-1], mean_v, mean_b
 
 
 @pytest.mark.parametrize(
-    "crane_mps, winch_mps, frame_on",
-    [(0.4, 0.0, True), (0.0, 0.2, False), (0.4, 0.2, True), (0.0, 0.0, False)],
-    ids=["crane moving", "winch moving", "both", "still"],
+    "crane_mps, winch_mps, frame_on, refresh",
+    [
+        (0.4, 0.0, True, True),
+        (0.0, 0.2, False, True),
+        (0.4, 0.2, True, True),
+        (0.0, 0.0, False, True),
+        (0.4, 0.2, True, False),
+    ],
+    ids=["crane moving", "winch moving", "both", "still", "held entries"],
 )
-def test_chunk_rows_are_the_numpy_forms_numbers(crane_mps, winch_mps, frame_on):
+def test_chunk_rows_are_the_numpy_forms_numbers(crane_mps, winch_mps, frame_on, refresh):
     """``site.chunk_rows_into`` (a chunk's environment rows in one compiled call) against
-    the numpy operations it replaced, bit for bit: the base row with the wire's entries for
-    the chunk's mean current, the push, the grip and the frame; each step's current velocity
-    V cos(beta), V sin(beta), 0, no water acceleration, the winch's ramp plus the stretch, the
-    crane tip's straight path (held at its target once there); and what it reports back."""
+    numpy operations, bit for bit: the base row with the wire's held entries (made anew, with
+    ``refresh``, for the current at the chunk's first step and the payout and crane tip at its
+    start; else kept as they were), the push, the grip and the frame; each step's current
+    velocity V cos(beta), V sin(beta), 0, no water acceleration, the winch's ramp plus its
+    stretch, the crane tip's straight path (held at its target once there); and what it
+    reports back."""
     rng = np.random.default_rng(11)
     n = 73
     S = site.wire_site(FULL)
@@ -439,8 +445,14 @@ def test_chunk_rows_are_the_numpy_forms_numbers(crane_mps, winch_mps, frame_on):
     args = (97.2, 97.2 + 0.05, winch_mps, tip, tip_to, crane_mps, push, 1.0, frame, 0.01)
     env = np.full((n, plant.N_ENV), np.nan)
     out = np.full(6, np.nan)
-    site.chunk_rows_into(env, S, speeds, dirs, *args, out)
-    ref, last_length, last_tip, mean_v, mean_b = _numpy_chunk_rows(S, speeds, dirs, *args)
+    held = np.zeros(plant.N_ENV)
+    site.wire_entries_into(held, S, 80.0, tip + 1.0, 0.3, 0.2)  # another moment's entries
+    expected = held.copy()
+    if refresh:
+        site.wire_entries_into(expected, S, args[0], tip, speeds[0], dirs[0])
+    site.chunk_rows_into(env, S, speeds, dirs, *args, held, refresh, out)
+    np.testing.assert_array_equal(held, expected)
+    ref, last_length, last_tip, mean_v, mean_b = _numpy_chunk_rows(S, speeds, dirs, *args, held)
     np.testing.assert_array_equal(env, ref)
     np.testing.assert_array_equal(out, [last_length, *last_tip, mean_v, mean_b])
     if crane_mps > 0.0:  # the crane got there and stopped: tip + 1.0 * (tip_to - tip) is

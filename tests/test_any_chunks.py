@@ -1,0 +1,161 @@
+"""A run is the same whatever pieces it is stepped in. The console advances a mission a tick
+at a time (two steps at 1x), the command line a request at a time (chunks of a second), a
+batch beside other runs: the same mission with the same seed must give the same rows in all
+of them, so a session flown in the console can be reproduced from the command line and a
+campaign's run alone.
+
+Two things used to depend on the cut. One generator served every random draw, chunk by
+chunk (the current's walk, then the sensors' dropouts, then their noise), so cutting a run
+differently handed each step other numbers: a model-scale mission with seed 3 ended 3.6 cm
+apart when advanced 50 steps at a time instead of a request at a time, the full-scale
+docking 1.0 cm apart. And the slow parts of the environment (the quasi-static wire's
+stiffnesses and drag offset, the control model's wire spring, the point where the waves are
+evaluated, the elastic wire's mass and its top's velocity) were brought up to date at each
+chunk's start: with the draws separated, the full-scale closed loop below still differed by
+mm in the tree's position and hundreds of newtons in the wire's tension between a run in
+one chunk and in chunks of seven steps. Now each purpose draws from its own stream spawned
+from the seed, and the slow parts refresh on the whole seconds of the step grid."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from control.simulation import Simulation
+from missions.driver import MissionDriver
+from missions.schema import load_mission
+from missions.setup import build_simulation
+from sim import environment as envmod
+from sim import params
+from tests.test_chunk_into import CURRENT
+
+RTOL = 1e-9
+"""Relative tolerance between the cuts. Only rounding remains: the current's walk and the
+winch's and crane's ramps go on from their values at each chunk's start, so their sums group
+differently (measured: 3e-13 m in the tree's position, 3e-7 N in a 3e5 N wire tension, so
+about 1e-12 relative); 1e-9 is a thousand times that and a million times below the
+millimetres and hundreds of newtons the cut used to move."""
+ATOL = 1e-9
+"""Absolute floor for entries near zero [SI units of each column]."""
+
+PIECES = [1, 2, 3, 7, 7, 1, 49, 30, 100, 97, 3, 50, 150, 100]
+"""Requests of odd lengths (ending inside and across whole seconds), 600 steps in all."""
+
+
+def _full_scale(control: bool, **kw: object) -> Simulation:
+    sim = Simulation(
+        params.load("full-scale"),
+        tree_depth_m=400.0,
+        current=CURRENT,
+        control=control,
+        seed=11,
+        **kw,  # type: ignore[arg-type]
+    )
+    if control:
+        sim.set_target(0.5, -0.3, math.radians(20.0))
+    else:
+        sim.set_thruster_speeds(np.linspace(-3.0, 3.0, sim.n_thrusters))
+    return sim
+
+
+def _rows(sim: Simulation, pieces: list[int]) -> np.ndarray:
+    return np.vstack([sim.step(k).data for k in pieces])
+
+
+@pytest.mark.parametrize("control", [True, False], ids=["closed loop", "open loop"])
+def test_a_run_stepped_in_odd_pieces_gives_the_rows_of_the_run_in_one_request(
+    control: bool,
+) -> None:
+    """Full scale, a walking current (its speed and direction change every step, so the wire's
+    entries differ with every cut that takes them from another moment), 600 steps: in one
+    request (chunks of 100), in ``PIECES``, and a winch payout started half-way through a
+    second. The same draws and the same arithmetic, to rounding (``RTOL``)."""
+    assert sum(PIECES) == 600
+    whole, cut = _full_scale(control), _full_scale(control)
+    a = [whole.step(150).data]
+    b = [cut.step(k).data for k in (1, 2, 7, 40, 50, 50)]
+    for sim in (whole, cut):
+        sim.winch_to(sim.wire_length_m + 0.5, 0.1)
+    a.append(whole.step(450).data)
+    b += [cut.step(k).data for k in (3, 47, 1, 99, 100, 200)]
+    rows_a, rows_b = np.vstack(a), np.vstack(b)
+    assert rows_a.shape == rows_b.shape == (600, rows_a.shape[1])
+    np.testing.assert_allclose(rows_b, rows_a, rtol=RTOL, atol=ATOL)
+    np.testing.assert_allclose(cut.plant_state, whole.plant_state, rtol=RTOL, atol=ATOL)
+    tension = whole.step(1)["wire_tension"]
+    assert np.all(tension > 0.0)
+
+
+def test_the_elastic_wire_in_a_seaway_with_vessel_motion_is_the_same_in_any_pieces() -> None:
+    """The elastic wire (its mass with the payout, its top's velocity from the rows) under a
+    moving vessel in waves evaluated at the tree: the other inputs a chunk's start used to
+    fix."""
+    from sim import vessel as vesselmod
+
+    kw = {
+        "waves": envmod.WaveParams(
+            significant_height_m=2.5, peak_period_s=8.0, direction_rad=0.4, n_components=40
+        ),
+        "vessel": vesselmod.VesselMotion(heading_rad=math.radians(200.0)),
+        "wire": "elastic",
+    }
+    whole, cut = _full_scale(True, **kw), _full_scale(True, **kw)
+    rows_a = _rows(whole, [600])
+    rows_b = _rows(cut, PIECES)
+    np.testing.assert_allclose(rows_b, rows_a, rtol=RTOL, atol=ATOL)
+    # the vessel moved the crane tip: the rows carry the seaway, not a still surface
+    assert np.ptp(rows_a[:, 3]) > 0.0
+
+
+def test_each_purpose_draws_from_its_own_stream() -> None:
+    """The sensors' noise and the current's walk at a step do not depend on what else draws:
+    a sea of 300 wave components (whose frequencies and phases are drawn when the run is set
+    up) leaves the same noise, dropouts and current as calm water."""
+    model = params.load("model-scale")
+    sea = envmod.WaveParams(
+        significant_height_m=0.1, peak_period_s=2.0, direction_rad=0.0, n_components=300
+    )
+    calm = Simulation(model, tree_depth_m=50.0, current=CURRENT, seed=4)
+    waves = Simulation(model, tree_depth_m=50.0, current=CURRENT, seed=4, waves=sea)
+    for sim in (calm, waves):
+        sim.step(37)
+    env_c, noise_c = calm._chunk_inputs(60)
+    env_w, noise_w = waves._chunk_inputs(60)
+    assert np.array_equal(noise_w.noise, noise_c.noise)
+    assert np.array_equal(noise_w.fresh, noise_c.fresh)
+    assert calm.current_speed_mps == waves.current_speed_mps
+    assert not np.array_equal(env_w, env_c)  # the waves are in the other's rows
+    other = Simulation(model, tree_depth_m=50.0, current=CURRENT, seed=5)
+    other.step(37)
+    _, noise_o = other._chunk_inputs(60)
+    assert not np.array_equal(noise_o.noise, noise_c.noise)  # another seed, other numbers
+
+
+def _mission_end(name: str, seed: int, max_steps: int | None) -> tuple[np.ndarray, dict]:
+    mission = load_mission(name)
+    sim = build_simulation(mission, seed=seed)
+    driver = MissionDriver(mission, sim)
+    while not driver.done:
+        driver.advance(max_steps)
+    result = driver.result()
+    return sim.plant_state.copy(), result.summary()
+
+
+@pytest.mark.parametrize("max_steps", [2, 50], ids=["console tick at 1x", "50 steps"])
+def test_a_mission_advanced_a_tick_at_a_time_ends_where_the_command_line_run_ends(
+    max_steps: int,
+) -> None:
+    """model-square-ekf-400 (model scale, the EKF, a current) with seed 3, advanced as the
+    console does at 1x (two steps a tick) or 50 steps at a time, against the command line's
+    request at a time: the same final plant state and the same scored figures."""
+    x_cli, summary_cli = _mission_end("model-square-ekf-400", 3, None)
+    x_tick, summary_tick = _mission_end("model-square-ekf-400", 3, max_steps)
+    np.testing.assert_allclose(x_tick, x_cli, rtol=RTOL, atol=ATOL)
+    assert summary_tick.keys() == summary_cli.keys()
+    for key, value in summary_cli.items():
+        if isinstance(value, float):
+            assert summary_tick[key] == pytest.approx(value, rel=RTOL, abs=ATOL), key
+        else:
+            assert summary_tick[key] == value, key
