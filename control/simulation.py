@@ -372,6 +372,11 @@ class Simulation:
     def t_s(self) -> float:
         return self.step_index * self.dt_s
 
+    def _times(self, n: int) -> FloatArray:
+        """The times of the next n steps [s], each (step index) x dt: the same numbers
+        whatever chunk they fall in (t_s + j dt rounds with where the chunk starts)."""
+        return (self.step_index + np.arange(n, dtype=np.float64)) * self.dt_s
+
     @property
     def n_thrusters(self) -> int:
         return int(self.ps.rov.thrusters.T.shape[1])
@@ -887,7 +892,7 @@ class Simulation:
         keeps station) is unchanged."""
         if self.vessel_motion is None or self.wave_field is None:
             return
-        t = self.t_s + self.dt_s * np.arange(n)
+        t = self._times(n)
         env[:, plant.E_CT : plant.E_CT + 3] += vesselmod.crane_tip_motion_n(
             self.wave_field,
             t,
@@ -994,7 +999,7 @@ class Simulation:
     ) -> tuple[FloatArray, FloatArray]:
         """The current's speed and direction over the chunk's steps with surges and turns
         added (at the tree and along the wire alike)."""
-        t = self.t_s + self.dt_s * np.arange(len(speeds))
+        t = self._times(len(speeds))
         speeds, dirs = np.array(speeds, float), np.array(dirs, float)
         for f in self.faults:
             on = (t >= f.start_s - 1e-9) & (t < f.end_s - 1e-9)
@@ -1007,7 +1012,7 @@ class Simulation:
     def _faults_in_chunk(self, env: FloatArray, noise: sensors.NoiseChunk) -> None:
         """Sensor and environment faults over the chunk's steps."""
         n = len(env)
-        t = self.t_s + self.dt_s * np.arange(n)
+        t = self._times(n)
         for f in self.faults:
             on = (t >= f.start_s - 1e-9) & (t < f.end_s - 1e-9)
             if not on.any():
@@ -1026,8 +1031,15 @@ class Simulation:
             elif f.kind == "vessel_drift":
                 d = math.radians(f.direction_deg)
                 step = f.value * self.dt_s * np.array([math.cos(d), math.sin(d), 0.0])
-                drift = np.cumsum(on)[:, None] * step[None, :]
-                env[:, plant.E_CT : plant.E_CT + 3] += drift
+                tips = env[:, plant.E_CT : plant.E_CT + 3]
+                moves = np.vstack([tips[0:1], on[:, None] * step[None, :]])
+                if np.all(tips == tips[0]):
+                    # the crane holds still (the fault holds it): a step at a time from where
+                    # the tip is (add.accumulate sums in order), the same whatever the chunks
+                    tips[:] = np.add.accumulate(moves, axis=0)[1:]
+                else:  # the crane was moving when the drift began
+                    moves[0] = 0.0
+                    tips += np.add.accumulate(moves, axis=0)[1:]
                 self.crane_tip_n = env[-1, plant.E_CT : plant.E_CT + 3].copy()
                 self.crane_target_n = self.crane_tip_n.copy()
 
@@ -1175,7 +1187,7 @@ class Simulation:
             self._wire_current_n = envmod.current_velocity_n(float(out[4]), float(out[5]))
         if self.wave_field is not None:
             # the waves' velocity and acceleration added to the current's
-            t = self.t_s + self.dt_s * np.arange(n)
+            t = self._times(n)
             # at the tree's centre as at the last refresh, kept inside the water column (a
             # tree in the seabed's contact spring sits a few centimetres into it)
             north, east, down = self._refresh_point[0:3]

@@ -205,43 +205,8 @@ def initial_current(params: CurrentParams) -> CurrentState:
     )
 
 
-def _fold_into_band(
-    x: NDArray[np.float64], lo: float, hi: float
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Reflect values into [lo, hi] as a triangle wave of period 2 (hi - lo).
-
-    Returns (folded, side), both shaped like ``x``: side is +1 where the fold maps x onto the
-    band increasing (x - lo in [0, w] modulo 2 w) and -1 where it maps it mirrored. Values
-    already inside the band are returned unchanged (bit for bit). A band of zero width maps
-    everything onto lo.
-    """
-    width = hi - lo
-    if width <= 0.0:
-        return np.full_like(x, lo), np.ones_like(x)
-    if x.min() >= lo and x.max() <= hi:
-        # every value inside (a walk between its bounds, the usual case): nothing to fold
-        return x, np.ones_like(x)
-    m = np.mod(x - lo, 2.0 * width)
-    mirrored = m > width
-    folded = np.clip(lo + np.where(mirrored, 2.0 * width - m, m), lo, hi)
-    inside = (x >= lo) & (x <= hi)
-    side = np.where(mirrored & ~inside, -1.0, 1.0)
-    return np.where(inside, x, folded), side
-
-
-def _folded(
-    free: NDArray[np.float64], inside: bool, sign: int, lo: float, hi: float
-) -> tuple[NDArray[np.float64], int]:
-    """A free walk's path (n + 1 values) reflected into [lo, hi], and the fold sign to go on
-    with: the path itself when it stayed ``inside`` the band (nothing to fold)."""
-    if inside:
-        return free, int(sign)
-    path, side = _fold_into_band(free, lo, hi)
-    return path, int(sign * side[-1])
-
-
 @njit(**JIT_NOALLOC)
-def _walk_into(
+def _reflected_walk_into(
     out: NDArray[np.float64],
     start: float,
     sign: float,
@@ -250,50 +215,59 @@ def _walk_into(
     column: int,
     lo: float,
     hi: float,
-) -> bool:
-    """The free walk ``start + sign * [0, cumsum(scale * normals[:, column])]`` into ``out``
-    (n + 1,): the operations of the numpy form (the increments ``scale * normal``, then
-    ``cumsum`` adding them in order), compiled, as the simulator asks for it every chunk.
-    Returns whether every value lies in [lo, hi]."""
-    acc = 0.0
-    out[0] = start + sign * 0.0
-    inside = lo <= out[0] <= hi
+) -> float:
+    """One bounded walk, a step at a time, into ``out`` (n + 1,): out[0] = start, then
+    x = out[i] + sign * scale * normals[i, column], reflected into [lo, hi] as a triangle
+    wave of period 2 (hi - lo) where it leaves the band (a band of zero width holds lo). A
+    reflection that mirrors the step turns ``sign`` over for the steps after it. Returns the
+    sign to go on with.
+
+    Each value comes from the one before it, its increment and the sign alone, and the last
+    value and the sign are the whole state: a run cut into chunks anywhere gives the same
+    numbers, bit for bit, as one long run."""
+    width = hi - lo
+    v = start + 0.0
+    out[0] = v
     for i in range(normals.shape[0]):
-        increment = scale * normals[i, column]
-        acc = increment if i == 0 else acc + increment  # as cumsum, -0.0 included
-        out[i + 1] = start + sign * acc
-        if not lo <= out[i + 1] <= hi:
-            inside = False
-    return inside
+        x = v + sign * (scale * normals[i, column])
+        if lo <= x <= hi:
+            v = x
+        elif width <= 0.0:
+            v = lo + 0.0
+        else:
+            m = (x - lo) % (2.0 * width)  # in [0, 2 width): Python's modulo
+            if m > width:
+                v = min(max(lo + (2.0 * width - m), lo), hi)
+                sign = -sign
+            else:
+                v = min(max(lo + m, lo), hi)
+        out[i + 1] = v
+    return sign
 
 
 @njit(**JIT_NOALLOC)
 def _walks_into(
-    free: NDArray[np.float64],
+    paths: NDArray[np.float64],
+    signs: NDArray[np.float64],
     normals: NDArray[np.float64],
     speed: float,
-    speed_sign: float,
     speed_scale: float,
     speed_lo: float,
     speed_hi: float,
     direction: float,
-    direction_sign: float,
     direction_scale: float,
     direction_lo: float,
     direction_hi: float,
-) -> int:
-    """Both free walks of ``advance_current`` in one compiled call: the speed's into
-    ``free[0]`` from the normals' column 0, the direction's into ``free[1]`` from column 1
-    (each as ``_walk_into``). Returns 1 if the speed's stayed in its band plus 2 if the
-    direction's did."""
-    inside = 0
-    if _walk_into(free[0], speed, speed_sign, speed_scale, normals, 0, speed_lo, speed_hi):
-        inside += 1
-    if _walk_into(
-        free[1], direction, direction_sign, direction_scale, normals, 1, direction_lo, direction_hi
-    ):
-        inside += 2
-    return inside
+) -> None:
+    """Both walks of ``advance_current`` in one compiled call: the speed's into ``paths[0]``
+    from the normals' column 0, the direction's into ``paths[1]`` from column 1 (each as
+    ``_reflected_walk_into``), starting with and leaving in ``signs`` their fold signs."""
+    signs[0] = _reflected_walk_into(
+        paths[0], speed, signs[0], speed_scale, normals, 0, speed_lo, speed_hi
+    )
+    signs[1] = _reflected_walk_into(
+        paths[1], direction, signs[1], direction_scale, normals, 1, direction_lo, direction_hi
+    )
 
 
 def advance_current(
@@ -307,9 +281,9 @@ def advance_current(
 
     V(k+1) = V(k) + sigma_V sqrt(dt) N(0, 1), reflected at [V_min, V_max]; the same for the
     direction. Always draws exactly 2 n_steps standard normals (one (n_steps, 2) array, row
-    k = step k), whatever the intensities, so other users of ``rng`` see the same stream and a
-    run cut into chunks draws the same numbers as one long run. Zero intensities keep both
-    values exactly constant.
+    k = step k), whatever the intensities, and walks a step at a time from the state
+    (``_reflected_walk_into``), so a run cut into chunks gives the same numbers, bit for bit,
+    as one long run. Zero intensities keep both values exactly constant.
 
     Returns a CurrentChunk (state, speeds_mps (n_steps,), directions_rad (n_steps,)).
     """
@@ -336,28 +310,23 @@ def advance_current(
     )
     normals = rng.standard_normal((int(n_steps), 2))
     sqrt_dt = math.sqrt(dt_s)
-    lo_v, hi_v = float(params.speed_min_mps), float(params.speed_max_mps)
-    lo_b, hi_b = float(params.direction_min_rad), float(params.direction_max_rad)
-    free = np.empty((2, int(n_steps) + 1))
-    inside = _walks_into(
-        free,
+    paths = np.empty((2, int(n_steps) + 1))
+    signs = np.array([float(state.speed_fold_sign), float(state.direction_fold_sign)])
+    _walks_into(
+        paths,
+        signs,
         normals,
         float(state.speed_mps),
-        float(state.speed_fold_sign),
         float(params.speed_walk_mps_per_sqrt_s * sqrt_dt),
-        lo_v,
-        hi_v,
+        float(params.speed_min_mps),
+        float(params.speed_max_mps),
         float(state.direction_rad),
-        float(state.direction_fold_sign),
         float(params.direction_walk_rad_per_sqrt_s * sqrt_dt),
-        lo_b,
-        hi_b,
+        float(params.direction_min_rad),
+        float(params.direction_max_rad),
     )
-    speeds, speed_sign = _folded(free[0], bool(inside & 1), state.speed_fold_sign, lo_v, hi_v)
-    directions, direction_sign = _folded(
-        free[1], bool(inside & 2), state.direction_fold_sign, lo_b, hi_b
-    )
-    new_state = CurrentState(float(speeds[-1]), float(directions[-1]), speed_sign, direction_sign)
+    speeds, directions = paths[0], paths[1]
+    new_state = CurrentState(float(speeds[-1]), float(directions[-1]), int(signs[0]), int(signs[1]))
     return CurrentChunk(new_state, speeds[:-1], directions[:-1])
 
 

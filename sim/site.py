@@ -156,17 +156,6 @@ def wire_entries_into(
     env[plant.E_OFF + 1] = offset * math.sin(direction_rad)
 
 
-@njit(inline="always", **JIT_NOALLOC)
-def _ramp_at(start: float, target: float, rate: float, dt: float, j: int) -> float:
-    """Where a value moving from ``start`` towards ``target`` at ``rate`` is after j + 1
-    steps of dt (held at the target once there)."""
-    if target == start:
-        return start + 0.0
-    step = (j + 1) * dt * rate
-    sign = 1.0 if target > start else -1.0
-    return start + sign * min(step, abs(target - start))
-
-
 @njit(**JIT_NOALLOC)
 def chunk_rows_into(
     env: np.ndarray,
@@ -198,11 +187,13 @@ def chunk_rows_into(
     a run's chunks begin. Every row also carries the ``push_n``, the ``grip`` and the docking
     frame (``frame``: [on (1/0), north, east, heading, landing depth]); row j then its own
     current velocity [V cos(beta), V sin(beta), 0], no water acceleration, the rest length of
-    the payout after j + 1 steps of the winch (towards ``wire_target_m`` at ``winch_mps``)
-    plus that payout's self-weight stretch, and the crane tip after j + 1 steps towards
-    ``crane_target_n`` at ``crane_mps`` along the straight line. Waves are added to the rows
-    afterwards. ``out`` (6,) gets [payout at the end, crane tip at the end (3), mean speed,
-    mean direction over the chunk] (the means plain sums in order over n)."""
+    the payout after j + 1 steps of the winch (towards ``wire_target_m``, ``winch_mps`` dt a
+    step, the target once within a step of it) plus that payout's self-weight stretch, and the
+    crane tip after j + 1 steps towards ``crane_target_n`` (``crane_mps`` dt a step along the
+    line to the target, the target once within a step). Each step moves on from the one
+    before, so a run gives the same rows bit for bit however it is cut into chunks. Waves are
+    added to the rows afterwards. ``out`` (6,) gets [payout at the end, crane tip at the end
+    (3), mean speed, mean direction over the chunk] (the means plain sums in order over n)."""
     n = env.shape[0]
     sum_v = 0.0
     sum_b = 0.0
@@ -224,36 +215,49 @@ def chunk_rows_into(
         base[plant.E_FRAME + 1] = frame[2]
         base[plant.E_FRAME_PSI] = frame[3]
         base[plant.E_LAND] = frame[4]
-    d0 = crane_target_n[0] - crane_tip_n[0]
-    d1 = crane_target_n[1] - crane_tip_n[1]
-    d2 = crane_target_n[2] - crane_tip_n[2]
-    dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    still = dist < 1e-12 or crane_mps <= 0.0
-    for j in range(n - 1, -1, -1):  # row 0 (the base) last
+    for j in range(1, n):
         row = env[j]
-        if j > 0:
-            for i in range(row.shape[0]):
-                row[i] = base[i]
+        for i in range(row.shape[0]):
+            row[i] = base[i]
+    payout = wire_m + 0.0
+    winch_step = dt * winch_mps
+    tip0, tip1, tip2 = crane_tip_n[0], crane_tip_n[1], crane_tip_n[2]
+    crane_step = dt * crane_mps
+    for j in range(n):  # each step from the one before: the same whatever the chunks
+        row = env[j]
         row[plant.E_VC] = speeds_mps[j] * math.cos(directions_rad[j])
         row[plant.E_VC + 1] = speeds_mps[j] * math.sin(directions_rad[j])
         row[plant.E_VC + 2] = 0.0
         row[plant.E_AC] = 0.0
         row[plant.E_AC + 1] = 0.0
         row[plant.E_AC + 2] = 0.0
-        payout = _ramp_at(wire_m, wire_target_m, winch_mps, dt, j)
+        gap = wire_target_m - payout
+        if gap != 0.0:
+            if abs(gap) <= winch_step:
+                payout = wire_target_m + 0.0
+            elif gap > 0.0:
+                payout = payout + winch_step
+            else:
+                payout = payout - winch_step
         row[plant.E_LREST] = payout + _stretch(S.w, S.EA, payout)
-        if still:
-            row[plant.E_CT] = crane_tip_n[0]
-            row[plant.E_CT + 1] = crane_tip_n[1]
-            row[plant.E_CT + 2] = crane_tip_n[2]
-        else:
-            frac = _ramp_at(0.0, dist, crane_mps, dt, j) / dist
-            row[plant.E_CT] = crane_tip_n[0] + frac * d0
-            row[plant.E_CT + 1] = crane_tip_n[1] + frac * d1
-            row[plant.E_CT + 2] = crane_tip_n[2] + frac * d2
-    out[0] = _ramp_at(wire_m, wire_target_m, winch_mps, dt, n - 1)
-    out[1] = env[n - 1, plant.E_CT]
-    out[2] = env[n - 1, plant.E_CT + 1]
-    out[3] = env[n - 1, plant.E_CT + 2]
+        if crane_mps > 0.0:
+            d0 = crane_target_n[0] - tip0
+            d1 = crane_target_n[1] - tip1
+            d2 = crane_target_n[2] - tip2
+            dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            if dist <= crane_step:
+                tip0, tip1, tip2 = crane_target_n[0], crane_target_n[1], crane_target_n[2]
+            elif dist > 0.0:
+                frac = crane_step / dist
+                tip0 = tip0 + frac * d0
+                tip1 = tip1 + frac * d1
+                tip2 = tip2 + frac * d2
+        row[plant.E_CT] = tip0
+        row[plant.E_CT + 1] = tip1
+        row[plant.E_CT + 2] = tip2
+    out[0] = payout
+    out[1] = tip0
+    out[2] = tip1
+    out[3] = tip2
     out[4] = mean_v
     out[5] = mean_b

@@ -616,23 +616,12 @@ def test_chunked_run_equals_one_run(
     rng = np.random.default_rng(seed)
     head = advance_current(initial_current(params), params, dt, first, rng)
     tail = advance_current(head.state, params, dt, second, rng)
-    # Only round-off differs (a cumulative sum restarted at another point): at most about
-    # n eps max|x| = 3000 * 2.2e-16 * (free path up to ~10^3) = 7e-10.
-    tolerance = 1e-9
-    np.testing.assert_allclose(
-        np.concatenate([head.speeds_mps, tail.speeds_mps]),
-        whole.speeds_mps,
-        rtol=0.0,
-        atol=tolerance,
+    # each value from the one before, its normal and the fold sign alone: bit for bit
+    assert np.array_equal(np.concatenate([head.speeds_mps, tail.speeds_mps]), whole.speeds_mps)
+    assert np.array_equal(
+        np.concatenate([head.directions_rad, tail.directions_rad]), whole.directions_rad
     )
-    np.testing.assert_allclose(
-        np.concatenate([head.directions_rad, tail.directions_rad]),
-        whole.directions_rad,
-        rtol=0.0,
-        atol=tolerance,
-    )
-    assert tail.state.speed_mps == pytest.approx(whole.state.speed_mps, abs=tolerance)
-    assert tail.state.direction_rad == pytest.approx(whole.state.direction_rad, abs=tolerance)
+    assert tail.state == whole.state
 
 
 @pytest.mark.parametrize(
@@ -679,16 +668,22 @@ def test_advance_current_rejects_bad_step_and_state() -> None:
     ],
     ids=["inside", "folding"],
 )
-def test_current_walk_is_the_numpy_form_bit_for_bit(params: CurrentParams) -> None:
-    """Both walks go in one compiled call; the numbers are those of the numpy form it
-    replaced: increments ``sigma sqrt(dt) * normal``, summed in order (``cumsum``), from the
-    state with its fold sign, reflected into the band where they leave it."""
+def test_current_walk_is_the_step_by_step_form_bit_for_bit(params: CurrentParams) -> None:
+    """Both walks go in one compiled call; the numbers are those of the walk written a step
+    at a time in Python: the increment ``sigma sqrt(dt) * normal`` added with the fold sign,
+    the sum reflected into the band (a triangle wave of period 2 w) where it leaves it, the
+    sign turned over where the reflection mirrors. The folding case does fold."""
     state = CurrentState(params.speed_mps, params.direction_rad, -1, 1)
     got = advance_current(state, params, 0.01, 500, np.random.default_rng(5))
     normals = np.random.default_rng(5).standard_normal((500, 2))
     walks = (
-        (params.speed_walk_mps_per_sqrt_s, state.speed_mps, -1),
-        (params.direction_walk_rad_per_sqrt_s, state.direction_rad, 1),
+        (params.speed_walk_mps_per_sqrt_s, state.speed_mps, -1, got.state.speed_fold_sign),
+        (
+            params.direction_walk_rad_per_sqrt_s,
+            state.direction_rad,
+            1,
+            got.state.direction_fold_sign,
+        ),
     )
     bands = (
         (params.speed_min_mps, params.speed_max_mps),
@@ -696,10 +691,25 @@ def test_current_walk_is_the_numpy_form_bit_for_bit(params: CurrentParams) -> No
     )
     samples = (got.speeds_mps, got.directions_rad)
     ends = (got.state.speed_mps, got.state.direction_rad)
+    folds = 0
     for k in range(2):
-        sigma, start, sign = walks[k]
-        steps = sigma * math.sqrt(0.01) * normals[:, k]
-        free = start + sign * np.concatenate(([0.0], np.cumsum(steps)))
-        path, _ = environment._fold_into_band(free, *bands[k])
-        assert np.array_equal(samples[k].view(np.int64), path[:-1].view(np.int64))
-        assert ends[k] == path[-1]
+        sigma, v, sign, end_sign = walks[k]
+        lo, hi = bands[k]
+        w = hi - lo
+        path = [v]
+        for i in range(500):
+            x = v + sign * (sigma * math.sqrt(0.01) * normals[i, k])
+            if lo <= x <= hi:
+                v = x
+            else:
+                folds += 1
+                m = (x - lo) % (2.0 * w)
+                if m > w:
+                    v, sign = min(max(lo + (2.0 * w - m), lo), hi), -sign
+                else:
+                    v = min(max(lo + m, lo), hi)
+            path.append(v)
+        ref = np.array(path)
+        assert np.array_equal(samples[k].view(np.int64), ref[:-1].view(np.int64))
+        assert ends[k] == ref[-1] and end_sign == sign
+    assert (folds > 0) == (params.speed_max_mps - params.speed_min_mps < 0.2)

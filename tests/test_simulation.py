@@ -376,9 +376,9 @@ def test_grip_closes_only_within_reach_of_the_mount():
 def _numpy_chunk_rows(
     S, speeds, dirs, wire, wire_to, winch, tip, tip_to, crane, push, grip, frame, dt, held
 ):
-    """``site.chunk_rows_into``'s rows made with numpy a column at a time (the ramps, the
-    crane's straight path, a repeat of the base row), with the means and the crane's distance
-    summed in order as the compiled call does; the wire's entries ``held`` (from
+    """``site.chunk_rows_into``'s rows made in Python and numpy (the winch's and the crane's
+    steps one by one, a repeat of the base row), with the means summed in order as the
+    compiled call does; the wire's entries ``held`` (from
     ``site.wire_entries_into``, checked against the closed forms in ``tests/test_wire.py``)."""
     n = len(speeds)
     mean_v = sum(float(v) for v in speeds) / n
@@ -391,24 +391,26 @@ def _numpy_chunk_rows(
         base[plant.E_FRAME_PSI] = frame[3]
         base[plant.E_LAND] = frame[4]
 
-    def ramp(start, target, rate):
-        if target == start:
-            return np.full(n, start + 0.0)
-        steps = np.arange(1, n + 1) * dt * rate
-        return start + np.sign(target - start) * np.minimum(steps, abs(target - start))
-
-    delta = tip_to - tip
-    dist = math.sqrt(delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2])
-    if dist < 1e-12 or crane <= 0.0:
-        path = np.repeat(tip[None, :], n, axis=0)
-    else:
-        path = tip[None, :] + (ramp(0.0, dist, crane) / dist)[:, None] * delta[None, :]
+    # the winch and the crane a step at a time, each from where the step before left it
+    lengths, path = np.empty(n), np.empty((n, 3))
+    payout, at = wire, tip.astype(float).copy()
+    for j in range(n):
+        gap = wire_to - payout
+        if gap != 0.0:
+            payout = wire_to if abs(gap) <= dt * winch else payout + math.copysign(dt * winch, gap)
+        if crane > 0.0:
+            d = tip_to - at
+            dist = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+            if dist <= dt * crane:
+                at = tip_to.astype(float).copy()
+            elif dist > 0.0:
+                at = at + (dt * crane / dist) * d
+        lengths[j], path[j] = payout, at
     ref = np.repeat(base[None, :], n, axis=0)
     ref[:, plant.E_VC] = speeds * np.array([math.cos(b) for b in dirs])
     ref[:, plant.E_VC + 1] = speeds * np.array([math.sin(b) for b in dirs])
     ref[:, plant.E_VC + 2] = 0.0
     ref[:, plant.E_AC : plant.E_AC + 3] = 0.0
-    lengths = ramp(wire, wire_to, winch)
     ref[:, plant.E_LREST] = lengths + 0.5 * S.w * (lengths * lengths) / S.EA
     ref[:, plant.E_CT : plant.E_CT + 3] = path
     return ref, lengths[-1], path[-1], mean_v, mean_b
@@ -430,9 +432,9 @@ def test_chunk_rows_are_the_numpy_forms_numbers(crane_mps, winch_mps, frame_on, 
     numpy operations, bit for bit: the base row with the wire's held entries (made anew, with
     ``refresh``, for the current at the chunk's first step and the payout and crane tip at its
     start; else kept as they were), the push, the grip and the frame; each step's current
-    velocity V cos(beta), V sin(beta), 0, no water acceleration, the winch's ramp plus its
-    stretch, the crane tip's straight path (held at its target once there); and what it
-    reports back."""
+    velocity V cos(beta), V sin(beta), 0, no water acceleration, the winch's steps plus their
+    stretch, the crane tip's steps along its straight path (held at its target once there);
+    and what it reports back."""
     rng = np.random.default_rng(11)
     n = 73
     S = site.wire_site(FULL)
