@@ -647,6 +647,15 @@ def study(
         Path | None,
         typer.Option(help="landing-limit: PNG of the wire tension of the last landing run"),
     ] = None,
+    seeds: Annotated[
+        int,
+        typer.Option(
+            help="landing-limit: sweep this many seas (seeds --seed, --seed + 1, ...) and judge "
+            "on the lowest limit: one seed's limit is one sea's",
+            min=1,
+            max=50,
+        ),
+    ] = 1,
 ) -> None:
     """Rerun one of the thesis's studies and print our numbers beside the thesis's.
 
@@ -661,7 +670,7 @@ def study(
     if name == "landing-limit":
         if mission is not None:
             _mission_landing_limit(
-                mission, period, compensation, hs_step, hs_max, seed, plot, json_out
+                mission, period, compensation, hs_step, hs_max, seed, plot, json_out, seeds
             )
             return
         _landing_limit(
@@ -672,10 +681,13 @@ def study(
             0 if seed is None else seed,
             plot,
             json_out,
+            seeds,
         )
         return
     if mission is not None:
         _fail(f"--mission is for the landing-limit study, not {name}")
+    if seeds != 1:
+        _fail(f"--seeds is for the landing-limit study, not {name}")
     seed = 0 if seed is None else seed
     if name == "table-4.1":
         try:
@@ -738,30 +750,51 @@ def _landing_limit(
     seed: int,
     plot: Path | None,
     json_out: bool,
+    seeds: int = 1,
 ) -> None:
     """Step Hs up (head sea, elastic wire, tree alone on the wire, full scale, 100 m of
-    water) until a landing goes slack or touches down faster than the frame allows."""
+    water) until a landing goes slack or touches down faster than the frame allows; with
+    ``seeds`` > 1 in as many seas, judged on the lowest limit."""
     from missions import seaway
 
     if hs_step > hs_max:
         raise typer.BadParameter(f"--hs-step must be at most --hs-max ({hs_max}), got {hs_step}")
-    hs, landings = seaway.landing_limit(period, compensation, hs_step, hs_max, seed=seed)
+    limits = seaway.limits_over_seeds(
+        lambda s: seaway.landing_limit(period, compensation, hs_step, hs_max, seed=s),
+        seed,
+        seeds,
+    )
+    low = limits[0]
+    hs, landings = low.limit_m, low.landings
     if plot is not None:
         seaway.tension_figure(landings[-1], plot)
     if json_out:
-        typer.echo(json.dumps(_landing_limit_json(hs, landings), indent=2))
+        typer.echo(json.dumps(_landing_limit_json(hs, landings, limits), indent=2))
         return
     for x in landings:
         typer.echo(x.words())
     comp = "on" if compensation else "off"
+    if seeds > 1:
+        typer.echo(seaway.seeds_words(limits))
     typer.echo(
         f"last Hs within the limits at Tp {period:g} s, heave compensation {comp}: {hs:g} m"
         + (f" (the largest tried, {hs_max:g} m)" if landings[-1].within_limits else "")
+        + (f" (the lowest of {seeds} seeds: seed {low.seed}'s landings above)" if seeds > 1 else "")
     )
 
 
-def _landing_limit_json(hs: float, landings: list) -> dict:
+def _landing_limit_json(hs: float, landings: list, limits: list | None = None) -> dict:
+    by_seed = {}
+    if limits is not None:
+        by_seed = {
+            "seed_of_lowest_limit": limits[0].seed,
+            "limits_by_seed": [
+                {"seed": r.seed, "last_hs_within_limits_m": r.limit_m}
+                for r in sorted(limits, key=lambda r: r.seed)
+            ],
+        }
     return {
+        **by_seed,
         "last_hs_within_limits_m": hs,
         "landings": [
             {
@@ -789,9 +822,11 @@ def _mission_landing_limit(
     seed: int | None,
     plot: Path | None,
     json_out: bool,
+    seeds: int = 1,
 ) -> None:
     """The landing-limit study for the installation a mission's [setup] describes: only Hs
-    is swept; the mission's own Hs is reported beside the limit."""
+    is swept (in ``seeds`` seas from the seed on, judged on the lowest limit); the mission's
+    own Hs is reported beside the limit."""
     from missions import schema, seaway
 
     if period is not None:
@@ -809,10 +844,16 @@ def _mission_landing_limit(
     try:
         spec = schema.load_mission(mission)
         scenario = seaway.LandingScenario.from_mission(spec)
-        hs, landings = scenario.limit(hs_step, hs_max, seed=seed)
+        limits = seaway.limits_over_seeds(
+            lambda s: scenario.limit(hs_step, hs_max, seed=s),
+            scenario.seed if seed is None else seed,
+            seeds,
+        )
     except ValueError as err:
         _fail(str(err))
         return
+    low = limits[0]
+    hs, landings = low.limit_m, low.landings
     if plot is not None:
         seaway.tension_figure(landings[-1], plot)
     verdict = seaway.hs_verdict(scenario.significant_height_m, hs, landings)
@@ -825,19 +866,23 @@ def _mission_landing_limit(
             "hover_m": scenario.hover_m,
             "lower_rate_mps": scenario.lower_rate_mps,
             "seed": scenario.seed if seed is None else seed,
+            "seeds": seeds,
             "mission_hs_m": scenario.significant_height_m,
             "mission_hs_within_limit": scenario.significant_height_m <= hs,
             "verdict": verdict,
         }
-        out.update(_landing_limit_json(hs, landings))
+        out.update(_landing_limit_json(hs, landings, limits if seeds > 1 else None))
         typer.echo(json.dumps(out, indent=2))
         return
     typer.echo(scenario.words(seed))
     for x in landings:
         typer.echo(x.words())
+    if seeds > 1:
+        typer.echo(seaway.seeds_words(limits))
     typer.echo(
         f"last Hs within the limits: {hs:g} m"
         + (f" (the largest tried, {hs_max:g} m)" if landings[-1].within_limits else "")
+        + (f" (the lowest of {seeds} seeds: seed {low.seed}'s landings above)" if seeds > 1 else "")
     )
     typer.echo(verdict)
 

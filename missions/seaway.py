@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import textwrap
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -532,6 +533,47 @@ class LandingScenario:
             f"{deg(c.direction_rad):g} deg; lowered from {self.hover_m:g} m over the post "
             f"tops at {self.lower_rate_mps:g} m/s; seed {self.seed if seed is None else seed}"
         )
+
+
+SEEDS_MAX = 50
+"""Most seeds one landing-limit study sweeps (each is a whole sweep of Hs, 1-3 s)."""
+
+
+@dataclass(frozen=True)
+class SeedLimit:
+    """One sea's sweep: its seed, the last Hs within the limits, the landings run."""
+
+    seed: int
+    limit_m: float
+    landings: list[SeawayLanding] = field(compare=False, repr=False)
+
+
+def limits_over_seeds(
+    sweep: Callable[[int], tuple[float, list[SeawayLanding]]], first_seed: int, seeds: int
+) -> list[SeedLimit]:
+    """``sweep(seed)`` for ``seeds`` seeds from ``first_seed`` on, lowest limit first (ties:
+    the lower seed). One seed's limit is one sea's: with the draws of 2026-11-27, Tp 10 s,
+    2 m steps, seeds 0 to 11 gave limits from 2 to 6 m, so a margin is judged on the lowest
+    of several."""
+    if isinstance(seeds, bool) or not isinstance(seeds, int) or not 1 <= seeds <= SEEDS_MAX:
+        raise ValueError(f"seeds must be a whole number in [1, {SEEDS_MAX}], got {seeds!r}")
+    out = []
+    for seed in range(first_seed, first_seed + seeds):
+        hs, landings = sweep(seed)
+        out.append(SeedLimit(seed, hs, landings))
+    return sorted(out, key=lambda r: (r.limit_m, r.seed))
+
+
+def seeds_words(limits: list[SeedLimit]) -> str:
+    """The limits of several seas in one line, lowest first."""
+    low = limits[0]
+    each = ", ".join(
+        f"{r.limit_m:g} m (seed {r.seed})" for r in sorted(limits, key=lambda r: r.seed)
+    )
+    return (
+        f"over {len(limits)} seeds the lowest limit is {low.limit_m:g} m (seed {low.seed}); "
+        f"each: {each}"
+    )
 
 
 def hs_verdict(mission_hs_m: float, limit_m: float, landings: list[SeawayLanding]) -> str:

@@ -294,3 +294,53 @@ def test_a_library_mission_names_what_it_lacks():
     result = _cli("--mission", "full-docking-current-0.3")
     assert result.exit_code == 2
     assert "full-docking-current-0.3: setup.waves.peak_period_s is missing" in result.stderr
+
+
+def test_several_seeds_judge_the_mission_on_the_lowest_limit(tmp_path):
+    """One seed's limit is one sea's (the default scenario, 2 m steps: seeds 0 to 11 gave 2
+    to 6 m). ``--seeds 3`` sweeps seeds 0, 1, 2 (measured: 2, 2 and 4 m), reports each, and
+    judges the mission's Hs 3 m on the lowest, 2 m, with the landings of the seed that gave
+    it (the lower seed on a tie)."""
+    path = _write(tmp_path, _mission())
+    result = _cli(
+        "--mission", str(path), "--hs-step", "2", "--hs-max", "6", "--seeds", "3", "--json"
+    )
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.stdout)
+    assert out["seeds"] == 3 and out["seed"] == 0
+    assert out["limits_by_seed"] == [
+        {"seed": 0, "last_hs_within_limits_m": 2.0},
+        {"seed": 1, "last_hs_within_limits_m": 2.0},
+        {"seed": 2, "last_hs_within_limits_m": 4.0},
+    ]
+    assert out["seed_of_lowest_limit"] == 0 and out["last_hs_within_limits_m"] == 2.0
+    assert [r["hs_m"] for r in out["landings"]] == [2.0, 4.0]  # seed 0's sweep
+    assert out["mission_hs_within_limit"] is False
+    text = _cli("--mission", str(path), "--hs-step", "2", "--hs-max", "6", "--seeds", "3")
+    assert text.exit_code == 0, text.output
+    assert (
+        "over 3 seeds the lowest limit is 2 m (seed 0); each: 2 m (seed 0), 2 m (seed 1), "
+        "4 m (seed 2)" in text.stdout
+    )
+    assert "(the lowest of 3 seeds: seed 0's landings above)" in text.stdout
+
+
+def test_the_seeds_sweep_orders_and_refuses_as_it_says():
+    """``limits_over_seeds`` runs each seed once, lowest limit first (the lower seed on a
+    tie), and refuses a count outside [1, 50] naming the range; the command line refuses
+    ``--seeds`` for the other studies."""
+    calls: list[int] = []
+
+    def sweep(seed: int) -> tuple[float, list]:
+        calls.append(seed)
+        return {5: 3.0, 6: 1.5, 7: 1.5, 8: 4.0}[seed], []
+
+    limits = seaway.limits_over_seeds(sweep, 5, 4)
+    assert calls == [5, 6, 7, 8]
+    assert [(r.seed, r.limit_m) for r in limits] == [(6, 1.5), (7, 1.5), (5, 3.0), (8, 4.0)]
+    for bad in (0, 51, 2.5, True):
+        with pytest.raises(ValueError, match=r"seeds must be a whole number in \[1, 50\]"):
+            seaway.limits_over_seeds(sweep, 0, bad)  # type: ignore[arg-type]
+    other = CliRunner().invoke(cli_app, ["study", "table-4.2", "--seeds", "2"])
+    assert other.exit_code == 2
+    assert "--seeds is for the landing-limit study, not table-4.2" in other.output
