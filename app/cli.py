@@ -769,7 +769,9 @@ def _landing_limit(
     if plot is not None:
         seaway.tension_figure(landings[-1], plot)
     if json_out:
-        typer.echo(json.dumps(_landing_limit_json(hs, landings, limits), indent=2))
+        typer.echo(
+            json.dumps(_landing_limit_json(hs, landings, limits if seeds > 1 else None), indent=2)
+        )
         return
     for x in landings:
         typer.echo(x.words())
@@ -779,8 +781,15 @@ def _landing_limit(
     typer.echo(
         f"last Hs within the limits at Tp {period:g} s, heave compensation {comp}: {hs:g} m"
         + (f" (the largest tried, {hs_max:g} m)" if landings[-1].within_limits else "")
-        + (f" (the lowest of {seeds} seeds: seed {low.seed}'s landings above)" if seeds > 1 else "")
+        + _lowest_of(limits)
     )
+
+
+def _lowest_of(limits: list) -> str:
+    """' (the lowest of N seeds: ...)' after the limit when several seas were swept."""
+    if len(limits) == 1:
+        return ""
+    return f" (the lowest of {len(limits)} seeds: seed {limits[0].seed}'s landings above)"
 
 
 def _landing_limit_json(hs: float, landings: list, limits: list | None = None) -> dict:
@@ -882,7 +891,7 @@ def _mission_landing_limit(
     typer.echo(
         f"last Hs within the limits: {hs:g} m"
         + (f" (the largest tried, {hs_max:g} m)" if landings[-1].within_limits else "")
-        + (f" (the lowest of {seeds} seeds: seed {low.seed}'s landings above)" if seeds > 1 else "")
+        + _lowest_of(limits)
     )
     typer.echo(verdict)
 

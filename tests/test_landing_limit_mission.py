@@ -341,6 +341,16 @@ def test_the_seeds_sweep_orders_and_refuses_as_it_says():
     for bad in (0, 51, 2.5, True):
         with pytest.raises(ValueError, match=r"seeds must be a whole number in \[1, 50\]"):
             seaway.limits_over_seeds(sweep, 0, bad)  # type: ignore[arg-type]
+    # the study's own scenario: each seed listed only when several were swept (Hs 6 m is
+    # beyond the limits in seeds 0 and 1 alike, measured)
+    one = _cli("--hs-step", "6", "--hs-max", "6", "--json")
+    two = _cli("--hs-step", "6", "--hs-max", "6", "--seeds", "2", "--json")
+    assert one.exit_code == two.exit_code == 0, one.output + two.output
+    assert "limits_by_seed" not in json.loads(one.stdout)
+    assert json.loads(two.stdout)["limits_by_seed"] == [
+        {"seed": 0, "last_hs_within_limits_m": 0.0},
+        {"seed": 1, "last_hs_within_limits_m": 0.0},
+    ]
     other = CliRunner().invoke(cli_app, ["study", "table-4.2", "--seeds", "2"])
     assert other.exit_code == 2
     assert "--seeds is for the landing-limit study, not table-4.2" in other.output
