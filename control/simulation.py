@@ -14,11 +14,13 @@ its own methods; nothing outside writes its arrays.
 With ``control=False`` it is the open-loop plant of ``rov-console simulate``: the thrusters
 turn at ``set_thruster_speeds`` and the control columns of the rows stay zero.
 
-Stepping goes in chunks of at most ``chunk_steps``: ``_chunk_inputs`` makes the environment and
-sensor noise for a chunk (the place where injected faults will change what the plant and the
-sensors see), then one compiled kernel advances the chunk (``control.loop``). Commands are
-applied between chunks. A state that stops being finite raises ``SimulationDiverged`` naming
-the time and which part went non-finite.
+Stepping goes in chunks of at most ``chunk_steps`` that end on whole seconds (``REFRESH_S``),
+or of up to ``LONG_CHUNK_S`` while nothing but the wire's entries needs refreshing there
+(``_still``): ``_chunk_inputs`` makes the environment and sensor noise for a chunk (the place
+where injected faults will change what the plant and the sensors see), then one compiled
+kernel advances the chunk (``control.loop``). Commands are applied between chunks. A state
+that stops being finite raises ``SimulationDiverged`` naming the time and which part went
+non-finite.
 """
 
 from __future__ import annotations
@@ -98,11 +100,22 @@ wire's stiffnesses and drag offset (from the current at that step, the payout an
 tip), the control model's wire spring (its stiffness for the payout, its equilibrium under
 the crane tip), the point where the waves and the vessel's motion are evaluated, and the
 elastic wire's lumped mass. On the whole seconds of the step grid (steps 0, 1/dt, 2/dt...),
-and chunks end there, so a run gives the same numbers however it is cut into requests (the
-console's ticks, the command line's requests, a batch). A second is short beside how fast any
-of them changes: the current walks by millimetres a second, the winch pays out at most 2 m/s
-on a wire hundreds of metres long (its horizontal stiffness moves by 1 % at most), and the
-tree moves centimetres against waves hundreds of metres long."""
+and chunks end there (or, with only the wire's entries to refresh, run past them and refresh
+those at the rows of whole seconds: ``LONG_CHUNK_S``), so a run gives the same numbers however
+it is cut into requests (the console's ticks, the command line's requests, a batch). A second
+is short beside how fast any of them changes: the current walks by millimetres a second, the
+winch pays out at most 2 m/s on a wire hundreds of metres long (its horizontal stiffness moves
+by 1 % at most), and the tree moves centimetres against waves hundreds of metres long."""
+
+
+LONG_CHUNK_S = 5.0
+"""The longest chunk while nothing but the quasi-static wire's entries needs a refresh
+(``Simulation._still``: winch and crane at rest, no sea, no faults) [s]. A chunk costs some
+40 us of Python and numpy calls besides its steps (its inputs, the kernel's call, the rows'
+bookkeeping), 0.4 us a step in chunks of a second; five seconds make that 0.08 us, and
+longer ones gain little more (measured: the plant alone 1.97 us a step in chunks of 5 s,
+1.94 in chunks of 10 s, 2.12 in chunks of 1 s) while their rows outgrow the processor's
+second-level cache (500 rows of 115 columns are 460 kB)."""
 
 
 class SimulationDiverged(RuntimeError):
@@ -205,6 +218,13 @@ class Simulation:
         self.chunk_steps = chunk_steps
         self.refresh_steps = max(1, round(REFRESH_S / dt_s))
         """Steps between refreshes of the slow parts of the environment (``REFRESH_S``)."""
+        self.long_chunk_steps = (
+            self.refresh_steps * round(LONG_CHUNK_S / REFRESH_S)
+            if chunk_steps >= self.refresh_steps
+            else chunk_steps
+        )
+        """The longest chunk while the slow parts stand still (``LONG_CHUNK_S``; a
+        ``chunk_steps`` under a second keeps every chunk that short)."""
         self.has_rov = has_rov
         self.control_on = control
         self.vessel_motion = vessel
@@ -763,6 +783,11 @@ class Simulation:
             )
             if self.mdwire is not None:
                 k = 1  # MoorDyn and the plant take turns, one step each
+            elif k == self.refresh_steps and self._still():
+                # whole seconds with nothing to refresh but the wire's entries (which the
+                # rows refresh themselves): one chunk over several, ending on a whole second
+                whole = min(int(n) - done, self.long_chunk_steps) // self.refresh_steps
+                k = self.refresh_steps * max(1, whole)
             if done == 0 and k == n:
                 # most requests: one chunk, whose own fresh rows are the answer
                 out = yield from self._chunk(k)
@@ -777,6 +802,26 @@ class Simulation:
             out = np.empty((0, N_LOG))
         out.flags.writeable = False  # shared by the joins of whoever reads them (LogRows.join)
         return LogRows(out, self.n_thrusters, self.Q.counters.copy())
+
+    def _still(self) -> bool:
+        """Nothing refreshed on a whole second can change for seconds to come but the
+        quasi-static wire's entries, which ``site.chunk_rows_into`` refreshes at the rows of
+        whole seconds itself: the winch and the crane at rest (the payout for the control
+        model's wire spring, the tip for its equilibrium), no sea (the waves and the vessel's
+        motion are evaluated where the tree was at the refresh), no elastic or MoorDyn wire,
+        no faults. Then a chunk may run past whole seconds (``LONG_CHUNK_S``) and give the
+        same numbers as chunks of a second."""
+        return (
+            not self.faults
+            and self.wave_field is None
+            and self.wire_model == "quasi-static"
+            and self.mdwire is None
+            and self.wire_length_m == self.wire_target_m
+            and (
+                self.crane_speed_mps <= 0.0
+                or bool(np.array_equal(self.crane_tip_n, self.crane_target_n))
+            )
+        )
 
     def _refreshing(self) -> bool:
         """This chunk starts on a whole second of the step grid (``REFRESH_S``)."""
@@ -1145,8 +1190,7 @@ class Simulation:
         """(n, N_ENV) environment rows (sim.plant.E_*); advances the current, the winch and
         the vessel to the end of the chunk. A chunk that starts on a whole second refreshes
         the slow parts first (``REFRESH_S``); any other holds them."""
-        refresh = self._refreshing()
-        if refresh:
+        if self._refreshing():
             self._refresh()
         self.current_state, speeds, dirs = envmod.advance_current(
             self.current_state, self.current_params, self.dt_s, n, self.rng_current
@@ -1178,7 +1222,8 @@ class Simulation:
             frame,
             self.dt_s,
             self._wire_held,
-            refresh,
+            self.step_index,
+            self.refresh_steps,
             out,
         )
         if self.mdwire is not None:

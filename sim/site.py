@@ -173,18 +173,20 @@ def chunk_rows_into(
     frame: np.ndarray,
     dt: float,
     held: np.ndarray,
-    refresh: bool,
+    first_step: int,
+    refresh_steps: int,
     out: np.ndarray,
 ) -> None:
     """A chunk's environment rows (n, N_ENV) into ``env`` in one call (the simulator makes
     them for every chunk; a dozen Python and numpy calls cost more than the arithmetic).
 
     Every row carries the wire's slow entries held in ``held`` (N_ENV,): its horizontal and
-    vertical stiffness and its drag offset (``wire_entries_into``). With ``refresh`` they are
-    made anew first, from the current at the chunk's first step and the payout ``wire_m`` and
-    crane tip ``crane_tip_n`` where the chunk starts; the simulator refreshes them at every
-    whole second of the step grid and holds them in between, so they do not depend on where
-    a run's chunks begin. Every row also carries the ``push_n``, the ``grip`` and the docking
+    vertical stiffness and its drag offset (``wire_entries_into``). Row j's step is
+    ``first_step + j``; where that is a multiple of ``refresh_steps`` (a whole second of the
+    step grid) they are made anew before the row, from the current at that step and the
+    payout and crane tip where that step starts, and held in between, so they do not depend
+    on where a run's chunks begin (nor on a chunk running past whole seconds: the simulator's
+    long chunks). Every row also carries the ``push_n``, the ``grip`` and the docking
     frame (``frame``: [on (1/0), north, east, heading, landing depth]); row j then its own
     current velocity [V cos(beta), V sin(beta), 0], no water acceleration, the rest length of
     the payout after j + 1 steps of the winch (towards ``wire_target_m``, ``winch_mps`` dt a
@@ -202,29 +204,26 @@ def chunk_rows_into(
         sum_b += directions_rad[j]
     mean_v = sum_v / n
     mean_b = sum_b / n
-    if refresh:
-        wire_entries_into(held, S, wire_m, crane_tip_n, speeds_mps[0], directions_rad[0])
-    base = env[0]
-    for i in range(base.shape[0]):
-        base[i] = held[i]
-    for i in range(3):
-        base[plant.E_PUSH + i] = push_n[i]
-    base[plant.E_GRIP] = grip
-    if frame[0] > 0.5:
-        base[plant.E_FRAME] = frame[1]
-        base[plant.E_FRAME + 1] = frame[2]
-        base[plant.E_FRAME_PSI] = frame[3]
-        base[plant.E_LAND] = frame[4]
-    for j in range(1, n):
-        row = env[j]
-        for i in range(row.shape[0]):
-            row[i] = base[i]
     payout = wire_m + 0.0
     winch_step = dt * winch_mps
     tip0, tip1, tip2 = crane_tip_n[0], crane_tip_n[1], crane_tip_n[2]
     crane_step = dt * crane_mps
+    tip_now = out[1:4]  # scratch: the crane tip where a refreshing step starts
     for j in range(n):  # each step from the one before: the same whatever the chunks
+        if (first_step + j) % refresh_steps == 0:
+            tip_now[0], tip_now[1], tip_now[2] = tip0, tip1, tip2
+            wire_entries_into(held, S, payout, tip_now, speeds_mps[j], directions_rad[j])
         row = env[j]
+        for i in range(row.shape[0]):
+            row[i] = held[i]
+        for i in range(3):
+            row[plant.E_PUSH + i] = push_n[i]
+        row[plant.E_GRIP] = grip
+        if frame[0] > 0.5:
+            row[plant.E_FRAME] = frame[1]
+            row[plant.E_FRAME + 1] = frame[2]
+            row[plant.E_FRAME_PSI] = frame[3]
+            row[plant.E_LAND] = frame[4]
         row[plant.E_VC] = speeds_mps[j] * math.cos(directions_rad[j])
         row[plant.E_VC + 1] = speeds_mps[j] * math.sin(directions_rad[j])
         row[plant.E_VC + 2] = 0.0

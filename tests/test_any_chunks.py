@@ -85,6 +85,47 @@ def test_a_run_stepped_in_odd_pieces_gives_the_rows_of_the_run_in_one_request(
     assert np.all(tension > 0.0)
 
 
+def _chunk_sizes(sim: Simulation, n: int) -> tuple[np.ndarray, list[int]]:
+    """Step ``n`` in one request; its rows and the lengths of the chunks it ran in."""
+    sizes: list[int] = []
+    chunk = sim._chunk
+
+    def counted(k: int, out: np.ndarray | None = None):  # type: ignore[no-untyped-def]
+        sizes.append(k)
+        return chunk(k, out)
+
+    sim._chunk = counted  # type: ignore[method-assign]
+    try:
+        rows = sim.step(n).data
+    finally:
+        del sim._chunk
+    return rows, sizes
+
+
+@pytest.mark.parametrize("control", [True, False], ids=["closed loop", "open loop"])
+def test_long_chunks_while_the_winch_and_crane_rest_give_the_rows_of_short_ones(
+    control: bool,
+) -> None:
+    """With the winch and the crane at rest, no sea and no faults, a request runs past whole
+    seconds in chunks of up to ``LONG_CHUNK_S`` (the wire's entries refresh at the rows of
+    each whole second inside them): 1 234 steps from t = 0.37 s go as 63 steps to the next
+    whole second, then 500, 500 and 100, then the 71 left. The walking current changes the
+    entries at every refresh, so a refresh missed or taken at another step would show: the
+    rows are bit for bit those of the same run in odd pieces (whose chunks never exceed a
+    second). Once the winch moves, chunks are a second again."""
+    whole, cut = _full_scale(control), _full_scale(control)
+    for sim in (whole, cut):
+        sim.step(37)
+    rows_a, sizes = _chunk_sizes(whole, 1234)
+    assert sizes == [63, 500, 500, 100, 71]
+    rows_b = _rows(cut, [5, 58, 100, 250, 301, 99, 1, 120, 300])
+    assert np.array_equal(rows_a, rows_b)
+    assert np.array_equal(whole.plant_state, cut.plant_state)
+    whole.winch_to(whole.wire_length_m + 2.0, 0.1)
+    _, sizes = _chunk_sizes(whole, 829)
+    assert sizes == [29, 100, 100, 100, 100, 100, 100, 100, 100]
+
+
 def test_the_elastic_wire_in_a_seaway_with_vessel_motion_is_the_same_in_any_pieces() -> None:
     """The elastic wire (its mass with the payout, its top's velocity from the rows) under a
     moving vessel in waves evaluated at the tree: the other inputs a chunk's start used to

@@ -416,6 +416,18 @@ def _numpy_chunk_rows(
     return ref, lengths[-1], path[-1], mean_v, mean_b
 
 
+def _walk_inputs(seed: int, n: int):  # type: ignore[no-untyped-def]
+    """A chunk's inputs for ``site.chunk_rows_into`` tests: the full-scale wire site, n
+    speeds and directions at random (wider than any sea's, directions over several turns), a
+    crane tip and a push."""
+    rng = np.random.default_rng(seed)
+    speeds = rng.uniform(0.0, 1.2, n)
+    dirs = rng.uniform(-7.0, 7.0, n)
+    tip = rng.normal(size=3)
+    push = rng.normal(size=3) * 1e3
+    return site.wire_site(FULL), speeds, dirs, tip, push
+
+
 @pytest.mark.parametrize(
     "crane_mps, winch_mps, frame_on, refresh",
     [
@@ -430,19 +442,14 @@ def _numpy_chunk_rows(
 def test_chunk_rows_are_the_numpy_forms_numbers(crane_mps, winch_mps, frame_on, refresh):
     """``site.chunk_rows_into`` (a chunk's environment rows in one compiled call) against
     numpy operations, bit for bit: the base row with the wire's held entries (made anew, with
-    ``refresh``, for the current at the chunk's first step and the payout and crane tip at its
-    start; else kept as they were), the push, the grip and the frame; each step's current
-    velocity V cos(beta), V sin(beta), 0, no water acceleration, the winch's steps plus their
-    stretch, the crane tip's steps along its straight path (held at its target once there);
-    and what it reports back."""
-    rng = np.random.default_rng(11)
+    ``refresh``, a chunk starting on a whole second, for the current at the chunk's first
+    step and the payout and crane tip at its start; else kept as they were), the push, the
+    grip and the frame; each step's current velocity V cos(beta), V sin(beta), 0, no water
+    acceleration, the winch's steps plus their stretch, the crane tip's steps along its
+    straight path (held at its target once there); and what it reports back."""
     n = 73
-    S = site.wire_site(FULL)
-    speeds = rng.uniform(0.0, 1.2, n)
-    dirs = rng.uniform(-7.0, 7.0, n)
-    tip = rng.normal(size=3)
+    S, speeds, dirs, tip, push = _walk_inputs(11, n)
     tip_to = tip + np.array([0.05, -0.2, 0.01])  # reached within the chunk at 0.4 m/s
-    push = rng.normal(size=3) * 1e3
     frame = np.array([1.0 if frame_on else 0.0, 3.0, -4.0, 0.7, 101.5])
     args = (97.2, 97.2 + 0.05, winch_mps, tip, tip_to, crane_mps, push, 1.0, frame, 0.01)
     env = np.full((n, plant.N_ENV), np.nan)
@@ -452,7 +459,9 @@ def test_chunk_rows_are_the_numpy_forms_numbers(crane_mps, winch_mps, frame_on, 
     expected = held.copy()
     if refresh:
         site.wire_entries_into(expected, S, args[0], tip, speeds[0], dirs[0])
-    site.chunk_rows_into(env, S, speeds, dirs, *args, held, refresh, out)
+    # a chunk from step 0 refreshes at its first row; one from step 1 (73 steps, whole
+    # seconds every 100) holds the entries it is given
+    site.chunk_rows_into(env, S, speeds, dirs, *args, held, 0 if refresh else 1, 100, out)
     np.testing.assert_array_equal(held, expected)
     ref, last_length, last_tip, mean_v, mean_b = _numpy_chunk_rows(S, speeds, dirs, *args, held)
     np.testing.assert_array_equal(env, ref)
@@ -465,3 +474,46 @@ def test_chunk_rows_are_the_numpy_forms_numbers(crane_mps, winch_mps, frame_on, 
         assert out[0] == 97.2 + 0.05
     if not frame_on:
         assert not env[:, plant.E_FRAME : plant.E_LAND + 1].any()
+
+
+def test_a_chunk_past_whole_seconds_gives_the_rows_of_chunks_cut_there():
+    """A chunk that runs past whole seconds (the simulator's long chunks, ``LONG_CHUNK_S``)
+    refreshes the wire's entries at the rows of those seconds itself: from step 40 to 172
+    with a refresh every 50 steps, the winch paying out and the crane moving, its rows are
+    bit for bit those of four chunks cut at steps 50, 100 and 150 (each starting from where
+    the one before left the payout and the tip), and the entries it holds at the end are
+    those made at step 150 from that step's current, payout and tip."""
+    n = 132
+    S, speeds, dirs, tip, push = _walk_inputs(5, n)
+    tip_to = tip + np.array([0.3, -0.2, 0.1])
+    frame = np.array([1.0, 3.0, -4.0, 0.7, 101.5])
+    winch = (97.2, 99.0, 0.2)
+    rest = (tip_to, 0.4, push, 1.0, frame, 0.01)
+    held = np.zeros(plant.N_ENV)
+    site.wire_entries_into(held, S, 80.0, tip + 1.0, 0.3, 0.2)
+    held_whole = held.copy()
+    env = np.full((n, plant.N_ENV), np.nan)
+    out = np.full(6, np.nan)
+    site.chunk_rows_into(env, S, speeds, dirs, *winch, tip, *rest, held_whole, 40, 50, out)
+
+    held_cut = held.copy()
+    pieces, wire_m, at, made = [], winch[0], tip.copy(), None
+    for a, b in ((0, 10), (10, 60), (60, 110), (110, n)):
+        part = np.full((b - a, plant.N_ENV), np.nan)
+        part_out = np.full(6, np.nan)
+        if 40 + a == 150:
+            made = np.zeros(plant.N_ENV)
+            site.wire_entries_into(made, S, wire_m, at, speeds[a], dirs[a])
+        site.chunk_rows_into(
+            part, S, speeds[a:b], dirs[a:b], wire_m, *winch[1:], at, *rest,
+            held_cut, 40 + a, 50, part_out,
+        )  # fmt: skip
+        pieces.append(part)
+        wire_m, at = float(part_out[0]), part_out[1:4].copy()
+    np.testing.assert_array_equal(env, np.vstack(pieces))
+    np.testing.assert_array_equal(held_whole, held_cut)
+    np.testing.assert_array_equal(held_whole, made)
+    np.testing.assert_array_equal(out[0:4], [wire_m, *at])
+    # the entries did change at the whole seconds (the payout grew, the current changed)
+    assert env[9, plant.E_KZ] != env[10, plant.E_KZ] != env[60, plant.E_KZ]
+    assert np.array_equal(env[10:60, plant.E_KH], np.full(50, env[10, plant.E_KH]))
