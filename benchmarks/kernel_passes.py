@@ -140,7 +140,7 @@ def timed_steps(
         acc[5] += spent
         if again:
             for i in range(x_sb.shape[0]):
-                for r in range(n_runs):
+                for r in range(x_sb.shape[1]):
                     x_again[i, r] = x_sb[i, r]
             c0 = cycles()
             batch_plant.rk4_batch_into(x_again, n_sb, env_sb, P0, dt, bwork)
@@ -190,11 +190,11 @@ def measure(runs: int, again: bool = False) -> dict:
     acc = np.zeros(N_ACC, np.int64)
 
     def steps(s: batch._Slots) -> int:
+        x_sb, n_sb, env_sb, bwork = s.plant_columns()
         return timed_steps(
             s.pos, s.length, s.ok, s.active, s.k0, s.x, s.held_y, s.xhat, s.Pc, s.cs, s.target,
             s.n_rps, s.env, s.noise, s.fresh, s.PS, s.CS, s.QS, s.dt_s, s.log_at, s.work, s.W,
-            s.same_plant, s.P0, s.x_sb, s.n_sb, s.env_sb, s.bwork, acc, np.empty_like(s.x_sb),
-            again,
+            s.same_plant, s.P0, x_sb, n_sb, env_sb, bwork, acc, np.empty_like(x_sb), again,
         )  # fmt: skip
 
     bb._warm(runs)

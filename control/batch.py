@@ -31,6 +31,11 @@ from sim import batch_plant, plant
 
 T = TypeVar("T")
 
+PLANT_LANES = 8
+"""The plant pass's widths are multiples of this many runs: the doubles in an AVX-512
+register, so the structure-of-arrays loops over the runs have no scalar remainder (on AVX2,
+two registers' worth)."""
+
 
 def _stacked(template: Any, n_runs: int) -> Any:
     """A NamedTuple like ``template`` with every field stacked over ``n_runs`` runs (zeros)."""
@@ -87,10 +92,20 @@ class _Slots:
         self.P0 = s.arrays
         self.same_plant = np.zeros(n_runs, np.bool_)
         m = s.arrays.thr_T.shape[1]
-        self.x_sb = np.zeros((plant.N_STATE, n_runs))
-        self.n_sb = np.zeros((m, n_runs))
-        self.env_sb = np.zeros((first.env.shape[1], n_runs))
-        self.bwork = batch_plant.make_batch_work(m, n_runs)
+        # the plant pass's columns, one set per width: a multiple of PLANT_LANES up to the
+        # batch's size (``plant_columns`` picks the narrowest that holds the runs under way)
+        self._columns = {
+            w: (
+                np.zeros((plant.N_STATE, w)),
+                np.zeros((m, w)),
+                np.zeros((first.env.shape[1], w)),
+                batch_plant.make_batch_work(m, w),
+            )
+            for w in sorted(
+                {min(n_runs, k) for k in range(PLANT_LANES, n_runs + PLANT_LANES, PLANT_LANES)}
+            )
+        }
+        self.x_sb, self.n_sb, self.env_sb, self.bwork = self._columns[n_runs]
 
     def _inputs(self, job: ChunkJob, length: int) -> None:
         """(Re)make the chunk buffers for chunks of up to ``length`` steps, keeping what the
@@ -208,7 +223,18 @@ class _Slots:
             int(self.ok[r]),
         )
 
+    def plant_columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
+        """The plant pass's arrays (x_sb, n_sb, env_sb, bwork) for the next ``steps``: the
+        narrowest set with a column for every run under way on the batch's plant (runs only
+        leave during a call). As runs end, the structure-of-arrays step narrows with them."""
+        under_way = int(np.count_nonzero((self.pos < self.length) & self.same_plant))
+        for w, arrays in self._columns.items():
+            if w >= under_way:
+                return arrays
+        raise AssertionError("the widest set has a column for every run")
+
     def steps(self) -> int:
+        x_sb, n_sb, env_sb, bwork = self.plant_columns()
         return batch_steps(
             self.pos,
             self.length,
@@ -234,10 +260,10 @@ class _Slots:
             self.W,
             self.same_plant,
             self.P0,
-            self.x_sb,
-            self.n_sb,
-            self.env_sb,
-            self.bwork,
+            x_sb,
+            n_sb,
+            env_sb,
+            bwork,
         )
 
 

@@ -194,30 +194,50 @@ def plants_into(
     bwork: batch_plant.BatchWork,
 ) -> None:
     """``batch_steps``' plant pass: one RK4 step of every active run's plant (``x[r]`` in
-    place, at propeller speeds ``n_rps[r]`` and its row ``env[r, pos[r]]``). The runs on the
-    batch's own plant (``same_plant``) go together in one step of all columns, the runs
-    innermost (``sim.batch_plant``, the same bits as alone); any other run by itself."""
+    place, at propeller speeds ``n_rps[r]`` and its row ``env[r, pos[r]]``). The active runs
+    on the batch's own plant (``same_plant``) go together in one step of the columns of
+    ``x_sb`` (N_STATE, w), the runs innermost (``sim.batch_plant``, the same bits as alone),
+    packed into its first columns in run order: runs that have ended or wait between chunks
+    take no column (an ended run left landed on the frame would otherwise take the scalar
+    contact in every stage to the batch's end). The caller gives arrays w wide, at least as
+    many columns as such runs (``control.batch._Slots.plant_columns``: a multiple of the
+    vector width; fewer raises ValueError); columns left over repeat the first with no
+    landing surface, so they cost the plain step and nothing more. Any other run by
+    itself."""
     n_runs = pos.shape[0]
     m = n_sb.shape[0]
-    any_same = False
+    w = x_sb.shape[1]
+    c = 0
     for r in range(n_runs):
         if active[r] and same_plant[r]:
-            any_same = True
+            if c == w:
+                raise ValueError("batch plant pass: more runs under way than plant columns")
             for i in range(plant.N_STATE):
-                x_sb[i, r] = x[r, i]
+                x_sb[i, c] = x[r, i]
             for i in range(m):
-                n_sb[i, r] = n_rps[r, i]
+                n_sb[i, c] = n_rps[r, i]
             env_r = env[r, pos[r]]
             for i in range(env_r.shape[0]):
-                env_sb[i, r] = env_r[i]
-    if any_same:
+                env_sb[i, c] = env_r[i]
+            c += 1
+    if c > 0:
+        for col in range(c, w):
+            for i in range(plant.N_STATE):
+                x_sb[i, col] = x_sb[i, 0]
+            for i in range(m):
+                n_sb[i, col] = n_sb[i, 0]
+            for i in range(env_sb.shape[0]):
+                env_sb[i, col] = env_sb[i, 0]
+            env_sb[plant.E_LAND, col] = 0.0
         batch_plant.rk4_batch_into(x_sb, n_sb, env_sb, P0, dt, bwork)
+    c = 0
     for r in range(n_runs):
         if not active[r]:
             continue
         if same_plant[r]:
             for i in range(plant.N_STATE):
-                x[r, i] = x_sb[i, r]
+                x[r, i] = x_sb[i, c]
+            c += 1
         else:
             # inlined: a call would pass run r's ``PlantArrays`` views one by one
             P = plant_view(PS, r)

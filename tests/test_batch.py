@@ -194,3 +194,51 @@ def test_runs_on_another_plant_step_by_themselves_in_the_batch_and_stay_as_alone
     slots = _Slots(jobs[0], 3, 100)
     assert all(slots.put(r, job) for r, job in enumerate(jobs))
     assert slots.same_plant.tolist() == [True, False, True]
+
+
+def test_the_plant_pass_narrows_as_runs_end_and_each_run_stays_as_alone():
+    """The structure-of-arrays plant step takes only the runs under way, packed into its
+    first columns, in sets whose widths are multiples of eight (``PLANT_LANES``): ten runs
+    have widths 8 and 10. Requests of 30 to 120 steps end one after another, so the pass goes
+    from ten columns to eight, the packing shifts the later runs into earlier columns as the
+    earlier ones end, and the columns left over repeat the first: every run's rows and final
+    state are still those of the run alone, bit for bit. Fewer columns than runs under way is
+    refused, not stepped past the arrays' end."""
+    from control.batch import PLANT_LANES, _Slots
+    from control.batchkernel import batch_steps
+
+    assert PLANT_LANES == 8
+    base = params.load("full-scale")
+
+    def runs() -> list[Simulation]:
+        sims = [Simulation(base, tree_depth_m=100.0, seed=i) for i in range(10)]
+        for i, sim in enumerate(sims):
+            sim.set_target(0.3 * i, -0.2, math.radians(10.0 * i))
+        return sims
+
+    lengths = [120, 30, 110, 40, 100, 50, 90, 60, 80, 70]
+    alone = [sim.step(n).data for sim, n in zip(runs(), lengths, strict=True)]
+    sims = runs()
+    together = run_together([sim.step_jobs(n) for sim, n in zip(sims, lengths, strict=True)])
+    for a, o in zip(alone, together, strict=True):
+        assert o.error is None
+        assert np.array_equal(o.value.data, a)
+    assert len({float(a[-1, 0]) for a in alone}) == 10  # ten different runs
+
+    sims = runs()
+    jobs = [next(sim.step_jobs(10)) for sim in sims]
+    slots = _Slots(jobs[0], 10, 100)
+    assert list(slots._columns) == [8, 10]
+    assert all(slots.put(r, job) for r, job in enumerate(jobs))
+    assert slots.plant_columns()[0].shape == (24, 10)
+    slots.length[[1, 3]] = 0  # two runs between chunks: eight under way
+    assert slots.plant_columns()[0].shape == (24, 8)
+    slots.length[[1, 3]] = 10
+    narrow = slots._columns[8]
+    with pytest.raises(ValueError, match="more runs under way than plant columns"):
+        batch_steps(
+            slots.pos, slots.length, slots.ok, slots.active, slots.k0, slots.x, slots.held_y,
+            slots.xhat, slots.Pc, slots.cs, slots.target, slots.n_rps, slots.env, slots.noise,
+            slots.fresh, slots.PS, slots.CS, slots.QS, slots.dt_s, slots.log_at, slots.work,
+            slots.W, slots.same_plant, slots.P0, *narrow,
+        )  # fmt: skip
