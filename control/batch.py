@@ -105,7 +105,6 @@ class _Slots:
                 {min(n_runs, k) for k in range(PLANT_LANES, n_runs + PLANT_LANES, PLANT_LANES)}
             )
         }
-        self.x_sb, self.n_sb, self.env_sb, self.bwork = self._columns[n_runs]
 
     def _inputs(self, job: ChunkJob, length: int) -> None:
         """(Re)make the chunk buffers for chunks of up to ``length`` steps, keeping what the

@@ -815,7 +815,6 @@ class Simulation:
             not self.faults
             and self.wave_field is None
             and self.wire_model == "quasi-static"
-            and self.mdwire is None
             and self.wire_length_m == self.wire_target_m
             and (
                 self.crane_speed_mps <= 0.0
