@@ -245,6 +245,7 @@ def compile_entry_points(arrays: PlantArrays) -> None:
         (refkernel.third_order_step, (a1, a1, f8, a2)),
         (refkernel.reference_step, (i8, a1, a1, f8, a2)),
         (refkernel.reference_step_into, (a1, i8, a1, a1, f8, a2)),
+        (refkernel.polls_still_away, (i8, a1, a1, f8, a2, a1, a1, i8, i8, a1)),
         (allocation._priority_forces, (a2, a3, a3, a1, a1, a1, f8)),
     ]
     # the thrusters' maps: the parameter sets' arrays are read-only, a caller's own are not

@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from control import allocation as alloc
-from control import loop, model, quality
+from control import loop, model, quality, refkernel
 from control.columns import N_LOG, LogRows
 from control.config import (
     ALLOCATIONS,
@@ -441,6 +441,47 @@ class Simulation:
     def winch_idle(self) -> bool:
         """The winch has reached its commanded payout."""
         return abs(self.wire_length_m - self.wire_target_m) < 1e-6
+
+    def winch_steps_busy(self) -> int:
+        """Steps from now after each of which the winch is certainly still moving
+        (``winch_idle`` false): its gap to the target over a step's travel, less two steps of
+        margin for the rounding of the payout's sum (some 1e-13 m a step against a travel of
+        1e-4 m or more). 0 when the winch is idle or stopped, and with any fault scheduled (a
+        winch slip moves the payout)."""
+        travel_m = self.wire_rate_mps * self.dt_s
+        gap_m = abs(self.wire_target_m - self.wire_length_m)
+        if self.faults or travel_m <= 0.0 or gap_m < 1e-6:
+            return 0
+        return max(0, int(gap_m / travel_m) - 2)
+
+    def reference_polls_away(
+        self, goal: FloatArray, tol: FloatArray, poll_steps: int, max_polls: int
+    ) -> int:
+        """How many polls of ``poll_steps`` steps from now certainly end with the reference
+        model's pose and rate away from ``goal`` (6,) by more than ``tol`` (6,) in some entry
+        (``control.refkernel.polls_still_away``: the reference steps towards the target as
+        the closed-loop kernel steps it, and nothing but the target and the mode moves it).
+        0 when nothing can be said: open loop (no reference is stepped), or a switch into
+        tree mode not yet taken (its first step resets the reference to the estimate)."""
+        cs = self.cs
+        if not self.control_on or max_polls <= 0 or poll_steps <= 0:
+            return 0
+        if int(cs[loop.CS_MODE]) == loop.MODE_TREE and int(cs[loop.CS_LAST_MODE]) != loop.MODE_TREE:
+            return 0
+        return int(
+            refkernel.polls_still_away(
+                int(self.C.ref_kind),
+                cs[loop.CS_REF : loop.CS_REF + 9].copy(),
+                np.ascontiguousarray(self.target, dtype=float),
+                float(self.dt_s),
+                self.C.ref_params,
+                np.ascontiguousarray(goal, dtype=float),
+                np.ascontiguousarray(tol, dtype=float),
+                int(poll_steps),
+                int(max_polls),
+                np.empty(9),
+            )
+        )
 
     def vessel_at(self, target_n: FloatArray, tol_m: float = 1e-6) -> bool:
         return bool(np.linalg.norm(self.crane_tip_n - np.asarray(target_n, float)) <= tol_m)

@@ -32,6 +32,20 @@ CHUNK_S = 1.0
 """How long an executor waiting for a condition runs between checks [s]."""
 ARRIVED_M = 1e-3
 ARRIVED_RAD = math.radians(0.01)
+ARRIVED_MPS = 1e-4
+ARRIVED_RAD_S = 1e-5
+"""The reference has arrived when its pose is within ARRIVED_M (north, east) and ARRIVED_RAD
+(heading) of the target and its rates below ARRIVED_MPS and ARRIVED_RAD_S."""
+_ARRIVED_TOL = np.array(
+    [ARRIVED_M, ARRIVED_M, ARRIVED_RAD, ARRIVED_MPS, ARRIVED_MPS, ARRIVED_RAD_S]
+)
+MAX_MERGED_POLLS = 600
+"""The most polls one request stands for when checks are skipped (``MissionContext.polls``):
+a bound on how far ahead a prediction looks."""
+
+Away = Callable[[int, int], int]
+"""A prediction for ``MissionContext.polls``: (steps a poll, most polls) -> how many polls
+from now certainly end with the executor's condition still false."""
 
 
 class MissionContext:
@@ -66,15 +80,49 @@ class MissionContext:
         self.target = np.array([north, east, psi])
         self.sim.set_target(north, east, psi, heading_mode="absolute")
 
+    merge_polls = True
+    """Skip the checks a prediction says would fail (``polls``); False polls every time, as
+    before predictions (the same figures either way: ``tests/test_legs.py``)."""
+
     def reference_arrived(self) -> bool:
         ref = self.sim.reference
         return bool(
             abs(ref[0] - self.target[0]) < ARRIVED_M
             and abs(ref[1] - self.target[1]) < ARRIVED_M
             and abs(ref[2] - self.target[2]) < ARRIVED_RAD
-            and np.all(np.abs(ref[3:5]) < 1e-4)
-            and abs(ref[5]) < 1e-5
+            and np.all(np.abs(ref[3:5]) < ARRIVED_MPS)
+            and abs(ref[5]) < ARRIVED_RAD_S
         )
+
+    def reference_away(self, poll_steps: int, max_polls: int) -> int:
+        """``Away`` for ``reference_arrived``: the reference model run ahead
+        (``Simulation.reference_polls_away``)."""
+        goal = np.array([self.target[0], self.target[1], self.target[2], 0.0, 0.0, 0.0])
+        return self.sim.reference_polls_away(goal, _ARRIVED_TOL, poll_steps, max_polls)
+
+    def winch_away(self, poll_steps: int, max_polls: int) -> int:
+        """``Away`` for a condition that needs the winch idle (``Simulation.winch_steps_busy``)."""
+        return min(max_polls, self.sim.winch_steps_busy() // poll_steps)
+
+    def polls(self, poll_s: float, deadline_s: float, away: Away | None) -> float:
+        """Seconds to run before the next check of a condition polled every ``poll_s``: one
+        poll, or, when ``away`` says the next checks would certainly fail, the polls up to the
+        first check that might not, in one request. The checks skipped are those the loop
+        would have made and failed, and the deadline's too (a poll starts only before the
+        deadline), so the run is the same step for step: the simulation's chunks do not
+        depend on how requests cut its time (``Simulation.step_jobs``). Fewer requests, and
+        longer chunks where the winch and crane are still, are what it saves."""
+        sim = self.sim
+        poll_steps = int(round(poll_s / sim.dt_s))
+        if away is None or not self.merge_polls or poll_steps <= 0:
+            return poll_s
+        n = min(away(poll_steps, MAX_MERGED_POLLS), MAX_MERGED_POLLS)
+        extra = 0
+        while extra < n and (sim.step_index + (extra + 1) * poll_steps) * sim.dt_s < deadline_s:
+            extra += 1  # poll extra + 1 would start before the deadline, after a failed check
+        if extra == 0:
+            return poll_s
+        return (extra + 1) * poll_steps * sim.dt_s
 
     def wait(self, seconds: float, deadline_s: float) -> Iterator[float]:
         """Run for ``seconds``, cut at the deadline."""
@@ -82,12 +130,15 @@ class MissionContext:
         if remaining > 0:
             yield remaining
 
-    def run_until(self, done: Callable[[], bool], deadline_s: float) -> LegRun:
-        """Run in chunks until ``done()``; returns False if the deadline came first."""
+    def run_until(
+        self, done: Callable[[], bool], deadline_s: float, away: Away | None = None
+    ) -> LegRun:
+        """Run in chunks until ``done()``; returns False if the deadline came first. ``away``
+        predicts checks of ``done`` that would fail, to be skipped (``polls``)."""
         while not done():
             if self.sim.t_s >= deadline_s:
                 return False
-            yield CHUNK_S
+            yield self.polls(CHUNK_S, deadline_s, away)
         return True
 
     def go_and_settle(
@@ -96,7 +147,7 @@ class MissionContext:
         """Set the target, run until the reference arrives, then settle. Returns False on
         timeout."""
         self.set_target(north, east, psi)
-        if not (yield from self.run_until(self.reference_arrived, deadline_s)):
+        if not (yield from self.run_until(self.reference_arrived, deadline_s, self.reference_away)):
             return False
         yield from self.wait(settle_s, deadline_s)
         self.check_reached(north, east, psi)
@@ -210,7 +261,7 @@ def _mode(ctx: MissionContext, leg: schema.ModeLeg, deadline: float) -> LegRun:
 def _wire(ctx: MissionContext, leg: schema.WireLeg, deadline: float) -> LegRun:
     sim = ctx.sim
     sim.winch_to(sim.wire_length_m + leg.change_m, leg.rate_mps)
-    if not (yield from ctx.run_until(lambda: sim.winch_idle, deadline)):
+    if not (yield from ctx.run_until(lambda: sim.winch_idle, deadline, ctx.winch_away)):
         return False
     yield from ctx.wait(leg.settle_s, deadline)
     return True
@@ -323,7 +374,7 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
             )
     if ok:
         ok = yield from ctx.run_until(
-            lambda: cl.winch_idle and _aligned(cl, frame, layout, leg), deadline
+            lambda: cl.winch_idle and _aligned(cl, frame, layout, leg), deadline, ctx.winch_away
         )
     if not ok:
         ctx.event("landing", "landing abandoned: not aligned over the frame in time")
@@ -334,8 +385,8 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
     while not cl.winch_idle:
         if cl.t_s >= deadline:
             return False
-        yield 0.5
-        rows = ctx.last_log
+        yield ctx.polls(0.5, deadline, ctx.winch_away)
+        rows = ctx.last_log  # (the first contact in them is the first of the polls')
         k = _first_contact(rows, post_top, half_h) if contact is None else None
         if k is not None:
             prev = rows.data[k - 1] if k > 0 else ctx.previous_row
@@ -401,7 +452,7 @@ def _lift(ctx: MissionContext, leg: schema.LiftLeg, deadline: float) -> LegRun:
     half_h = float(cl.plant_ps.tree.dimensions_m[2]) / 2.0
     post_top = frame.post_top_depth_m(layout)
     cl.winch_to(cl.wire_length_for_depth(post_top - leg.height_m - half_h), leg.rate_mps)
-    if not (yield from ctx.run_until(lambda: cl.winch_idle, deadline)):
+    if not (yield from ctx.run_until(lambda: cl.winch_idle, deadline, ctx.winch_away)):
         return False
     ctx.event("lift", "tree lifted off the frame")
     yield from ctx.wait(leg.settle_s, deadline)

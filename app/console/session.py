@@ -146,6 +146,11 @@ class Session:
         self.sim = run.sim
         self.mission = run.mission
         self.driver = MissionDriver(run.mission, run.sim) if run.run_legs else None
+        if self.driver is not None:
+            # live, an instructor's fault (a winch slip) or the pilot's changes can move what
+            # a leg waits for mid-leg: its checks come every poll, none skipped on a
+            # prediction made before (missions.legs.MissionContext.polls)
+            self.driver.ctx.merge_polls = False
         self._result: Future | None = None
         name = run.mission.name if run.run_legs else None
         self.mission_status = MissionStatus(
