@@ -142,9 +142,7 @@ def tracking_figures(rows: LogRows, dt_s: float) -> tuple[float, float, float, f
     err_n = tree[:, 0] - ref[:, 0]
     err_e = tree[:, 1] - ref[:, 1]
     err_psi = ssa_each(tree[:, 5] - ref[:, 2])
-    util = rows["thruster_utilisation"]
-    umax = float(util.max()) if util.size else 0.0
-    sat = float(np.sum(np.any(util >= SATURATED, axis=1)) * dt_s) if util.size else 0.0
+    umax, sat = utilisation_figures(rows, dt_s)
     return rms(err_n), rms(err_e), math.degrees(rms(err_psi)), umax, sat
 
 
@@ -154,16 +152,27 @@ def settling_time(rows: LogRows, dt_s: float, tol_m: float, tol_deg: float) -> f
     tree = rows["tree_eta_n"]
     moving = np.any(np.abs(np.diff(ref, axis=0)) > 1e-9, axis=1)
     last_change = int(np.flatnonzero(moving)[-1]) + 1 if moving.any() else 0
-    err_pos = np.hypot(tree[:, 0] - ref[:, 0], tree[:, 1] - ref[:, 1])
-    err_psi = np.degrees(np.abs(ssa_each(tree[:, 5] - ref[:, 2])))
+    # the errors from the last change on only (the rows before it are not looked at)
+    tree, ref_tail = tree[last_change:], ref[last_change:]
+    err_pos = np.hypot(tree[:, 0] - ref_tail[:, 0], tree[:, 1] - ref_tail[:, 1])
+    err_psi = np.degrees(np.abs(ssa_each(tree[:, 5] - ref_tail[:, 2])))
     outside = (err_pos > tol_m) | (err_psi > tol_deg)
-    out_idx = np.flatnonzero(outside[last_change:])
+    out_idx = np.flatnonzero(outside)
     if out_idx.size == 0:
         return 0.0
     last_out = last_change + int(out_idx[-1])
-    if last_out >= len(outside) - 1:
+    if last_out >= len(ref) - 1:
         return None
     return (last_out + 1 - last_change) * dt_s
+
+
+def utilisation_figures(rows: LogRows, dt_s: float) -> tuple[float, float]:
+    """``tracking_figures``' last two alone: the largest thruster utilisation and the time with
+    a thruster saturated [s]."""
+    util = rows["thruster_utilisation"]
+    umax = float(util.max()) if util.size else 0.0
+    sat = float(np.sum(np.any(util >= SATURATED, axis=1)) * dt_s) if util.size else 0.0
+    return umax, sat
 
 
 def counters_by_name(counters: NDArray[np.int64]) -> dict[str, dict[str, int]]:
@@ -195,6 +204,7 @@ def score(
     scored) and the whole run (utilisation, saturation, settling)."""
     legs = []
     scored: list[FloatArray] = []
+    scored_figures = []
     for span in spans:
         part = _take(rows, span.start, span.stop)
         fig = tracking_figures(part, dt_s)
@@ -212,14 +222,16 @@ def score(
         )
         if span.score:
             scored.append(part.data)
+            scored_figures.append(fig)
+    full = utilisation_figures(rows, dt_s)
     if not scored:
-        scored_rows = rows
+        rms_n, rms_e, rms_psi, _, _ = tracking_figures(rows, dt_s)
+    elif len(scored) == 1:  # most missions: the scored leg's own figures (the same rows)
+        rms_n, rms_e, rms_psi, _, _ = scored_figures[0]
     else:
-        # one scored leg (most missions): its rows as they are, not a copy of them
-        data = scored[0] if len(scored) == 1 else np.vstack(scored)
+        data = np.vstack(scored)
         scored_rows = LogRows(data, rows.n_thrusters, layout=rows.layout)
-    rms_n, rms_e, rms_psi, _, _ = tracking_figures(scored_rows, dt_s)
-    full = tracking_figures(rows, dt_s)
+        rms_n, rms_e, rms_psi, _, _ = tracking_figures(scored_rows, dt_s)
     final = rows["tree_eta_n"][-1] if len(rows) else np.zeros(6)
     final_eta = [float(v) for v in final[:3]] + [math.degrees(ssa(float(v))) for v in final[3:]]
     tol_m = 0.1 * max(1.0, tree_size_m / 3.6)
@@ -232,8 +244,8 @@ def score(
         rms_north_m=rms_n,
         rms_east_m=rms_e,
         rms_heading_deg=rms_psi,
-        max_thruster_utilisation=full[3],
-        saturated_time_s=full[4],
+        max_thruster_utilisation=full[0],
+        saturated_time_s=full[1],
         settling_time_s=settling_time(rows, dt_s, tol_m, 2.0) if len(rows) else None,
         final_eta_n=[round(v, 6) for v in final_eta],
         diverged=diverged,
