@@ -182,14 +182,15 @@ class MissionDriver:
             )
 
     def _finish_request(self) -> None:
-        """Hand the rows of the request just run to the executor."""
-        data = LogRows.join(self._request_parts, self.sim.n_thrusters)
-        self._request_parts = []
-        if len(self.ctx.last_log):
-            self.ctx.previous_row = self.ctx.last_log.data[-1]
-        self.parts.append(data if self.keep_log else _scored_columns(data))
-        self.ctx.last_log = data
-        self.rows += len(data)
+        """Hand the rows of the request just run to the executor (in the pieces they were
+        run in: ``MissionContext.last_log`` joins them if the executor reads them)."""
+        parts, self._request_parts = self._request_parts, []
+        if self.keep_log:
+            self.parts.extend(parts)
+        else:
+            self.parts.extend(_scored_columns(p) for p in parts)
+        self.ctx.hand_back(parts)
+        self.rows += sum(len(p) for p in parts)
 
     # ------------------------------------------------------------------ stepping
     def advance(self, max_steps: int | None = None) -> LogRows:
@@ -199,10 +200,17 @@ class MissionDriver:
         return run_jobs(self.advance_jobs(max_steps))
 
     def advance_jobs(
-        self, max_steps: int | None = None
+        self, max_steps: int | None = None, rows: bool = True
     ) -> Generator[ChunkJob, ChunkResult, LogRows]:
         """``advance`` as a generator of the simulation's compiled chunks
-        (``Simulation.step_jobs``), for ``control.batch`` to run beside other missions'."""
+        (``Simulation.step_jobs``), for ``control.batch`` to run beside other missions'.
+        ``rows=False`` returns no rows (``run_to_end_jobs``: the result has them).
+
+        A request longer than ``Simulation.long_chunk_steps`` (5 s) runs in pieces of that
+        many steps, each a ``step_jobs`` of its own (the same chunks and numbers; a run does
+        not depend on how its time is cut): the rows of a long request then never need one
+        array for all of them (a leg's merged polls can ask for minutes, 920 bytes a step;
+        fresh arrays that size cost the kernel's writes a page fault every 4 kB)."""
         out: list[LogRows] = []
         budget = max_steps
         while not self.done and (budget is None or budget > 0):
@@ -212,28 +220,31 @@ class MissionDriver:
                 self._finish_request()
                 continue
             k = self._pending if budget is None else min(budget, self._pending)
+            k = min(k, max(1, self.sim.long_chunk_steps))
             try:
-                rows = yield from self.sim.step_jobs(k)
+                piece = yield from self.sim.step_jobs(k)
             except SimulationDiverged as err:
                 self._mark_diverged(str(err))
                 break
             except ValueError as err:
                 self._fail_leg(err)
                 break
-            out.append(rows)
-            self._request_parts.append(rows)
+            if rows:
+                out.append(piece)
+            self._request_parts.append(piece)
             for t_s, text in self.sim.take_fault_log():
                 self.ctx.events.append(
                     {"t_s": round(t_s, 3), "kind": "fault", "text": text, "data": {}}
                 )
             if self.wire_watch is not None:
-                self._watch_wire(rows)
+                self._watch_wire(piece)
             self._pending -= k
             if self._pending == 0:
                 self._finish_request()
-            if budget is None:
-                break
-            budget -= k
+                if budget is None:
+                    break
+            if budget is not None:
+                budget -= k
         return LogRows.join(out, self.sim.n_thrusters)
 
     def run_to_end(self) -> MissionResult:
@@ -244,7 +255,7 @@ class MissionDriver:
     def run_to_end_jobs(self) -> Generator[ChunkJob, ChunkResult, MissionResult]:
         """``run_to_end`` as a generator of compiled chunks (see ``advance_jobs``)."""
         while not self.done:
-            yield from self.advance_jobs()
+            yield from self.advance_jobs(rows=False)
         return self.result()
 
     def _fail_leg(self, err: Exception) -> None:

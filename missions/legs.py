@@ -60,8 +60,10 @@ class MissionContext:
         self.sim = sim
         eta = sim.eta_estimate
         self.target = np.array([eta[0], eta[1], eta[2]])
-        self.last_log = LogRows.empty(sim.n_thrusters)
+        self._last_parts: list[LogRows] = []
+        self._last_log: LogRows | None = LogRows.empty(sim.n_thrusters)
         self.previous_row: FloatArray | None = None
+        """The row before ``last_log``'s first (None before the first request)."""
         self.charted_frame: DockingFrame | None = None
         self.events: list[dict] = []
         self.leg: schema.Leg | None = None
@@ -79,6 +81,28 @@ class MissionContext:
     def set_target(self, north: float, east: float, psi: float) -> None:
         self.target = np.array([north, east, psi])
         self.sim.set_target(north, east, psi, heading_mode="absolute")
+
+    @property
+    def last_log(self) -> LogRows:
+        """The rows of the request just run, joined when first read (a long request comes
+        back in pieces, and most executors never read its rows)."""
+        if self._last_log is None:
+            self._last_log = LogRows.join(self._last_parts, self.sim.n_thrusters)
+            self._last_parts = [self._last_log]
+        return self._last_log
+
+    @last_log.setter
+    def last_log(self, rows: LogRows) -> None:
+        self._last_parts, self._last_log = [rows], rows
+
+    def hand_back(self, parts: list[LogRows]) -> None:
+        """The driver hands back a request's rows in its pieces: they become ``last_log``, and
+        the last row of the rows before becomes ``previous_row``."""
+        for part in reversed(self._last_parts):
+            if len(part):
+                self.previous_row = part.data[-1]
+                break
+        self._last_parts, self._last_log = list(parts), None
 
     merge_polls = True
     """Skip the checks a prediction says would fail (``polls``); False polls every time, as

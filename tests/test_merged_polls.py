@@ -209,3 +209,31 @@ def test_the_simulation_runs_a_merged_request_in_whole_second_chunks():
     long_steps = int(simulation.LONG_CHUNK_S / 0.01)
     assert sizes.count(long_steps) > 40  # measured 419 chunks polling, 210 merged
     assert len(sizes) < 260
+
+
+def test_a_long_request_runs_in_pieces_and_hands_back_all_its_rows():
+    """A request of minutes (the merged polls of a move) is stepped in pieces of at most
+    ``long_chunk_steps`` (no array of all its rows for the kernel to fault its pages in);
+    ``advance()`` still returns every row of the request, and the leg reads the same rows
+    joined (``MissionContext.last_log``)."""
+    d = _driver("full-docking-current-0.3", merge=True)
+    asked: list[int] = []
+    step_jobs = simulation.Simulation.step_jobs
+
+    def counted(self, n):
+        asked.append(n)
+        return (yield from step_jobs(self, n))
+
+    simulation.Simulation.step_jobs = counted  # type: ignore[method-assign]
+    try:
+        first = d.advance()  # the 120-s hold: one request
+        assert len(first) == 12_000 and max(asked) == d.sim.long_chunk_steps == 500
+        assert len(asked) == 24
+        assert np.array_equal(d.ctx.last_log.data, first.data)
+        previous_last = first.data[-1].copy()
+        second = d.advance()
+        assert len(second) > 500  # a merged request, in several pieces
+        assert np.array_equal(d.ctx.last_log.data, second.data)
+        assert np.array_equal(d.ctx.previous_row, previous_last)
+    finally:
+        simulation.Simulation.step_jobs = step_jobs  # type: ignore[method-assign]
