@@ -40,7 +40,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks import batch_benchmark as bb
 from control import batch, loop
 from control.batchkernel import (
-    ROW_BYTES,
     control_view,
     plant_view,
     plants_into,
@@ -73,7 +72,7 @@ PASSES = (
     "thrusters",
     "plant pass (all runs, structure of arrays)",
     "EKF prediction",
-    "log row's plant columns",
+    "log row's plant columns, and the kept columns written out",
 )
 # acc[k] for k < 8: cycles per pass; then these counters
 RUN_STEPS, FAR_STEPS, FAR_CYCLES, NEAR_STEPS, NEAR_CYCLES, NEAR_RUNS, ACTIVE, AGAIN = range(8, 16)
@@ -83,13 +82,15 @@ N_ACC = 16
 @njit(error_model="numpy", _nrt=False, cache=True)
 def timed_steps(
     pos, length, ok, active, k0, x, held_y, xhat, Pc, cs, target, n_rps, env, noise, fresh,
-    PS, CS, QS, dt, log_at, work, W, same_plant, P0, x_sb, n_sb, env_sb, bwork, acc, x_again, again,
+    PS, CS, QS, dt, log_at, work, W, same_plant, P0, x_sb, n_sb, env_sb, bwork, scratch, keep, acc,
+    x_again, again,
 ):  # fmt: skip
     """``batch_steps`` with the cycles of each pass added into ``acc`` (see ``PASSES``); with
     ``again``, the structure-of-arrays plant step run once more on ``x_again`` (a copy of the
     pass's result) and its cycles into ``acc[AGAIN]``."""
     n_runs = pos.shape[0]
     m = CS.f_lo.shape[1]
+    n_keep = keep.shape[0]
     tau6 = W.vec[loop.W_TAU6, 0:6]
     f = W.vec[loop.W_F, 0:m]
     reach = plant.contact_reach(P0)
@@ -105,7 +106,7 @@ def timed_steps(
             C = control_view(CS, r)
             Q = quality_view(QS, r)
             t = (k0[r] + j) * dt
-            row = row_at(log_at[r] + j * ROW_BYTES, N_LOG)
+            row = scratch[r]
             for i in range(N_LOG):
                 row[i] = 0.0
             xr, hr = x[r], held_y[r]
@@ -158,7 +159,7 @@ def timed_steps(
             c0 = cycles()
             j = pos[r]
             C = control_view(CS, r)
-            log_row = row_at(log_at[r] + j * ROW_BYTES, N_LOG)
+            log_row = scratch[r]
             env_k = env[r, j]
             # loop.observe_into, its two parts timed apart
             loop.predict_from_row_into(env_k, xhat[r], Pc[r], C, dt, log_row, W)
@@ -169,6 +170,9 @@ def timed_steps(
             if not plant.all_finite(x[r]):
                 ok[r] = j
                 pos[r] = length[r]
+            kept = row_at(log_at[r] + j * n_keep * 8, n_keep)
+            for i in range(n_keep):
+                kept[i] = log_row[keep[i]]
             acc[6] += c1 - c0
             acc[7] += cycles() - c1
     return h
@@ -194,7 +198,8 @@ def measure(runs: int, again: bool = False) -> dict:
         return timed_steps(
             s.pos, s.length, s.ok, s.active, s.k0, s.x, s.held_y, s.xhat, s.Pc, s.cs, s.target,
             s.n_rps, s.env, s.noise, s.fresh, s.PS, s.CS, s.QS, s.dt_s, s.log_at, s.work, s.W,
-            s.same_plant, s.P0, x_sb, n_sb, env_sb, bwork, acc, np.empty_like(x_sb), again,
+            s.same_plant, s.P0, x_sb, n_sb, env_sb, bwork, s.scratch, s.keep, acc,
+            np.empty_like(x_sb), again,
         )  # fmt: skip
 
     bb._warm(runs)

@@ -88,6 +88,9 @@ class _Slots:
         self._inputs(first, length)
         self.work = plant.make_work(s.arrays.thr_T.shape[1])
         self.W = loop.make_control_work()
+        # each run's whole row is made here, then the columns its log keeps go to its rows
+        self.scratch = np.zeros((n_runs, loop.N_LOG))
+        self.keep = s.log_keep
         # the batch's plant (the first run's) and who has it: those runs step together
         self.P0 = s.arrays
         self.same_plant = np.zeros(n_runs, np.bool_)
@@ -137,6 +140,7 @@ class _Slots:
             job.noise.shape[1:],
             job.fresh.shape[1:],
             job.fresh.dtype.str,
+            tuple(s.log_keep),
         )
 
     @staticmethod
@@ -166,6 +170,8 @@ class _Slots:
             return False
         if (self.seen_P[r] is None or p_new or c_new) and self.key_of(job) != self.key:
             return False
+        if s.log_keep is not self.keep and not np.array_equal(s.log_keep, self.keep):
+            return False  # a log of other columns (it runs alone)
         if n > self.env.shape[1]:
             self._inputs(job, n)
         for i in p_new:
@@ -187,8 +193,9 @@ class _Slots:
         self.noise[r, :n] = job.noise
         self.fresh[r, :n] = job.fresh
         out = job.out
-        if out is None or not out.flags.c_contiguous or out.shape != (n, loop.N_LOG):
-            out = np.empty((n, loop.N_LOG))  # (copied into ``job.out`` at the chunk's end)
+        width = self.keep.shape[0]
+        if out is None or not out.flags.c_contiguous or out.shape != (n, width):
+            out = np.empty((n, width))  # (copied into ``job.out`` at the chunk's end)
         self.rows[r] = out
         self.log_at[r] = out.ctypes.data
         self.k0[r] = s.step_index
@@ -263,6 +270,8 @@ class _Slots:
             n_sb,
             env_sb,
             bwork,
+            self.scratch,
+            self.keep,
         )
 
 

@@ -25,9 +25,6 @@ from control.loop import ControlArrays, ControlWork, QualityState
 from sim import batch_plant, plant, sensors
 from sim.gnc import JIT_NOALLOC
 
-ROW_BYTES = N_LOG * 8
-"""Bytes of one log row (``N_LOG`` float64)."""
-
 
 def _row_at(typingctx: Any, address: Any, length: Any) -> Any:
     """The ``length`` float64 numbers at memory ``address`` as a 1-D array (a view: no copy,
@@ -285,12 +282,18 @@ def batch_steps(
     n_sb: np.ndarray,
     env_sb: np.ndarray,
     bwork: batch_plant.BatchWork,
+    scratch: np.ndarray,
+    keep: np.ndarray,
 ) -> int:
     """Advance every run with a chunk under way (``pos[r] < length[r]``) step by step, all of
     them one step before any takes the next, until the first of them reaches the end of its
     chunk. Run r's step j (``pos[r]``) is its chunk's step, at time ``(k0[r] + j) dt``, and
-    writes its log row j: the ``N_LOG`` numbers at address ``log_at[r] + j ROW_BYTES`` (a
-    C-contiguous (steps, N_LOG) array of the run's own, zeroed here row by row). A run whose
+    writes its log row j: the step's whole row (``N_LOG`` numbers) is made in ``scratch[r]``
+    (zeroed first), then the columns ``keep`` (K indices into the whole row, in order) are
+    copied to the K numbers at address ``log_at[r] + j K 8`` (a C-contiguous (steps, K) array
+    of the run's own). ``keep`` is every column for a whole log; a lean log (a campaign's
+    runs: ``Simulation.keep_log_columns``) keeps the few its scores and legs read, and
+    writes a sixth of the bytes a step. A run whose
     plant state stops being finite at step j ends its chunk there: ``ok[r] = j``,
     ``pos[r] = length[r]``; its rows from j on are left unwritten. Returns the steps taken.
 
@@ -303,6 +306,8 @@ def batch_steps(
     RK4 step, ``observe_into``), with the same numbers."""
     n_runs = pos.shape[0]
     m = CS.f_lo.shape[1]
+    n_keep = keep.shape[0]
+    row_bytes = n_keep * 8
     tau6 = W.vec[loop.W_TAU6, 0:6]
     f = W.vec[loop.W_F, 0:m]
     h = steps_to_first_end(pos, length)
@@ -315,7 +320,7 @@ def batch_steps(
             C = control_view(CS, r)
             Q = quality_view(QS, r)
             t = (k0[r] + j) * dt
-            row = row_at(log_at[r] + j * ROW_BYTES, N_LOG)
+            row = scratch[r]
             for i in range(N_LOG):
                 row[i] = 0.0
             xr, hr = x[r], held_y[r]
@@ -343,10 +348,14 @@ def batch_steps(
                 dt,
                 t + dt,
                 held_y[r],
-                row_at(log_at[r] + j * ROW_BYTES, N_LOG),
+                scratch[r],
                 work,
                 W,
             )
+            whole = scratch[r]
+            kept = row_at(log_at[r] + j * row_bytes, n_keep)
+            for i in range(n_keep):
+                kept[i] = whole[keep[i]]
             pos[r] = j + 1
             if not plant.all_finite(x[r]):
                 ok[r] = j

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import numpy as np
 
 from control import loop
+from control.columns import N_LOG
 
 if TYPE_CHECKING:
     from control.simulation import Simulation
@@ -40,9 +41,9 @@ class ChunkJob:
     noise: np.ndarray  # sensor noise rows
     fresh: np.ndarray  # which sensors have a fresh sample at each step
     out: np.ndarray | None = None
-    """Where the chunk's log rows go, (n, N_LOG): a slice of its request's rows (C-contiguous);
-    None, a new array. A batch's kernel and ``run`` (``loop.run_chunk_into``) write the rows
-    straight there."""
+    """Where the chunk's log rows go, (n, the log's width: ``Simulation.log_keep``): a slice
+    of its request's rows (C-contiguous); None, a new array. A batch's kernel and ``run``
+    (``loop.run_chunk_into``) write the rows straight there."""
 
     @property
     def n(self) -> int:
@@ -67,6 +68,13 @@ class ChunkJob:
             s.Q,
             s.dt_s,
         )
+        if s.log_keep.shape[0] != N_LOG:  # a lean log: the whole rows made, the kept taken
+            x, held_y, xhat, P_cov, cs, rows, n_done = loop.run_chunk(*args)
+            kept = rows[:, s.log_keep]
+            if self.out is None:
+                return x, held_y, xhat, P_cov, cs, kept, n_done
+            self.out[...] = kept
+            return x, held_y, xhat, P_cov, cs, self.out, n_done
         if self.out is None:
             return loop.run_chunk(*args)
         x, held_y, xhat, P_cov, cs, n_done = loop.run_chunk_into(*args, self.out)

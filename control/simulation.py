@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 
 from control import allocation as alloc
 from control import loop, model, quality, refkernel
-from control.columns import N_LOG, LogRows
+from control.columns import LAYOUT, N_LOG, Layout, LogRows
 from control.config import (
     ALLOCATIONS,
     HEADING_MODES,
@@ -337,6 +337,10 @@ class Simulation:
         self.wire_rate_mps = 0.0
         self.docking_frame: DockingFrame | None = None
         self.faults: list[Fault] = []
+        self.log_layout: Layout = LAYOUT
+        """The columns of the rows ``step`` returns (``keep_log_columns``)."""
+        self.log_keep: NDArray[np.int64] = np.arange(N_LOG)
+        """Their indices in the whole row (``LAYOUT``), in order."""
         """Injected faults, past, present and scheduled (control.faults)."""
         self._slipped: set[int] = set()
         self._faults_on: set[int] = set()
@@ -441,6 +445,20 @@ class Simulation:
     def winch_idle(self) -> bool:
         """The winch has reached its commanded payout."""
         return abs(self.wire_length_m - self.wire_target_m) < 1e-6
+
+    def keep_log_columns(self, layout: Layout) -> None:
+        """From now on, log only ``layout``'s columns (blocks of ``LAYOUT``, in its order): the
+        rows ``step`` returns have that layout. A campaign's runs keep the few columns their
+        scores and legs read (``missions.driver.LEAN_LAYOUT``); the kernels still make the
+        whole row, and only the kept columns are written out (a sixth of the bytes a step
+        to memory)."""
+        keep = [
+            LAYOUT.starts[name] + k for name in layout.starts for k in range(layout.widths[name])
+        ]
+        if keep != sorted(keep) or len(keep) != layout.width:
+            raise ValueError("keep_log_columns: the layout's blocks must be LAYOUT's, in its order")
+        self.log_layout = layout
+        self.log_keep = np.array(keep, dtype=np.int64)
 
     def winch_steps_busy(self) -> int:
         """Steps from now after each of which the winch is certainly still moving
@@ -836,13 +854,13 @@ class Simulation:
                 # several chunks: each writes its rows straight into the request's (the
                 # kernels' ``*_into`` forms, a batch's kernel too; no join of the parts)
                 if out is None:
-                    out = np.empty((n, N_LOG))
+                    out = np.empty((n, self.log_layout.width))
                 yield from self._chunk(k, out[done : done + k])
             done += k
         if out is None:
-            out = np.empty((0, N_LOG))
+            out = np.empty((0, self.log_layout.width))
         out.flags.writeable = False  # shared by the joins of whoever reads them (LogRows.join)
-        return LogRows(out, self.n_thrusters, self.Q.counters.copy())
+        return LogRows(out, self.n_thrusters, self.Q.counters.copy(), self.log_layout)
 
     def _still(self) -> bool:
         """Nothing refreshed on a whole second can change for seconds to come but the
@@ -1131,9 +1149,11 @@ class Simulation:
     def _chunk(
         self, n: int, out: FloatArray | None = None
     ) -> Generator[ChunkJob, ChunkResult, FloatArray]:
-        """Advance n steps in one chunk; returns their rows: ``out`` (n, N_LOG) filled, when
-        given, else a new array."""
+        """Advance n steps in one chunk; returns their rows: ``out`` (n, the log's width)
+        filled, when given, else a new array. The kernels alone make whole rows, whose kept
+        columns are taken here (``keep_log_columns``); a batch's writes only those."""
         env, noise = self._chunk_inputs(n)
+        whole = self.log_keep.shape[0] == N_LOG
         if self.control_on:
             self._sync_site()
         if not self.control_on:
@@ -1148,7 +1168,7 @@ class Simulation:
                 self.arrays,
                 self.dt_s,
             )
-            if out is None:
+            if out is None or not whole:
                 x, held, log, ok = loop.run_open_chunk(*args)
             else:  # the rows straight into the request's (no copy of them afterwards)
                 x, held, ok = loop.run_open_chunk_into(*args, out)
@@ -1159,6 +1179,8 @@ class Simulation:
             x, held, self.xhat, self.P_cov, self.cs, log, ok = yield ChunkJob(
                 self, env, noise.noise, noise.fresh, out
             )
+        if not whole and log.shape[1] == N_LOG:
+            log = log[:, self.log_keep]
         if ok < n:
             self._diverged(x, ok)
         self.x, self.held_y = x, held

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Generator
+from functools import lru_cache
 
 import numpy as np
+from numpy.typing import NDArray
 
 from control.columns import LAYOUT, LOG_COLUMNS, Layout, LogRows
 from control.jobs import ChunkJob, ChunkResult, run_jobs
@@ -23,18 +25,28 @@ from missions.setup import charted_frame
 
 SCORED_LAYOUT = Layout.of([c for c in LOG_COLUMNS if c.name in SCORED_COLUMNS])
 """The log's columns that ``missions.scoring.score`` reads, in the log's order."""
+LEAN_COLUMNS = (*SCORED_COLUMNS, "t_s", "wire_tension")
+LEAN_LAYOUT = Layout.of([c for c in LOG_COLUMNS if c.name in LEAN_COLUMNS])
+"""What a lean driver's simulation logs (``Simulation.keep_log_columns``): the scored
+columns, and what the legs and the wire watch read of a request's rows (the tree's pose, the
+time, the wire's tension)."""
+
+
+@lru_cache(maxsize=8)
+def _scored_index(layout: Layout) -> NDArray[np.intp]:
+    """Where ``SCORED_LAYOUT``'s columns are in rows of ``layout``."""
+    names = SCORED_LAYOUT.starts
+    return np.array([layout.starts[name] + k for name in names for k in range(layout.widths[name])])
 
 
 def _scored_columns(rows: LogRows) -> LogRows:
-    """The scored columns of rows of the whole log (a copy)."""
+    """The scored columns of rows of the log (a copy)."""
     return LogRows(
-        rows.data[:, _SCORED_INDEX], rows.n_thrusters, rows.quality_counters, SCORED_LAYOUT
+        rows.data[:, _scored_index(rows.layout)],
+        rows.n_thrusters,
+        rows.quality_counters,
+        SCORED_LAYOUT,
     )
-
-
-_SCORED_INDEX = np.array(
-    [LAYOUT.starts[name] + k for name in SCORED_LAYOUT.starts for k in range(LAYOUT.widths[name])]
-)
 
 
 class MissionDriver:
@@ -52,6 +64,8 @@ class MissionDriver:
         run, not the whole log: a campaign's runs, many of them alive at once in a batch
         (the whole log of a 500 s docking is 47 MB). The figures are the same; the result's
         ``log`` has those columns only."""
+        if not keep_log:
+            sim.keep_log_columns(LEAN_LAYOUT)
         self.ctx = MissionContext(sim)
         self.ctx.charted_frame = charted_frame(mission)
         self.leg_index = -1

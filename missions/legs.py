@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from control.columns import LAYOUT, LogRows
+from control.columns import LAYOUT, Layout, LogRows
 from control.config import Gains
 from control.simulation import Simulation
 from missions import landing, schema
@@ -406,6 +406,7 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
     ctx.event("dock", "aligned over the frame: lowering")
     cl.winch_to(cl.wire_length_for_depth(frame.landing_depth_m - half_h) + 0.3, leg.lower_rate_mps)
     contact: tuple[int, FloatArray, FloatArray] | None = None
+    contact_layout = LAYOUT  # the layout of the contact's rows (a lean log's, in a campaign)
     while not cl.winch_idle:
         if cl.t_s >= deadline:
             return False
@@ -416,8 +417,9 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
             prev = rows.data[k - 1] if k > 0 else ctx.previous_row
             row = rows.data[k]
             contact = (k, row.copy(), (row if prev is None else prev).copy())
+            contact_layout = rows.layout
     yield from ctx.wait(leg.settle_s, deadline)
-    result = _landing_result(cl, real, layout, contact)
+    result = _landing_result(cl, real, layout, contact, contact_layout)
     ctx.landings.append(result)
     verdict = "landed" if result.success else "FAILED landing"
     ctx.event(
@@ -435,6 +437,7 @@ def _landing_result(
     frame: DockingFrame,
     layout: DockingLayout,
     contact: tuple[int, FloatArray, FloatArray] | None,
+    rows_layout: Layout = LAYOUT,
 ) -> LandingResult:
     """The landing as it happened: the funnels over the posts when they reached the post tops,
     and where the tree rests after settling. A success ends on the landing surface with every
@@ -443,9 +446,9 @@ def _landing_result(
     if contact is None:
         return LandingResult(False, math.inf, math.nan, 0.0, "nothing", cl.t_s)
     _, row, prev = contact
-    pose = LAYOUT.take(row, "tree_eta_n")
+    pose = rows_layout.take(row, "tree_eta_n")
     chk = docking.check_alignment(pose, frame, layout)
-    speed = float((pose[2] - LAYOUT.take(prev, "tree_eta_n")[2]) / cl.dt_s)
+    speed = float((pose[2] - rows_layout.take(prev, "tree_eta_n")[2]) / cl.dt_s)
     rest = docking.check_alignment(cl.tree_eta_n, frame, layout)
     bottom = cl.tree_eta_n[2] + float(cl.plant_ps.tree.dimensions_m[2]) / 2.0
     down = bottom > frame.landing_depth_m - 0.2 * layout.post_height_m
@@ -461,7 +464,7 @@ def _landing_result(
         chk.heading_error_deg,
         speed,
         rests_on,
-        float(LAYOUT.take(row, "t_s")),
+        float(rows_layout.take(row, "t_s")),
         rest.miss_m,
         rest.heading_error_deg,
     )

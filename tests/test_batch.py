@@ -240,5 +240,55 @@ def test_the_plant_pass_narrows_as_runs_end_and_each_run_stays_as_alone():
             slots.pos, slots.length, slots.ok, slots.active, slots.k0, slots.x, slots.held_y,
             slots.xhat, slots.Pc, slots.cs, slots.target, slots.n_rps, slots.env, slots.noise,
             slots.fresh, slots.PS, slots.CS, slots.QS, slots.dt_s, slots.log_at, slots.work,
-            slots.W, slots.same_plant, slots.P0, *narrow,
+            slots.W, slots.same_plant, slots.P0, *narrow, slots.scratch, slots.keep,
         )  # fmt: skip
+
+
+def test_a_lean_log_keeps_the_whole_logs_columns_in_a_batch_alone_and_mixed():
+    """A campaign's runs log only the columns their scores and legs read (``LEAN_LAYOUT``):
+    the batch's kernel makes each step's whole row in a scratch row and writes those columns
+    out, the kernels alone make whole rows and the simulation takes them. Either way a lean
+    run's rows are its whole log's columns, bit for bit; a batch of lean and whole logs runs
+    the whole ones alone beside it (their rows another width)."""
+    from control.columns import LAYOUT, Layout
+    from missions.driver import LEAN_LAYOUT
+
+    base = params.load("full-scale")
+    lengths = [120, 30, 110, 40, 100, 50]
+
+    def runs(lean: list[bool]) -> list[Simulation]:
+        sims = [Simulation(base, tree_depth_m=100.0, seed=i) for i in range(len(lean))]
+        for i, sim in enumerate(sims):
+            sim.set_target(0.3 * i, -0.2, math.radians(10.0 * i))
+            if lean[i]:
+                sim.keep_log_columns(LEAN_LAYOUT)
+        return sims
+
+    whole = [s.step(n) for s, n in zip(runs([False] * 6), lengths, strict=True)]
+    keep = runs([True])[0].log_keep
+    assert LEAN_LAYOUT.width == len(keep) < LAYOUT.width / 5
+    alone = [s.step(n) for s, n in zip(runs([True] * 6), lengths, strict=True)]
+    lean = runs([True] * 6)
+    batch = run_together([s.step_jobs(n) for s, n in zip(lean, lengths, strict=True)])
+    mixed_flags = [True, False, True, False, True, False]
+    mixed = run_together([s.step_jobs(n) for s, n in zip(runs(mixed_flags), lengths, strict=True)])
+    for i, w in enumerate(whole):
+        kept = w.data[:, keep]
+        assert alone[i].layout == LEAN_LAYOUT and np.array_equal(alone[i].data, kept)
+        assert batch[i].error is None and batch[i].value.layout == LEAN_LAYOUT
+        assert np.array_equal(batch[i].value.data, kept)
+        m = mixed[i].value
+        assert np.array_equal(m.data, kept if mixed_flags[i] else w.data)
+        for name in LEAN_LAYOUT.starts:
+            assert np.array_equal(batch[i].value[name], w[name])
+    assert len({float(w.data[-1, 1]) for w in whole}) == 6  # six different runs
+    sim = runs([False])[0]
+    scrambled = Layout.of([_column("wire_tension"), _column("t_s")])
+    with pytest.raises(ValueError, match="LAYOUT's, in its order"):
+        sim.keep_log_columns(scrambled)
+
+
+def _column(name: str):
+    from control.columns import LOG_COLUMNS
+
+    return next(c for c in LOG_COLUMNS if c.name == name)
