@@ -140,7 +140,6 @@ class _Slots:
             job.noise.shape[1:],
             job.fresh.shape[1:],
             job.fresh.dtype.str,
-            tuple(s.log_keep),
         )
 
     @staticmethod

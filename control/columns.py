@@ -271,6 +271,14 @@ class Layout:
     def has(self, name: str) -> bool:
         return name in self.starts
 
+    def columns_in(self, other: Layout) -> NDArray[np.intp]:
+        """Where this layout's columns are in rows of ``other``, in this layout's order (a
+        KeyError names a block ``other`` lacks)."""
+        return np.array(
+            [other.slice(name).start + k for name in self.starts for k in range(self.widths[name])],
+            dtype=np.intp,
+        )
+
 
 LAYOUT = Layout.of(LOG_COLUMNS)
 N_LOG = LAYOUT.width

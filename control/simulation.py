@@ -337,11 +337,11 @@ class Simulation:
         self.wire_rate_mps = 0.0
         self.docking_frame: DockingFrame | None = None
         self.faults: list[Fault] = []
+        """Injected faults, past, present and scheduled (control.faults)."""
         self.log_layout: Layout = LAYOUT
         """The columns of the rows ``step`` returns (``keep_log_columns``)."""
-        self.log_keep: NDArray[np.int64] = np.arange(N_LOG)
+        self.log_keep: NDArray[np.intp] = np.arange(N_LOG, dtype=np.intp)
         """Their indices in the whole row (``LAYOUT``), in order."""
-        """Injected faults, past, present and scheduled (control.faults)."""
         self._slipped: set[int] = set()
         self._faults_on: set[int] = set()
         self._fault_log: list[tuple[float, str]] = []
@@ -452,13 +452,11 @@ class Simulation:
         scores and legs read (``missions.driver.LEAN_LAYOUT``); the kernels still make the
         whole row, and only the kept columns are written out (a sixth of the bytes a step
         to memory)."""
-        keep = [
-            LAYOUT.starts[name] + k for name in layout.starts for k in range(layout.widths[name])
-        ]
-        if keep != sorted(keep) or len(keep) != layout.width:
+        keep = layout.columns_in(LAYOUT)
+        if np.any(np.diff(keep) <= 0) or len(keep) != layout.width:
             raise ValueError("keep_log_columns: the layout's blocks must be LAYOUT's, in its order")
         self.log_layout = layout
-        self.log_keep = np.array(keep, dtype=np.int64)
+        self.log_keep = keep
 
     def winch_steps_busy(self) -> int:
         """Steps from now after each of which the winch is certainly still moving
@@ -489,7 +487,7 @@ class Simulation:
         return int(
             refkernel.polls_still_away(
                 int(self.C.ref_kind),
-                cs[loop.CS_REF : loop.CS_REF + 9].copy(),
+                cs[loop.CS_REF : loop.CS_REF + 9],
                 np.ascontiguousarray(self.target, dtype=float),
                 float(self.dt_s),
                 self.C.ref_params,

@@ -34,9 +34,8 @@ time, the wire's tension)."""
 
 @lru_cache(maxsize=8)
 def _scored_index(layout: Layout) -> NDArray[np.intp]:
-    """Where ``SCORED_LAYOUT``'s columns are in rows of ``layout``."""
-    names = SCORED_LAYOUT.starts
-    return np.array([layout.starts[name] + k for name in names for k in range(layout.widths[name])])
+    """Where ``SCORED_LAYOUT``'s columns are in rows of ``layout`` (kept per layout)."""
+    return SCORED_LAYOUT.columns_in(layout)
 
 
 def _scored_columns(rows: LogRows) -> LogRows:

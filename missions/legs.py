@@ -91,10 +91,6 @@ class MissionContext:
             self._last_parts = [self._last_log]
         return self._last_log
 
-    @last_log.setter
-    def last_log(self, rows: LogRows) -> None:
-        self._last_parts, self._last_log = [rows], rows
-
     def hand_back(self, parts: list[LogRows]) -> None:
         """The driver hands back a request's rows in its pieces: they become ``last_log``, and
         the last row of the rows before becomes ``previous_row``."""
@@ -106,7 +102,7 @@ class MissionContext:
 
     merge_polls = True
     """Skip the checks a prediction says would fail (``polls``); False polls every time, as
-    before predictions (the same figures either way: ``tests/test_legs.py``)."""
+    before predictions (the same figures either way: ``tests/test_merged_polls.py``)."""
 
     def reference_arrived(self) -> bool:
         ref = self.sim.reference
@@ -140,7 +136,7 @@ class MissionContext:
         poll_steps = int(round(poll_s / sim.dt_s))
         if away is None or not self.merge_polls or poll_steps <= 0:
             return poll_s
-        n = min(away(poll_steps, MAX_MERGED_POLLS), MAX_MERGED_POLLS)
+        n = away(poll_steps, MAX_MERGED_POLLS)
         extra = 0
         while extra < n and (sim.step_index + (extra + 1) * poll_steps) * sim.dt_s < deadline_s:
             extra += 1  # poll extra + 1 would start before the deadline, after a failed check
