@@ -55,7 +55,7 @@ def alone(runs: int, indices: list[int]) -> tuple[float, float]:
     drivers = _drivers(runs, indices)
     t0 = time.perf_counter()
     for d in drivers:
-        d.run_to_end()
+        d.run_to_end(log=False)  # as a campaign's runs: the figures kept, not the log
     return sum(d.sim.t_s for d in drivers), time.perf_counter() - t0
 
 
@@ -63,7 +63,7 @@ def together(runs: int, indices: list[int]) -> tuple[float, float]:
     """(simulated s, wall s) of the runs in one batch."""
     drivers = _drivers(runs, indices)
     t0 = time.perf_counter()
-    outcomes = run_together([d.run_to_end_jobs() for d in drivers])
+    outcomes = run_together([d.run_to_end_jobs(log=False) for d in drivers])
     wall = time.perf_counter() - t0
     bad = [o.error for o in outcomes if o.error is not None]
     if bad:

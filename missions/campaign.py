@@ -764,8 +764,7 @@ def run_one(c: Campaign, base: schema.Mission, index: int) -> dict:
         driver = MissionDriver(mission, sim, keep_log=False)
         while not driver.done:
             driver.advance()
-        result = driver.result()
-        result.log = None
+        result = driver.result(log=False)
     except Exception as err:  # any failure of one run is that run's outcome
         return failed_row(inputs, f"{type(err).__name__}: {err}")
     return {**input_row(inputs), **outcome_row(result, sim.t_s, time.perf_counter() - t0)}
@@ -787,7 +786,7 @@ def run_block(c: Campaign, base: schema.Mission, indices: Sequence[int]) -> list
             prepared.append((index, inputs, MissionDriver(mission, sim, keep_log=False)))
         except Exception as err:  # any failure of one run is that run's outcome
             rows[index] = failed_row(inputs, f"{type(err).__name__}: {err}")
-    outcomes = run_together([driver.run_to_end_jobs() for _, _, driver in prepared])
+    outcomes = run_together([driver.run_to_end_jobs(log=False) for _, _, driver in prepared])
     wall_s = time.perf_counter() - t0
     simulated_s = sum(driver.sim.t_s for _, _, driver in prepared) or 1.0
     for (index, inputs, driver), outcome in zip(prepared, outcomes, strict=True):
@@ -796,7 +795,6 @@ def run_block(c: Campaign, base: schema.Mission, indices: Sequence[int]) -> list
             rows[index] = failed_row(inputs, f"{type(failure).__name__}: {failure}")
             continue
         result = outcome.value
-        result.log = None
         share = wall_s * driver.sim.t_s / simulated_s
         rows[index] = {**input_row(inputs), **outcome_row(result, driver.sim.t_s, share)}
     return [rows[index] for index in indices]

@@ -9,13 +9,13 @@ its rows are handed back (``MissionContext.last_log``) and the executor is resum
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Generator
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
 
-from control.columns import LAYOUT, LOG_COLUMNS, Layout, LogRows
+from control.columns import LOG_COLUMNS, Layout, LogRows
 from control.jobs import ChunkJob, ChunkResult, run_jobs
 from control.simulation import Simulation, SimulationDiverged
 from missions import schema, seaway
@@ -23,8 +23,6 @@ from missions.legs import LEG_EXECUTORS, MissionContext
 from missions.scoring import SCORED_COLUMNS, LegSpan, MissionResult, score
 from missions.setup import charted_frame
 
-SCORED_LAYOUT = Layout.of([c for c in LOG_COLUMNS if c.name in SCORED_COLUMNS])
-"""The log's columns that ``missions.scoring.score`` reads, in the log's order."""
 LEAN_COLUMNS = (*SCORED_COLUMNS, "t_s", "wire_tension")
 LEAN_LAYOUT = Layout.of([c for c in LOG_COLUMNS if c.name in LEAN_COLUMNS])
 """What a lean driver's simulation logs (``Simulation.keep_log_columns``): the scored
@@ -32,20 +30,24 @@ columns, and what the legs and the wire watch read of a request's rows (the tree
 time, the wire's tension)."""
 
 
-@lru_cache(maxsize=8)
-def _scored_index(layout: Layout) -> NDArray[np.intp]:
-    """Where ``SCORED_LAYOUT``'s columns are in rows of ``layout`` (kept per layout)."""
-    return SCORED_LAYOUT.columns_in(layout)
+_JOINED = threading.local()
+"""Per thread, the array a lean run's rows are joined into to be scored when its result keeps
+no log (``MissionDriver.result(log=False)``): reused run after run, so a campaign's runs do
+not each take a fresh 7 MB array for it (whose first writes cost a page fault every 4 kB)."""
 
 
-def _scored_columns(rows: LogRows) -> LogRows:
-    """The scored columns of rows of the log (a copy)."""
-    return LogRows(
-        rows.data[:, _scored_index(rows.layout)],
-        rows.n_thrusters,
-        rows.quality_counters,
-        SCORED_LAYOUT,
-    )
+def _joined_rows(parts: list[LogRows], n_thrusters: int) -> LogRows:
+    """The parts' rows joined into this thread's reused array (valid until its next call)."""
+    if len(parts) == 1:
+        return LogRows.join(parts, n_thrusters)  # shared, not copied
+    n = sum(len(p) for p in parts)
+    width = parts[0].data.shape[1]
+    buf: NDArray[np.float64] | None = getattr(_JOINED, "buf", None)
+    if buf is None or buf.shape[0] < n or buf.shape[1] != width:
+        buf = np.empty((max(n, 1), width))
+        _JOINED.buf = buf
+    np.concatenate([p.data for p in parts], out=buf[:n])
+    return LogRows(buf[:n], n_thrusters, parts[-1].quality_counters.copy(), parts[0].layout)
 
 
 class MissionDriver:
@@ -59,10 +61,10 @@ class MissionDriver:
         self.mission = mission
         self.sim = sim
         self.keep_log = keep_log
-        """False: keep only the columns the scores read (``SCORED_LAYOUT``) of the rows
-        run, not the whole log: a campaign's runs, many of them alive at once in a batch
-        (the whole log of a 500 s docking is 47 MB). The figures are the same; the result's
-        ``log`` has those columns only."""
+        """False: the simulation logs only the columns the scores and the legs read
+        (``LEAN_LAYOUT``), not the whole log: a campaign's runs, many of them alive at once
+        in a batch (the whole log of a 500 s docking is 47 MB). The figures are the same;
+        the result's ``log`` has those columns only."""
         if not keep_log:
             sim.keep_log_columns(LEAN_LAYOUT)
         self.ctx = MissionContext(sim)
@@ -198,10 +200,7 @@ class MissionDriver:
         """Hand the rows of the request just run to the executor (in the pieces they were
         run in: ``MissionContext.last_log`` joins them if the executor reads them)."""
         parts, self._request_parts = self._request_parts, []
-        if self.keep_log:
-            self.parts.extend(parts)
-        else:
-            self.parts.extend(_scored_columns(p) for p in parts)
+        self.parts.extend(parts)
         self.ctx.hand_back(parts)
         self.rows += sum(len(p) for p in parts)
 
@@ -260,16 +259,18 @@ class MissionDriver:
                 budget -= k
         return LogRows.join(out, self.sim.n_thrusters)
 
-    def run_to_end(self) -> MissionResult:
+    def run_to_end(self, log: bool = True) -> MissionResult:
+        """Run the mission to its end and score it (``log`` as ``result``'s)."""
         while not self.done:
             self.advance()
-        return self.result()
+        return self.result(log)
 
-    def run_to_end_jobs(self) -> Generator[ChunkJob, ChunkResult, MissionResult]:
-        """``run_to_end`` as a generator of compiled chunks (see ``advance_jobs``)."""
+    def run_to_end_jobs(self, log: bool = True) -> Generator[ChunkJob, ChunkResult, MissionResult]:
+        """``run_to_end`` as a generator of compiled chunks (see ``advance_jobs``); ``log``
+        as ``result``'s."""
         while not self.done:
             yield from self.advance_jobs(rows=False)
-        return self.result()
+        return self.result(log)
 
     def _fail_leg(self, err: Exception) -> None:
         """The running leg cannot go on: it fails, the mission ends as failed, and the
@@ -300,13 +301,19 @@ class MissionDriver:
         self._pending = 0
         self.aborted = True
 
-    def result(self) -> MissionResult:
-        data = LogRows.join(self.parts, self.sim.n_thrusters)
+    def result(self, log: bool = True) -> MissionResult:
+        """The mission's scores from the rows run so far. ``log=False``: the result keeps no
+        ``log`` (a campaign's rows: it keeps only the figures), and the rows are joined for
+        scoring into an array reused from one run's result to the next."""
         if not self.parts:
-            layout = LAYOUT if self.keep_log else SCORED_LAYOUT
+            layout = self.sim.log_layout
             data = LogRows(
                 np.zeros((0, layout.width)), self.sim.n_thrusters, self.sim.quality_counters, layout
             )
+        elif log:
+            data = LogRows.join(self.parts, self.sim.n_thrusters)
+        else:
+            data = _joined_rows(self.parts, self.sim.n_thrusters)
         result = score(
             self.mission.name,
             data,
@@ -317,6 +324,8 @@ class MissionDriver:
             list(self.sim.startup.warnings),
         )
         result.error = self.error
+        if not log:
+            result.log = None
         result.landings = list(self.ctx.landings)
         result.events = list(self.ctx.events)
         return result

@@ -140,22 +140,29 @@ def test_runs_per_task_splits_the_runs_so_the_workers_finish_together(todo, work
     assert runner.runs_per_task(todo, workers) == size
 
 
-def test_a_driver_keeping_only_the_scored_columns_scores_the_same():
-    # what a campaign's runs keep (many are alive at once in a batch): 13 of the log's 115
-    # columns, the same figures to the bit
-    from missions.driver import SCORED_LAYOUT
+def test_a_lean_driver_scores_the_same_and_a_result_without_its_log_too():
+    # what a campaign's runs keep (many are alive at once in a batch): 19 of the log's 115
+    # columns, the same figures to the bit; and a result that keeps no log (its rows joined
+    # into a reused array to be scored) the same figures again, run after run
+    from missions.driver import LEAN_LAYOUT
     from missions.setup import build_simulation
 
     for mission in (cases()["model-step-priority-ekf"], cases()["full-docking-current-0.3"]):
         full = MissionDriver(mission, build_simulation(mission)).run_to_end()
         lean = MissionDriver(mission, build_simulation(mission), keep_log=False).run_to_end()
-        assert lean.log.data.shape == (len(full.log), SCORED_LAYOUT.width)
-        assert SCORED_LAYOUT.width < full.log.data.shape[1] / 5
-        for name in SCORED_LAYOUT.starts:  # every scored column, kept request by request
+        assert lean.log.data.shape == (len(full.log), LEAN_LAYOUT.width)
+        assert LEAN_LAYOUT.width < full.log.data.shape[1] / 5
+        for name in LEAN_LAYOUT.starts:  # every kept column, request by request
             assert np.array_equal(lean.log[name], full.log[name])
         assert np.array_equal(lean.log.quality_counters, full.log.quality_counters)
         assert lean.summary() == full.summary()
         assert lean.settling_time_s == full.settling_time_s
+        for _ in range(2):  # the second into the array the first was joined into
+            bare = MissionDriver(mission, build_simulation(mission), keep_log=False)
+            no_log = bare.run_to_end(log=False)
+            assert len(bare.parts) > 1 and no_log.log is None
+            assert no_log.summary() == full.summary()
+            assert no_log.settling_time_s == full.settling_time_s
 
 
 def test_runs_on_another_plant_step_by_themselves_in_the_batch_and_stay_as_alone():
