@@ -5,26 +5,38 @@ over the runs (structure of arrays, run index last).
 (N_STATE, N) by one step of ``sim.plant.rk4_step_into``: run r's state ``x_sb[:, r]``, its
 propeller speeds ``n_rps[:, r]`` and its environment row ``env[:, r]`` (N_ENV, N), one
 ``PlantArrays`` common to the batch. Each run's result is **bit for bit** what the scalar
-step gives on that run's column alone: every quantity of the scalar code is a row of N runs
-in ``BatchWork``, every loop of the scalar code has an inner ``for r in range(N)``, and each
-row is computed with the scalar code's operations in the scalar code's order (no
-reassociation; numba compiles without fast-math or contraction into fused multiply-adds).
-Matrices of ``PlantArrays`` are read element by element outside the loops over runs, so
-those loops only touch rows and the compiler vectorises them (AVX-512 here: checked in the
-assembly by ``benchmarks/batch_plant_benchmark.py``). Sines and cosines come from
-``sim.trig.sincos`` over a row (branch-free), as in the scalar plant.
+step gives on that run's column alone: each quantity of the scalar code is computed with the
+scalar code's operations in the scalar code's order (no reassociation; numba compiles
+without fast-math or contraction into fused multiply-adds).
 
-What differs between runs is a select per run: gripping (``E_GRIP``), the wire slack or
-taut, the wire force from outside (``E_WEXT``), the wire's mass (``E_WMASS``); the work for
-the coupling and the wire's mass is skipped for the whole batch when no run needs it (the
-same numbers for the runs that do). Contact with the frame and the seabed (``E_LAND`` > 0) is
-branchy, per corner and per post: it is evaluated run by run, for the runs near the frame,
-by the scalar ``sim.plant.contact_wrench_into`` on a contiguous copy of the run's column (the
-same arithmetic); a run clearly above it adds the scalar code's zero wrench as a select.
-A run that is not finite stays in its own column; the others go on.
+Each stage's right-hand side (``rhs_batch_into``) is a few loops over the runs whose bodies
+hold a run's whole arithmetic in local variables: ``_tree_loads_into`` (the tree's angles,
+rotation and the wrench of the water, its weight and the wire), the contact (below),
+``_coupling_into`` (the grip's coupling, a loop of its own: with the ROV's wrench in the same
+loop the compiler did not vectorise it) and ``_slopes_into`` (the ROV's wrench, both bodies'
+kinematics and accelerations). The matrices of ``PlantArrays`` are read into tuples of
+scalars before each loop, so a loop body touches only the runs' rows, has no branch (the
+per-run choices are selects) and the compiler vectorises it whole (AVX-512 here: checked in
+the assembly by ``benchmarks/batch_plant_benchmark.py``). The runs go in blocks of ``BLOCK``
+through flat work arrays whose rows lie a constant ``BLOCK`` apart (``_at``), so the compiler
+can tell the rows apart without checks at run time. An earlier form computed each
+intermediate as a row of N runs in a 2-D work array, one small loop per row: the same bits,
+but some 300 loops a stage whose set-up and remainders cost more than their arithmetic at a
+batch's 8 to 32 runs (a batch step of 8 runs 8.7 us, now 5.0; of 32 runs 15.5, now 12.5).
+Sines and cosines come from ``sim.trig.sincos`` (branch-free), as in the scalar plant.
+
+What differs between runs is a select per run: gripping (``E_GRIP``: the coupling is
+computed for every run and added where the run grips), the wire slack or taut, the wire
+force from outside (``E_WEXT``), the wire's mass (``E_WMASS``: a loop of its own, run only
+when a run of the block has it). Contact with the frame and the seabed (``E_LAND`` > 0) is
+branchy, per corner and per post: after the tree's loads, it is evaluated run by run, for
+the runs near the frame, by the scalar ``sim.plant.contact_wrench_trig_into`` on a
+contiguous copy of the run's column (the same arithmetic); a run clearly above it adds the
+scalar code's zero wrench as a select. A run that is not finite stays in its own column; the
+others go on.
 
 The step allocates nothing (compiled without numba's runtime, ``JIT_NOALLOC``):
-``make_batch_work(n_thrusters, n_runs)`` makes the work space once. ``rk4_batch`` is the
+``make_batch_work(n_thrusters)`` makes the work space once. ``rk4_batch`` is the
 allocating form, with checks of its arguments, for tests and tools.
 """
 
@@ -63,56 +75,59 @@ from sim.plant import (
 from sim.thrusters import thrust_of_one
 from sim.trig import sincos
 
-# rows of ``BatchWork.trig``: sines and cosines of the tree's and the ROV's angles
-T_SPHI, T_CPHI, T_STH, T_CTH, T_SPSI, T_CPSI = 0, 1, 2, 3, 4, 5
-T_ROV = 6  # the ROV's six follow the tree's
-N_TRIG = 12
-# ``BatchWork.vec`` slots, each (6, N): a 6-vector (or a 3-vector in rows 0:3) per run
-(
-    B_TAU_T,
-    B_TAU_R,
-    B_NU_REL,
-    B_VCB,
-    B_VCDB,
-    B_CRB,
-    B_CA,
-    B_MOM,
-    B_A,
-    B_B,
-    B_C,
-    B_D,
-    B_G,
-    B_WROV,
-    B_WTREE,
-    B_EPB,
-    B_EVB,
-    B_ETH,
-    B_EW,
-    B_U,
-    B_RHS6,
-    B_BASE,
-    B_MINVU,
-    B_SCAL,
-) = range(24)
-N_BVEC = 24
-# rows of the slot ``B_SCAL``
-S_AROT, S_SCALE = 0, 1
-# ``BatchWork.mat`` slots, each (3, 3, N)
-BM_RT, BM_RR, BM_TT, BM_TR, BM_RM, BM_TMP, BM_RTR = range(7)
-N_BMAT = 7
+# rows of ``BatchWork.tree``: what the first loop leaves for the contact and the second loop
+T_SPHI, T_CPHI, T_STH, T_CTH, T_SPSI, T_CPSI = 0, 1, 2, 3, 4, 5  # the tree's sines, cosines
+T_R = 6  # its rotation body -> NED, row-major (nine rows)
+T_TAU = 15  # the wrench on it of the water, its weight, the wire and the contact (six rows)
+N_TREE = 21
+
+
+BLOCK = 64
+"""Runs a block: the work arrays hold each quantity as a row of ``BLOCK`` runs, flat, so row
+k of run r is element ``k * BLOCK + r`` (``_at``). The rows' distance is a constant the
+compiler sees: the rows of one array then need no check against each other at run time
+(with the arrays' width a run-time number, LLVM checked every written row against every row
+read at each entry of a loop, ~0.7 us, or gave up vectorising). More runs go in blocks."""
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _at(k: int, r: int) -> np.uint64:
+    """Where row k of run r is in a block's flat work array (unsigned: numba then adds no
+    wrap-around of negative indices, which hid the rows' constant distance)."""
+    return np.uint64(k * BLOCK + r)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _rows6(a: np.ndarray, k: int, r: int) -> tuple:
+    """Rows k .. k + 5 of run r of a block's flat work array."""
+    return (
+        a[_at(k, r)],
+        a[_at(k + 1, r)],
+        a[_at(k + 2, r)],
+        a[_at(k + 3, r)],
+        a[_at(k + 4, r)],
+        a[_at(k + 5, r)],
+    )
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _rows9(a: np.ndarray, k: int, r: int) -> tuple:
+    """Rows k .. k + 8 of run r of a block's flat work array (a row-major 3x3 matrix)."""
+    return (*_rows6(a, k, r), a[_at(k + 6, r)], a[_at(k + 7, r)], a[_at(k + 8, r)])
 
 
 class BatchWork(NamedTuple):
-    """Work arrays of ``rk4_batch_into``, the run index last: made once
-    (``make_batch_work``) and reused for every step."""
+    """Work arrays of ``rk4_batch_into``, flat (``_at``): made once (``make_batch_work``)
+    and reused for every step."""
 
-    xs: np.ndarray  # (N_STATE, N) the stage state
-    k: np.ndarray  # (4, N_STATE, N) the four slopes
-    f: np.ndarray  # (n_thrusters, N) thrust of each thruster [N]
-    thr: np.ndarray  # (6, N) the thrusters' wrench on the ROV
-    trig: np.ndarray  # (N_TRIG, N) sines and cosines of both bodies' angles
-    vec: np.ndarray  # (N_BVEC, 6, N) vectors
-    mat: np.ndarray  # (N_BMAT, 3, 3, N) rotations and products
+    x0: np.ndarray  # (N_STATE rows) the states at the step's start
+    xs: np.ndarray  # (N_STATE rows) the stage state
+    env: np.ndarray  # (N_ENV rows) the environment rows
+    k: np.ndarray  # (4, N_STATE rows) the four slopes
+    f: np.ndarray  # (n_thrusters rows) thrust of each thruster [N]
+    thr: np.ndarray  # (6 rows) the thrusters' wrench on the ROV
+    tree: np.ndarray  # (N_TREE rows) the tree's trigonometry, rotation and loads (T_*)
+    grip: np.ndarray  # (12 rows) the grip's coupling wrench on the ROV, then on the tree
     col_x: np.ndarray  # (N_STATE,) one run's stage state, for the scalar contact
     col_env: np.ndarray  # (N_ENV,) its environment row
     col_R: np.ndarray  # (3, 3) its tree rotation
@@ -121,16 +136,18 @@ class BatchWork(NamedTuple):
 
 
 @njit(**JIT)
-def make_batch_work(n_thrusters: int, n_runs: int) -> BatchWork:
-    """A fresh work space for ``n_runs`` runs of a plant with ``n_thrusters`` thrusters."""
+def make_batch_work(n_thrusters: int, n_runs: int = BLOCK) -> BatchWork:
+    """A fresh work space for a plant with ``n_thrusters`` thrusters (``n_runs`` is kept for
+    the callers: any number of runs goes through one block's work space)."""
     return BatchWork(
-        np.zeros((N_STATE, n_runs)),
-        np.zeros((4, N_STATE, n_runs)),
-        np.zeros((n_thrusters, n_runs)),
-        np.zeros((6, n_runs)),
-        np.zeros((N_TRIG, n_runs)),
-        np.zeros((N_BVEC, 6, n_runs)),
-        np.zeros((N_BMAT, 3, 3, n_runs)),
+        np.zeros(N_STATE * BLOCK),
+        np.zeros(N_STATE * BLOCK),
+        np.zeros(N_ENV * BLOCK),
+        np.zeros((4, N_STATE * BLOCK)),
+        np.zeros(n_thrusters * BLOCK),
+        np.zeros(6 * BLOCK),
+        np.zeros(N_TREE * BLOCK),
+        np.zeros(12 * BLOCK),
         np.zeros(N_STATE),
         np.zeros(N_ENV),
         np.zeros((3, 3)),
@@ -139,259 +156,316 @@ def make_batch_work(n_thrusters: int, n_runs: int) -> BatchWork:
     )
 
 
-# --- row kernels: the scalar ``sim.gnc`` helpers with a run index ---
+# --- constants as tuples of scalars, read before a loop over the runs ---
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _sincos_rows(s_out: np.ndarray, c_out: np.ndarray, x: np.ndarray) -> None:
-    """``sim.trig.sincos`` of every element of the row ``x`` (branch-free: vectorised)."""
-    for r in range(x.shape[0]):
-        s_out[r], c_out[r] = sincos(x[r])
+def _v3(v: np.ndarray) -> tuple:
+    return (v[0], v[1], v[2])
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _trig_rows(trig: np.ndarray, x: np.ndarray, first: int, base: int) -> None:
-    """Sines and cosines of x[first:first + 3] (phi, theta, psi) into trig[base:base + 6]."""
-    _sincos_rows(trig[base + T_SPHI], trig[base + T_CPHI], x[first])
-    _sincos_rows(trig[base + T_STH], trig[base + T_CTH], x[first + 1])
-    _sincos_rows(trig[base + T_SPSI], trig[base + T_CPSI], x[first + 2])
+def _v6(v: np.ndarray) -> tuple:
+    return (v[0], v[1], v[2], v[3], v[4], v[5])
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _rzyx_rows(R: np.ndarray, trig: np.ndarray, base: int) -> None:
-    """``gnc.Rzyx_into`` per run, from the sines and cosines in trig[base:base + 6]."""
-    for r in range(R.shape[2]):
-        sphi, cphi = trig[base + T_SPHI, r], trig[base + T_CPHI, r]
-        sth, cth = trig[base + T_STH, r], trig[base + T_CTH, r]
-        spsi, cpsi = trig[base + T_SPSI, r], trig[base + T_CPSI, r]
-        R[0, 0, r] = cpsi * cth
-        R[0, 1, r] = -spsi * cphi + cpsi * sth * sphi
-        R[0, 2, r] = spsi * sphi + cpsi * cphi * sth
-        R[1, 0, r] = spsi * cth
-        R[1, 1, r] = cpsi * cphi + sphi * sth * spsi
-        R[1, 2, r] = -cpsi * sphi + sth * spsi * cphi
-        R[2, 0, r] = -sth
-        R[2, 1, r] = cth * sphi
-        R[2, 2, r] = cth * cphi
+def _m9(M: np.ndarray) -> tuple:
+    """A 3x3 matrix, row-major."""
+    return (M[0, 0], M[0, 1], M[0, 2], M[1, 0], M[1, 1], M[1, 2], M[2, 0], M[2, 1], M[2, 2])
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _tzyx_rows(T: np.ndarray, trig: np.ndarray, base: int) -> None:
-    """``gnc.Tzyx_into`` per run with tan theta = sin theta / cos theta (as ``rhs_into``)."""
-    for r in range(T.shape[2]):
-        sphi, cphi = trig[base + T_SPHI, r], trig[base + T_CPHI, r]
-        cth = trig[base + T_CTH, r]
-        tth = trig[base + T_STH, r] / cth
-        T[0, 0, r] = 1.0
-        T[0, 1, r] = sphi * tth
-        T[0, 2, r] = cphi * tth
-        T[1, 0, r] = 0.0
-        T[1, 1, r] = cphi
-        T[1, 2, r] = -sphi
-        T[2, 0, r] = 0.0
-        T[2, 1, r] = sphi / cth
-        T[2, 2, r] = cphi / cth
+def _m36(M: np.ndarray) -> tuple:
+    """A 6x6 matrix, row-major."""
+    return (
+        *_v6(M[0]),
+        *_v6(M[1]),
+        *_v6(M[2]),
+        *_v6(M[3]),
+        *_v6(M[4]),
+        *_v6(M[5]),
+    )
+
+
+# --- one run's arithmetic on scalars: the scalar ``sim.gnc`` and ``sim.plant`` helpers ---
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _mv3_rows(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
-    """``gnc.mv3_into`` per run: out[:, r] = A[:, :, r] @ x[:, r] (out must not alias x)."""
-    for i in range(3):
-        for r in range(out.shape[1]):
-            s = 0.0
-            s += A[i, 0, r] * x[0, r]
-            s += A[i, 1, r] * x[1, r]
-            s += A[i, 2, r] * x[2, r]
-            out[i, r] = s
+def _rzyx(sphi: float, cphi: float, sth: float, cth: float, spsi: float, cpsi: float) -> tuple:
+    """``gnc.Rzyx_into`` from the angles' sines and cosines, row-major."""
+    return (
+        cpsi * cth,
+        -spsi * cphi + cpsi * sth * sphi,
+        spsi * sphi + cpsi * cphi * sth,
+        spsi * cth,
+        cpsi * cphi + sphi * sth * spsi,
+        -cpsi * sphi + sth * spsi * cphi,
+        -sth,
+        cth * sphi,
+        cth * cphi,
+    )
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _mtv3_rows(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
-    """``gnc.mtv3_into`` per run: out[:, r] = A[:, :, r]^T @ x[:, r]."""
-    for j in range(3):
-        for r in range(out.shape[1]):
-            s = 0.0
-            s += A[0, j, r] * x[0, r]
-            s += A[1, j, r] * x[1, r]
-            s += A[2, j, r] * x[2, r]
-            out[j, r] = s
+def _t9(A: tuple) -> tuple:
+    """The transpose of a row-major 3x3 matrix."""
+    return (A[0], A[3], A[6], A[1], A[4], A[7], A[2], A[5], A[8])
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _mv3_const_rows(out: np.ndarray, A: np.ndarray, v: np.ndarray) -> None:
-    """``gnc.mv3_into`` of per-run matrices and one vector: out[:, r] = A[:, :, r] @ v."""
-    v0, v1, v2 = v[0], v[1], v[2]
-    for i in range(3):
-        for r in range(out.shape[1]):
-            s = 0.0
-            s += A[i, 0, r] * v0
-            s += A[i, 1, r] * v1
-            s += A[i, 2, r] * v2
-            out[i, r] = s
+def _mv3(A: tuple, v0: float, v1: float, v2: float) -> tuple:
+    """``gnc.mv3_into``: A @ v, each element summed from 0.0 (``_mv3(_t9(A), ...)`` is
+    ``gnc.mtv3_into``'s A^T @ v with its sums)."""
+    s0 = 0.0
+    s0 += A[0] * v0
+    s0 += A[1] * v1
+    s0 += A[2] * v2
+    s1 = 0.0
+    s1 += A[3] * v0
+    s1 += A[4] * v1
+    s1 += A[5] * v2
+    s2 = 0.0
+    s2 += A[6] * v0
+    s2 += A[7] * v1
+    s2 += A[8] * v2
+    return s0, s1, s2
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _mv6c_rows(out: np.ndarray, M: np.ndarray, x: np.ndarray) -> None:
-    """``gnc.mv6_into`` of one 6x6 matrix and per-run vectors: out[:, r] = M @ x[:, r]
-    (each element summed from 0.0 in the order of the columns)."""
-    for i in range(6):
-        m0, m1, m2, m3, m4, m5 = M[i, 0], M[i, 1], M[i, 2], M[i, 3], M[i, 4], M[i, 5]
-        for r in range(out.shape[1]):
-            s = 0.0
-            s += m0 * x[0, r]
-            s += m1 * x[1, r]
-            s += m2 * x[2, r]
-            s += m3 * x[3, r]
-            s += m4 * x[4, r]
-            s += m5 * x[5, r]
-            out[i, r] = s
+def _mtv3(A: tuple, v0: float, v1: float, v2: float) -> tuple:
+    """``gnc.mtv3_into``: A^T @ v."""
+    return _mv3(_t9(A), v0, v1, v2)
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _cross_rows(out: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
-    """``gnc.cross_into`` per run (out must not alias a or b)."""
-    for r in range(out.shape[1]):
-        out[0, r] = a[1, r] * b[2, r] - a[2, r] * b[1, r]
-        out[1, r] = a[2, r] * b[0, r] - a[0, r] * b[2, r]
-        out[2, r] = a[0, r] * b[1, r] - a[1, r] * b[0, r]
+def _mm_elem(A: tuple, B: tuple, i: int, j: int) -> float:
+    """(A @ B)[i, j] as ``gnc.mm_into`` sums it."""
+    s = 0.0
+    s += A[3 * i] * B[j]
+    s += A[3 * i + 1] * B[3 + j]
+    s += A[3 * i + 2] * B[6 + j]
+    return s
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _mm_const_rows(out: np.ndarray, A: np.ndarray, B: np.ndarray) -> None:
-    """``gnc.mm_into`` of per-run A and one B: out[:, :, r] = A[:, :, r] @ B."""
-    for i in range(3):
-        for j in range(3):
-            b0, b1, b2 = B[0, j], B[1, j], B[2, j]
-            for r in range(out.shape[2]):
-                s = 0.0
-                s += A[i, 0, r] * b0
-                s += A[i, 1, r] * b1
-                s += A[i, 2, r] * b2
-                out[i, j, r] = s
+def _mm(A: tuple, B: tuple) -> tuple:
+    """``gnc.mm_into``: A @ B (``_mm(_t9(A), B)`` is ``gnc.mtm_into``'s A^T @ B with its
+    sums)."""
+    return (
+        _mm_elem(A, B, 0, 0),
+        _mm_elem(A, B, 0, 1),
+        _mm_elem(A, B, 0, 2),
+        _mm_elem(A, B, 1, 0),
+        _mm_elem(A, B, 1, 1),
+        _mm_elem(A, B, 1, 2),
+        _mm_elem(A, B, 2, 0),
+        _mm_elem(A, B, 2, 1),
+        _mm_elem(A, B, 2, 2),
+    )
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _mtm_rows(out: np.ndarray, A: np.ndarray, B: np.ndarray) -> None:
-    """``gnc.mtm_into`` per run: out[:, :, r] = A[:, :, r]^T @ B[:, :, r]."""
-    for i in range(3):
-        for j in range(3):
-            for r in range(out.shape[2]):
-                s = 0.0
-                s += A[0, i, r] * B[0, j, r]
-                s += A[1, i, r] * B[1, j, r]
-                s += A[2, i, r] * B[2, j, r]
-                out[i, j, r] = s
+def _mtm(A: tuple, B: tuple) -> tuple:
+    """``gnc.mtm_into``: A^T @ B."""
+    return _mm(_t9(A), B)
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _coriolis_rows(out: np.ndarray, M: np.ndarray, nu: np.ndarray, mom: np.ndarray) -> None:
-    """``gnc.coriolis_force_into`` per run; ``mom`` (6, N) holds the momenta M nu."""
-    _mv6c_rows(mom, M, nu)
-    for r in range(out.shape[1]):
-        a0, a1, a2 = mom[0, r], mom[1, r], mom[2, r]
-        b0, b1, b2 = mom[3, r], mom[4, r], mom[5, r]
-        n0, n1, n2, n3, n4, n5 = nu[0, r], nu[1, r], nu[2, r], nu[3, r], nu[4, r], nu[5, r]
-        out[0, r] = -(a1 * n5 - a2 * n4)
-        out[1, r] = -(a2 * n3 - a0 * n5)
-        out[2, r] = -(a0 * n4 - a1 * n3)
-        out[3, r] = -(a1 * n2 - a2 * n1) - (b1 * n5 - b2 * n4)
-        out[4, r] = -(a2 * n0 - a0 * n2) - (b2 * n3 - b0 * n5)
-        out[5, r] = -(a0 * n1 - a1 * n0) - (b0 * n4 - b1 * n3)
-
-
-# --- the plant's pieces with a run index (sim.plant's functions of the same names) ---
+def _mv6_elem(M: tuple, i: int, v: tuple) -> float:
+    """(M @ v)[i] as ``gnc.mv6_into`` sums it (from 0.0, in the order of the columns)."""
+    s = 0.0
+    s += M[6 * i] * v[0]
+    s += M[6 * i + 1] * v[1]
+    s += M[6 * i + 2] * v[2]
+    s += M[6 * i + 3] * v[3]
+    s += M[6 * i + 4] * v[4]
+    s += M[6 * i + 5] * v[5]
+    return s
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _fluid_wrench_rows(
-    tau: np.ndarray,
-    nu: np.ndarray,
-    R: np.ndarray,
-    M_rb: np.ndarray,
-    M_a: np.ndarray,
-    D_l: np.ndarray,
-    D_nl: np.ndarray,
+def _mv6(M: tuple, v: tuple) -> tuple:
+    return (
+        _mv6_elem(M, 0, v),
+        _mv6_elem(M, 1, v),
+        _mv6_elem(M, 2, v),
+        _mv6_elem(M, 3, v),
+        _mv6_elem(M, 4, v),
+        _mv6_elem(M, 5, v),
+    )
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _add_where(a: tuple, b: tuple, on: bool) -> tuple:
+    """a + b where ``on``, a as it is elsewhere (a select: the scalar code's ``if``)."""
+    return (
+        a[0] + b[0] if on else a[0],
+        a[1] + b[1] if on else a[1],
+        a[2] + b[2] if on else a[2],
+        a[3] + b[3] if on else a[3],
+        a[4] + b[4] if on else a[4],
+        a[5] + b[5] if on else a[5],
+    )
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _coriolis(M: tuple, n: tuple) -> tuple:
+    """``gnc.coriolis_force_into``: minus C(nu) nu from the momenta M nu."""
+    a0, a1, a2 = _mv6_elem(M, 0, n), _mv6_elem(M, 1, n), _mv6_elem(M, 2, n)
+    b0, b1, b2 = _mv6_elem(M, 3, n), _mv6_elem(M, 4, n), _mv6_elem(M, 5, n)
+    n0, n1, n2, n3, n4, n5 = n
+    return (
+        -(a1 * n5 - a2 * n4),
+        -(a2 * n3 - a0 * n5),
+        -(a0 * n4 - a1 * n3),
+        -(a1 * n2 - a2 * n1) - (b1 * n5 - b2 * n4),
+        -(a2 * n0 - a0 * n2) - (b2 * n3 - b0 * n5),
+        -(a0 * n1 - a1 * n0) - (b0 * n4 - b1 * n3),
+    )
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _fluid_elem(
+    i: int, crb: tuple, ca: tuple, nr: tuple, D_l: tuple, D_nl: tuple, M_a: tuple, e: tuple
+) -> float:
+    """Element i of ``plant._hydro_into``'s wrench: minus both Coriolis forces, the linear and
+    quadratic damping of the relative velocity, the added mass's share of the current's
+    acceleration ``e`` (body axes, with the rotation's term)."""
+    t = -crb[i] - ca[i]
+    t -= (D_l[i] + D_nl[i] * abs(nr[i])) * nr[i]
+    t += M_a[6 * i] * e[0]
+    t += M_a[6 * i + 1] * e[1]
+    t += M_a[6 * i + 2] * e[2]
+    return t
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _fluid_wrench(
+    n: tuple,
+    R: tuple,
+    M_rb: tuple,
+    M_a: tuple,
+    D_l: tuple,
+    D_nl: tuple,
     fk_mass: float,
     env: np.ndarray,
-    work: BatchWork,
+    r: int,
+) -> tuple:
+    """``plant._fluid_wrench_into`` of one body of run r (``_relative_velocity_into``,
+    ``_hydro_into``, ``_froude_krylov_into``): its velocity ``n`` and rotation ``R``."""
+    c0, c1, c2 = _mtv3(R, env[_at(E_VC, r)], env[_at(E_VC + 1, r)], env[_at(E_VC + 2, r)])
+    d0, d1, d2 = _mtv3(R, env[_at(E_AC, r)], env[_at(E_AC + 1, r)], env[_at(E_AC + 2, r)])
+    n0, n1, n2, n3, n4, n5 = n
+    nr = (n0 - c0, n1 - c1, n2 - c2, n3, n4, n5)
+    e = (d0 - (n4 * c2 - n5 * c1), d1 - (n5 * c0 - n3 * c2), d2 - (n3 * c1 - n4 * c0))
+    crb = _coriolis(M_rb, n)
+    ca = _coriolis(M_a, nr)
+    return (
+        _fluid_elem(0, crb, ca, nr, D_l, D_nl, M_a, e) + fk_mass * d0,
+        _fluid_elem(1, crb, ca, nr, D_l, D_nl, M_a, e) + fk_mass * d1,
+        _fluid_elem(2, crb, ca, nr, D_l, D_nl, M_a, e) + fk_mass * d2,
+        _fluid_elem(3, crb, ca, nr, D_l, D_nl, M_a, e),
+        _fluid_elem(4, crb, ca, nr, D_l, D_nl, M_a, e),
+        _fluid_elem(5, crb, ca, nr, D_l, D_nl, M_a, e),
+    )
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _wire_force(
+    p0: float,
+    p1: float,
+    p2: float,
+    v0: float,
+    v1: float,
+    v2: float,
+    env: np.ndarray,
+    r: int,
+    W0: float,
+) -> tuple:
+    """``plant.wire_force_damped_into`` of run r at the attachment point p moving at v, its
+    branches as selects: the force given from outside where ``E_WEXT`` is set, zero where
+    the wire is slack."""
+    rest = W0 / env[_at(E_KH, r)] - W0 / env[_at(E_KZ, r)]
+    dx = p0 - (env[_at(E_CT, r)] + env[_at(E_OFF, r)])
+    dy = p1 - (env[_at(E_CT + 1, r)] + env[_at(E_OFF + 1, r)])
+    dz = p2 - (env[_at(E_CT + 2, r)] + env[_at(E_LREST, r)] - rest)
+    d = np.sqrt(dx * dx + dy * dy + dz * dz)
+    rate = (
+        dx * (v0 - env[_at(E_VPIV, r)])
+        + dy * (v1 - env[_at(E_VPIV + 1, r)])
+        + dz * (v2 - env[_at(E_VPIV + 2, r)])
+    ) / d
+    tension = env[_at(E_KZ, r)] * (d - rest) + env[_at(E_WDAMP, r)] * rate
+    taut = (d > rest) & (d > 0.0) & (tension > 0.0)
+    f0 = -tension * dx / d if taut else 0.0
+    f1 = -tension * dy / d if taut else 0.0
+    f2 = -tension * dz / d if taut else 0.0
+    ext = env[_at(E_WEXT, r)] > 0.0
+    return (
+        env[_at(E_FWIRE, r)] if ext else f0,
+        env[_at(E_FWIRE + 1, r)] if ext else f1,
+        env[_at(E_FWIRE + 2, r)] if ext else f2,
+    )
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _tree_loads_into(
+    tree: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, n: int
 ) -> None:
-    """``plant._fluid_wrench_into`` per run (``_relative_velocity_into``, ``_hydro_into``,
-    ``_froude_krylov_into``)."""
-    vec = work.vec
-    n = tau.shape[1]
-    nu_rel = vec[B_NU_REL]
-    v_c_b = vec[B_VCB]
-    v_c_dot_b = vec[B_VCDB]
-    _mtv3_rows(v_c_b, R, env[E_VC : E_VC + 3])
-    for i in range(6):
-        for r in range(n):
-            nu_rel[i, r] = nu[i, r]
-    for i in range(3):
-        for r in range(n):
-            nu_rel[i, r] -= v_c_b[i, r]
-    _mtv3_rows(v_c_dot_b, R, env[E_AC : E_AC + 3])
+    """The first loop of a stage: each run's tree angles' sines and cosines, its rotation,
+    and ``plant.tree_wrench_into``'s wrench but the contact's (the water, the weight and the
+    push, the wire at its attachment point) into the rows of ``tree`` (``T_*``)."""
+    M_rb, M_a = _m36(P.tree_M_rb), _m36(P.tree_M_a)
+    D_l, D_nl = _v6(P.tree_D_l), _v6(P.tree_D_nl)
+    fk_mass, W0 = P.tree_fk_mass, P.tree_W0
+    ra0, ra1, ra2 = _v3(P.tree_r_att)
     for r in range(n):
-        w0, w1, w2 = nu[3, r], nu[4, r], nu[5, r]
-        c0, c1, c2 = v_c_b[0, r], v_c_b[1, r], v_c_b[2, r]
-        v_c_dot_b[0, r] -= w1 * c2 - w2 * c1
-        v_c_dot_b[1, r] -= w2 * c0 - w0 * c2
-        v_c_dot_b[2, r] -= w0 * c1 - w1 * c0
-    c_rb = vec[B_CRB]
-    c_a = vec[B_CA]
-    _coriolis_rows(c_rb, M_rb, nu, vec[B_MOM])
-    _coriolis_rows(c_a, M_a, nu_rel, vec[B_MOM])
-    for i in range(6):
-        dl, dnl = D_l[i], D_nl[i]
-        ma0, ma1, ma2 = M_a[i, 0], M_a[i, 1], M_a[i, 2]
-        for r in range(n):
-            nr = nu_rel[i, r]
-            t = -c_rb[i, r] - c_a[i, r]
-            t -= (dl + dnl * abs(nr)) * nr
-            t += ma0 * v_c_dot_b[0, r]
-            t += ma1 * v_c_dot_b[1, r]
-            t += ma2 * v_c_dot_b[2, r]
-            tau[i, r] = t
-    tmp = vec[B_A]
-    _mtv3_rows(tmp, R, env[E_AC : E_AC + 3])
-    for i in range(3):
-        for r in range(n):
-            tau[i, r] += fk_mass * tmp[i, r]
+        sphi, cphi = sincos(x[_at(3, r)])
+        sth, cth = sincos(x[_at(4, r)])
+        spsi, cpsi = sincos(x[_at(5, r)])
+        R = _rzyx(sphi, cphi, sth, cth, spsi, cpsi)
+        w0, w1, w2 = x[_at(9, r)], x[_at(10, r)], x[_at(11, r)]
+        nu = (x[_at(6, r)], x[_at(7, r)], x[_at(8, r)], w0, w1, w2)
+        t0, t1, t2, t3, t4, t5 = _fluid_wrench(nu, R, M_rb, M_a, D_l, D_nl, fk_mass, env, r)
+        # the submerged weight and the push, in NED, into body axes
+        a0, a1, a2 = _mtv3(
+            R, env[_at(E_PUSH, r)], env[_at(E_PUSH + 1, r)], env[_at(E_PUSH + 2, r)] + W0
+        )
+        t0 += a0
+        t1 += a1
+        t2 += a2
+        # the wire at its attachment point (attachment_velocity_into: R (v + w x r_att))
+        c0, c1, c2 = _mv3(R, ra0, ra1, ra2)
+        v0, v1, v2 = _mv3(
+            R,
+            x[_at(6, r)] + (w1 * ra2 - w2 * ra1),
+            x[_at(7, r)] + (w2 * ra0 - w0 * ra2),
+            x[_at(8, r)] + (w0 * ra1 - w1 * ra0),
+        )
+        f0, f1, f2 = _wire_force(
+            x[_at(0, r)] + c0, x[_at(1, r)] + c1, x[_at(2, r)] + c2, v0, v1, v2, env, r, W0
+        )
+        a0, a1, a2 = _mtv3(R, f0, f1, f2)
+        t0 += a0
+        t1 += a1
+        t2 += a2
+        t3 += ra1 * a2 - ra2 * a1
+        t4 += ra2 * a0 - ra0 * a2
+        t5 += ra0 * a1 - ra1 * a0
+        tree[_at(T_SPHI, r)], tree[_at(T_CPHI, r)] = sphi, cphi
+        tree[_at(T_STH, r)], tree[_at(T_CTH, r)] = sth, cth
+        tree[_at(T_SPSI, r)], tree[_at(T_CPSI, r)] = spsi, cpsi
+        for i in range(9):
+            tree[_at(T_R + i, r)] = R[i]
+        tree[_at(T_TAU, r)], tree[_at(T_TAU + 1, r)], tree[_at(T_TAU + 2, r)] = t0, t1, t2
+        tree[_at(T_TAU + 3, r)], tree[_at(T_TAU + 4, r)], tree[_at(T_TAU + 5, r)] = t3, t4, t5
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _wire_force_rows(
-    f: np.ndarray, p_att: np.ndarray, v_att: np.ndarray, env: np.ndarray, W0: float
-) -> None:
-    """``plant.wire_force_damped_into`` per run, its branches as selects: the force given
-    from outside where ``E_WEXT`` is set, zero where the wire is slack."""
-    for r in range(f.shape[1]):
-        rest = W0 / env[E_KH, r] - W0 / env[E_KZ, r]
-        dx = p_att[0, r] - (env[E_CT, r] + env[E_OFF, r])
-        dy = p_att[1, r] - (env[E_CT + 1, r] + env[E_OFF + 1, r])
-        dz = p_att[2, r] - (env[E_CT + 2, r] + env[E_LREST, r] - rest)
-        d = np.sqrt(dx * dx + dy * dy + dz * dz)
-        rate = (
-            dx * (v_att[0, r] - env[E_VPIV, r])
-            + dy * (v_att[1, r] - env[E_VPIV + 1, r])
-            + dz * (v_att[2, r] - env[E_VPIV + 2, r])
-        ) / d
-        tension = env[E_KZ, r] * (d - rest) + env[E_WDAMP, r] * rate
-        taut = (d > rest) & (d > 0.0) & (tension > 0.0)
-        f0 = -tension * dx / d if taut else 0.0
-        f1 = -tension * dy / d if taut else 0.0
-        f2 = -tension * dz / d if taut else 0.0
-        ext = env[E_WEXT, r] > 0.0
-        f[0, r] = env[E_FWIRE, r] if ext else f0
-        f[1, r] = env[E_FWIRE + 1, r] if ext else f1
-        f[2, r] = env[E_FWIRE + 2, r] if ext else f2
-
-
-@njit(inline="always", **JIT_NOALLOC)
-def _contact_runs(
-    tau: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork
-) -> None:
-    """Add the contact wrench to ``tau`` for each run with a landing surface
-    (``E_LAND`` > 0), as ``plant.tree_wrench_into`` does.
+def _contact_runs(x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork, n: int) -> None:
+    """Add the contact wrench to the tree's wrench (``work.tree[T_TAU:]``) for each run with
+    a landing surface (``E_LAND`` > 0), as ``plant.tree_wrench_into`` does.
 
     A run whose tree is clearly above the surface and the posts' tops (its centre's depth
     plus the farthest its bottom corners reach, or plus half its height and the posts'
@@ -400,33 +474,32 @@ def _contact_runs(
     first test). It gets the scalar code's ``tau += 0.0`` as a select over the row (the
     scalar plant skips such a tree's contact too: ``plant.contact_reach``). The others (near
     the frame, or not finite) get the scalar ``plant.contact_wrench_trig_into`` on a copy of
-    their column, with their sines and cosines from ``work.trig`` (the same arithmetic)."""
+    their column, with their sines and cosines from the first loop (the same arithmetic)."""
     reach = contact_reach(P)
-    n = tau.shape[1]
+    tree = work.tree
     any_near = False
     for r in range(n):
-        land = env[E_LAND, r]
-        far = x[2, r] + reach < land
+        land = env[_at(E_LAND, r)]
+        far = x[_at(2, r)] + reach < land
         skip = (land > 0.0) & far
         any_near |= (land > 0.0) & (not far)
         for i in range(6):
-            tau[i, r] = tau[i, r] + 0.0 if skip else tau[i, r]
+            t = tree[_at(T_TAU + i, r)]
+            tree[_at(T_TAU + i, r)] = t + 0.0 if skip else t
     if not any_near:
         return
-    R = work.mat[BM_RT]
     col_x, col_env, col_R, col_cw = work.col_x, work.col_env, work.col_R, work.col_cw
     for r in range(n):
-        land = env[E_LAND, r]
-        if not (land > 0.0 and not x[2, r] + reach < land):
+        land = env[_at(E_LAND, r)]
+        if not (land > 0.0 and not x[_at(2, r)] + reach < land):
             continue
         for i in range(N_STATE):
-            col_x[i] = x[i, r]
+            col_x[i] = x[_at(i, r)]
         for i in range(N_ENV):
-            col_env[i] = env[i, r]
+            col_env[i] = env[_at(i, r)]
         for i in range(3):
             for j in range(3):
-                col_R[i, j] = R[i, j, r]
-        trig = work.trig
+                col_R[i, j] = tree[_at(T_R + 3 * i + j, r)]
         contact_wrench_trig_into(
             col_cw,
             col_x,
@@ -434,310 +507,254 @@ def _contact_runs(
             P,
             col_R,
             work.plant,
-            trig[T_SPHI, r],
-            trig[T_CPHI, r],
-            trig[T_CTH, r],
-            trig[T_SPSI, r],
-            trig[T_CPSI, r],
+            tree[_at(T_SPHI, r)],
+            tree[_at(T_CPHI, r)],
+            tree[_at(T_CTH, r)],
+            tree[_at(T_SPSI, r)],
+            tree[_at(T_CPSI, r)],
         )
         for i in range(6):
-            tau[i, r] += col_cw[i]
+            tree[_at(T_TAU + i, r)] += col_cw[i]
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _tree_wrench_rows(
-    tau: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork
-) -> None:
-    """``plant.tree_wrench_into`` per run."""
-    vec = work.vec
-    R = work.mat[BM_RT]
-    n = tau.shape[1]
-    _fluid_wrench_rows(
-        tau,
-        x[6:12],
-        R,
-        P.tree_M_rb,
-        P.tree_M_a,
-        P.tree_D_l,
-        P.tree_D_nl,
-        P.tree_fk_mass,
-        env,
-        work,
-    )
-    a = vec[B_A]
-    b = vec[B_B]
-    c = vec[B_C]
-    d = vec[B_D]
-    W0 = P.tree_W0
-    for i in range(3):
-        for r in range(n):
-            b[i, r] = env[E_PUSH + i, r]
-    for r in range(n):
-        b[2, r] += W0
-    _mtv3_rows(a, R, b)
-    for i in range(3):
-        for r in range(n):
-            tau[i, r] += a[i, r]
-    # the wire at its attachment point (attachment_velocity_into: tmp = w x r_att + v, R tmp)
-    _mv3_const_rows(c, R, P.tree_r_att)
-    for i in range(3):
-        for r in range(n):
-            c[i, r] = x[i, r] + c[i, r]
-    ra0, ra1, ra2 = P.tree_r_att[0], P.tree_r_att[1], P.tree_r_att[2]
-    for r in range(n):
-        w0, w1, w2 = x[9, r], x[10, r], x[11, r]
-        a[0, r] = w1 * ra2 - w2 * ra1
-        a[1, r] = w2 * ra0 - w0 * ra2
-        a[2, r] = w0 * ra1 - w1 * ra0
-    for i in range(3):
-        for r in range(n):
-            a[i, r] = x[6 + i, r] + a[i, r]
-    _mv3_rows(d, R, a)
-    _wire_force_rows(b, c, d, env, W0)
-    _mtv3_rows(a, R, b)
-    for i in range(3):
-        for r in range(n):
-            tau[i, r] += a[i, r]
-    for r in range(n):
-        a0, a1, a2 = a[0, r], a[1, r], a[2, r]
-        c[0, r] = ra1 * a2 - ra2 * a1
-        c[1, r] = ra2 * a0 - ra0 * a2
-        c[2, r] = ra0 * a1 - ra1 * a0
-    for i in range(3):
-        for r in range(n):
-            tau[3 + i, r] += c[i, r]
-    _contact_runs(tau, x, env, P, work)
+def _tzyx(sphi: float, cphi: float, sth: float, cth: float) -> tuple:
+    """``gnc.Tzyx_into`` with tan theta = sin theta / cos theta (as ``rhs_into``)."""
+    tth = sth / cth
+    return (1.0, sphi * tth, cphi * tth, 0.0, cphi, -sphi, 0.0, sphi / cth, cphi / cth)
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _rov_wrench_rows(
-    tau: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork
+def _tree_slopes_into(
+    xdot: np.ndarray, x: np.ndarray, tree: np.ndarray, r: int, tau_t: tuple, M_inv: tuple
 ) -> None:
-    """``plant.rov_wrench_into`` per run (the thrusters' wrench in ``work.thr``)."""
-    _fluid_wrench_rows(
-        tau,
-        x[18:24],
-        work.mat[BM_RR],
-        P.rov_M_rb,
-        P.rov_M_a,
-        P.rov_D_l,
-        P.rov_D_nl,
-        P.rov_fk_mass,
-        env,
-        work,
+    """Run r's tree kinematics and ``M^-1 tau`` into ``xdot[0:12]`` (the rotation and the
+    angles' sines and cosines from the first loop)."""
+    R = _rows9(tree, T_R, r)
+    T = _tzyx(tree[_at(T_SPHI, r)], tree[_at(T_CPHI, r)], tree[_at(T_STH, r)], tree[_at(T_CTH, r)])
+    xdot[_at(0, r)], xdot[_at(1, r)], xdot[_at(2, r)] = _mv3(
+        R, x[_at(6, r)], x[_at(7, r)], x[_at(8, r)]
     )
+    xdot[_at(3, r)], xdot[_at(4, r)], xdot[_at(5, r)] = _mv3(
+        T, x[_at(9, r)], x[_at(10, r)], x[_at(11, r)]
+    )
+    a = _mv6(M_inv, tau_t)
+    for i in range(6):
+        xdot[_at(6 + i, r)] = a[i]
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _slopes_into(
+    xdot: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork, n: int
+) -> None:
+    """The second loop of a stage with the ROV: each run's ROV wrench
+    (``plant.rov_wrench_into``, the thrusters' from ``work.thr``), the grip's coupling from
+    ``work.grip`` added where the run grips, both bodies' kinematics and ``M^-1 tau``."""
+    M_rb, M_a = _m36(P.rov_M_rb), _m36(P.rov_M_a)
+    D_l, D_nl = _v6(P.rov_D_l), _v6(P.rov_D_nl)
+    fk_mass = P.rov_fk_mass
     W, B, r_bg, r_bb = P.rov_W, P.rov_B, P.rov_r_cg, P.rov_r_cb
     wb = W - B
     m0 = r_bg[0] * W - r_bb[0] * B
     m1 = r_bg[1] * W - r_bb[1] * B
     m2 = r_bg[2] * W - r_bb[2] * B
-    trig, thr = work.trig, work.thr
-    for r in range(tau.shape[1]):
-        sphi, cphi = trig[T_ROV + T_SPHI, r], trig[T_ROV + T_CPHI, r]
-        sth, cth = trig[T_ROV + T_STH, r], trig[T_ROV + T_CTH, r]
+    rov_M_inv, tree_M_inv = _m36(P.rov_M_inv), _m36(P.tree_M_inv)
+    tree, thr, grip_w = work.tree, work.thr, work.grip
+    for r in range(n):
+        sphi, cphi = sincos(x[_at(15, r)])
+        sth, cth = sincos(x[_at(16, r)])
+        spsi, cpsi = sincos(x[_at(17, r)])
+        R_r = _rzyx(sphi, cphi, sth, cth, spsi, cpsi)
+        nu = _rows6(x, 18, r)
+        t0, t1, t2, t3, t4, t5 = _fluid_wrench(nu, R_r, M_rb, M_a, D_l, D_nl, fk_mass, env, r)
         # gvect_into, subtracted, then the thrusters' wrench added
-        tau[0, r] -= wb * sth
-        tau[1, r] -= -wb * cth * sphi
-        tau[2, r] -= -wb * cth * cphi
-        tau[3, r] -= -m1 * cth * cphi + m2 * cth * sphi
-        tau[4, r] -= m2 * sth + m0 * cth * cphi
-        tau[5, r] -= -m0 * cth * sphi - m1 * sth
+        t0 -= wb * sth
+        t1 -= -wb * cth * sphi
+        t2 -= -wb * cth * cphi
+        t3 -= -m1 * cth * cphi + m2 * cth * sphi
+        t4 -= m2 * sth + m0 * cth * cphi
+        t5 -= -m0 * cth * sphi - m1 * sth
+        th = _rows6(thr, 0, r)
+        tau_r = (t0 + th[0], t1 + th[1], t2 + th[2], t3 + th[3], t4 + th[4], t5 + th[5])
+        w_rov = _rows6(grip_w, 0, r)
+        w_tree = _rows6(grip_w, 6, r)
+        grip = env[_at(E_GRIP, r)] > 0.0
+        tau_r = _add_where(tau_r, w_rov, grip)
+        tau_t = _add_where(_rows6(tree, T_TAU, r), w_tree, grip)
+        T_r = _tzyx(sphi, cphi, sth, cth)
+        xdot[_at(12, r)], xdot[_at(13, r)], xdot[_at(14, r)] = _mv3(R_r, nu[0], nu[1], nu[2])
+        xdot[_at(15, r)], xdot[_at(16, r)], xdot[_at(17, r)] = _mv3(T_r, nu[3], nu[4], nu[5])
+        a = _mv6(rov_M_inv, tau_r)
         for i in range(6):
-            tau[i, r] += thr[i, r]
+            xdot[_at(18 + i, r)] = a[i]
+        _tree_slopes_into(xdot, x, tree, r, tau_t, tree_M_inv)
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _coupling_rows(x: np.ndarray, P: PlantArrays, work: BatchWork) -> None:
-    """``plant.coupling_wrench_into`` per run, into ``work.vec[B_WROV]`` and
-    ``work.vec[B_WTREE]``."""
-    vec, mat = work.vec, work.mat
-    n = x.shape[1]
-    R_t, R_r = mat[BM_RT], mat[BM_RR]
-    a = vec[B_A]
-    b = vec[B_B]
-    R_m = mat[BM_RM]
-    _mm_const_rows(R_m, R_t, P.mount_R)
-    mr = P.mount_r
-    mr0, mr1, mr2 = mr[0], mr[1], mr[2]
-    # position error: R_r^T (p_m - p_rov), p_m = p_tree + R_t r_mount
-    _mv3_const_rows(a, R_t, mr)
-    for i in range(3):
-        for r in range(n):
-            a[i, r] = x[i, r] + a[i, r]
-    for i in range(3):
-        for r in range(n):
-            a[i, r] = a[i, r] - x[12 + i, r]
-    e_p_b = vec[B_EPB]
-    _mtv3_rows(e_p_b, R_r, a)
-    # velocity error: R_r^T R_t (v_t + w_t x r_mount) - v_rov
+def _coupling_into(x: np.ndarray, P: PlantArrays, work: BatchWork, n: int) -> None:
+    """The grip's coupling (``plant.coupling_wrench_into``) of every run, gripping or not,
+    into ``work.grip``: the wrench on the ROV (rows 0-5, ROV axes) and on the tree (rows
+    6-11, tree axes). A loop of its own: with the ROV's wrench in the same loop, the
+    compiler did not vectorise it."""
+    mount_R = _m9(P.mount_R)
+    mr0, mr1, mr2 = _v3(P.mount_r)
+    K, C = _v6(P.coupling_K), _v6(P.coupling_C)
+    tree, wc = work.tree, work.grip
     for r in range(n):
-        w0, w1, w2 = x[9, r], x[10, r], x[11, r]
-        a[0, r] = w1 * mr2 - w2 * mr1
-        a[1, r] = w2 * mr0 - w0 * mr2
-        a[2, r] = w0 * mr1 - w1 * mr0
-    for i in range(3):
-        for r in range(n):
-            a[i, r] = x[6 + i, r] + a[i, r]
-    _mv3_rows(b, R_t, a)
-    e_v_b = vec[B_EVB]
-    _mtv3_rows(e_v_b, R_r, b)
-    for i in range(3):
-        for r in range(n):
-            e_v_b[i, r] = e_v_b[i, r] - x[18 + i, r]
-    R_tmp = mat[BM_TMP]
-    _mtm_rows(R_tmp, R_r, R_m)
-    e_th = vec[B_ETH]
-    for r in range(n):
-        e_th[0, r] = 0.5 * (R_tmp[2, 1, r] - R_tmp[1, 2, r])
-        e_th[1, r] = 0.5 * (R_tmp[0, 2, r] - R_tmp[2, 0, r])
-        e_th[2, r] = 0.5 * (R_tmp[1, 0, r] - R_tmp[0, 1, r])
-    _mv3_rows(a, R_t, x[9:12])
-    e_w = vec[B_EW]
-    _mtv3_rows(e_w, R_r, a)
-    for i in range(3):
-        for r in range(n):
-            e_w[i, r] = e_w[i, r] - x[21 + i, r]
-    w_rov = vec[B_WROV]
-    w_tree = vec[B_WTREE]
-    K, C = P.coupling_K, P.coupling_C
-    for i in range(3):
-        kp, cv, kt, cw = K[i], C[i], K[3 + i], C[3 + i]
-        for r in range(n):
-            w_rov[i, r] = kp * e_p_b[i, r] + cv * e_v_b[i, r]
-            w_rov[3 + i, r] = kt * e_th[i, r] + cw * e_w[i, r]
-    R_tr = mat[BM_RTR]
-    _mtm_rows(R_tr, R_t, R_r)  # ROV axes -> tree axes
-    _mv3_rows(a, R_tr, w_rov[0:3])
-    for i in range(3):
-        for r in range(n):
-            w_tree[i, r] = -a[i, r]
-    for r in range(n):
-        f0, f1, f2 = w_tree[0, r], w_tree[1, r], w_tree[2, r]
-        b[0, r] = mr1 * f2 - mr2 * f1
-        b[1, r] = mr2 * f0 - mr0 * f2
-        b[2, r] = mr0 * f1 - mr1 * f0
-    _mv3_rows(a, R_tr, w_rov[3:6])
-    for i in range(3):
-        for r in range(n):
-            w_tree[3 + i, r] = b[i, r] - a[i, r]
+        sphi, cphi = sincos(x[_at(15, r)])
+        sth, cth = sincos(x[_at(16, r)])
+        spsi, cpsi = sincos(x[_at(17, r)])
+        R_r = _rzyx(sphi, cphi, sth, cth, spsi, cpsi)
+        R_t = _rows9(tree, T_R, r)
+        R_m = _mm(R_t, mount_R)
+        a0, a1, a2 = _mv3(R_t, mr0, mr1, mr2)
+        e_p = _mtv3(
+            R_r,
+            (x[_at(0, r)] + a0) - x[_at(12, r)],
+            (x[_at(1, r)] + a1) - x[_at(13, r)],
+            (x[_at(2, r)] + a2) - x[_at(14, r)],
+        )
+        w0, w1, w2 = x[_at(9, r)], x[_at(10, r)], x[_at(11, r)]
+        b0, b1, b2 = _mv3(
+            R_t,
+            x[_at(6, r)] + (w1 * mr2 - w2 * mr1),
+            x[_at(7, r)] + (w2 * mr0 - w0 * mr2),
+            x[_at(8, r)] + (w0 * mr1 - w1 * mr0),
+        )
+        ev0, ev1, ev2 = _mtv3(R_r, b0, b1, b2)
+        e_v = (ev0 - x[_at(18, r)], ev1 - x[_at(19, r)], ev2 - x[_at(20, r)])
+        R_e = _mtm(R_r, R_m)
+        e_th = (0.5 * (R_e[7] - R_e[5]), 0.5 * (R_e[2] - R_e[6]), 0.5 * (R_e[3] - R_e[1]))
+        a0, a1, a2 = _mv3(R_t, w0, w1, w2)
+        ew0, ew1, ew2 = _mtv3(R_r, a0, a1, a2)
+        e_w = (ew0 - x[_at(21, r)], ew1 - x[_at(22, r)], ew2 - x[_at(23, r)])
+        w_rov = (
+            K[0] * e_p[0] + C[0] * e_v[0],
+            K[1] * e_p[1] + C[1] * e_v[1],
+            K[2] * e_p[2] + C[2] * e_v[2],
+            K[3] * e_th[0] + C[3] * e_w[0],
+            K[4] * e_th[1] + C[4] * e_w[1],
+            K[5] * e_th[2] + C[5] * e_w[2],
+        )
+        R_tr = _mtm(R_t, R_r)
+        a0, a1, a2 = _mv3(R_tr, w_rov[0], w_rov[1], w_rov[2])
+        f0, f1, f2 = -a0, -a1, -a2
+        a0, a1, a2 = _mv3(R_tr, w_rov[3], w_rov[4], w_rov[5])
+        for i in range(6):
+            wc[_at(i, r)] = w_rov[i]
+        wc[_at(6, r)], wc[_at(7, r)], wc[_at(8, r)] = f0, f1, f2
+        wc[_at(9, r)] = (mr1 * f2 - mr2 * f1) - a0
+        wc[_at(10, r)] = (mr2 * f0 - mr0 * f2) - a1
+        wc[_at(11, r)] = (mr0 * f1 - mr1 * f0) - a2
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def _tree_acceleration_rows(
-    nu_dot: np.ndarray, x: np.ndarray, tau: np.ndarray, env: np.ndarray, P: PlantArrays, work
+def _tree_only_slopes_into(
+    xdot: np.ndarray, x: np.ndarray, P: PlantArrays, work: BatchWork, n: int
 ) -> None:
-    """``plant.tree_acceleration_into`` per run: M^-1 tau, and where a run has the wire's
-    mass (``E_WMASS`` > 0) the Sherman-Morrison correction instead (computed only when a run
-    of the batch has it)."""
-    n = nu_dot.shape[1]
-    M_inv = P.tree_M_inv
-    _mv6c_rows(nu_dot, M_inv, tau)
+    """The second loop of a stage without the ROV: the tree's kinematics and ``M^-1 tau``,
+    the ROV's slopes zero."""
+    tree_M_inv = _m36(P.tree_M_inv)
+    tree = work.tree
+    for r in range(n):
+        tau_t = _rows6(tree, T_TAU, r)
+        _tree_slopes_into(xdot, x, tree, r, tau_t, tree_M_inv)
+        for i in range(12, N_STATE):
+            xdot[_at(i, r)] = 0.0
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _wire_mass_into(
+    xdot: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork, n: int
+) -> None:
+    """``plant.tree_acceleration_into``'s Sherman-Morrison correction for the wire's mass,
+    in the tree's accelerations (rows 6-11 of ``xdot``) where a run has it (``E_WMASS`` >
+    0): run only when a run of the block has it."""
     any_mass = False
     for r in range(n):
-        any_mass |= env[E_WMASS, r] > 0.0
+        any_mass |= env[_at(E_WMASS, r)] > 0.0
     if not any_mass:
         return
-    vec = work.vec
-    R_t = work.mat[BM_RT]
-    u = vec[B_U]
-    for i in range(3):
-        for r in range(n):
-            u[i, r] = R_t[2, i, r]
-            u[3 + i, r] = 0.0
-    cor = vec[B_A]
-    _cross_rows(cor, x[9:12], x[6:9])
-    a_rot = vec[B_SCAL, S_AROT]
+    M_inv = _m36(P.tree_M_inv)
+    tree, grip_w, has_rov = work.tree, work.grip, P.has_rov
     for r in range(n):
-        a_rot[r] = R_t[2, 0, r] * cor[0, r] + R_t[2, 1, r] * cor[1, r] + R_t[2, 2, r] * cor[2, r]
-    rhs6 = vec[B_RHS6]
-    for i in range(6):
-        for r in range(n):
-            rhs6[i, r] = tau[i, r] - env[E_WMASS, r] * a_rot[r] * u[i, r]
-    base = vec[B_BASE]
-    _mv6c_rows(base, M_inv, rhs6)
-    minv_u = vec[B_MINVU]
-    _mv6c_rows(minv_u, M_inv, u)
-    scale = vec[B_SCAL, S_SCALE]
-    for r in range(n):
+        # the tree's whole wrench as the second loop summed it: the grip's added where it grips
+        grip = has_rov & (env[_at(E_GRIP, r)] > 0.0)
+        tau = _add_where(_rows6(tree, T_TAU, r), _rows6(grip_w, 6, r), grip)
+        u = (tree[_at(T_R + 6, r)], tree[_at(T_R + 7, r)], tree[_at(T_R + 8, r)], 0.0, 0.0, 0.0)
+        w0, w1, w2 = x[_at(9, r)], x[_at(10, r)], x[_at(11, r)]
+        v0, v1, v2 = x[_at(6, r)], x[_at(7, r)], x[_at(8, r)]
+        a_rot = u[0] * (w1 * v2 - w2 * v1) + u[1] * (w2 * v0 - w0 * v2) + u[2] * (w0 * v1 - w1 * v0)
+        m_w = env[_at(E_WMASS, r)]
+        rhs6 = (
+            tau[0] - m_w * a_rot * u[0],
+            tau[1] - m_w * a_rot * u[1],
+            tau[2] - m_w * a_rot * u[2],
+            tau[3] - m_w * a_rot * u[3],
+            tau[4] - m_w * a_rot * u[4],
+            tau[5] - m_w * a_rot * u[5],
+        )
+        base = _mv6(M_inv, rhs6)
+        minv_u = _mv6(M_inv, u)
         u_minv_u = 0.0
         for i in range(6):
-            u_minv_u += u[i, r] * minv_u[i, r]
+            u_minv_u += u[i] * minv_u[i]
         u_base = 0.0
         for i in range(6):
-            u_base += u[i, r] * base[i, r]
-        m_w = env[E_WMASS, r]
+            u_base += u[i] * base[i]
         denom = 1.0 + m_w * u_minv_u
-        scale[r] = m_w * u_base / denom
-    for i in range(6):
-        for r in range(n):
-            corrected = base[i, r] - minv_u[i, r] * scale[r]
-            nu_dot[i, r] = corrected if env[E_WMASS, r] > 0.0 else nu_dot[i, r]
+        scale = m_w * u_base / denom
+        for i in range(6):
+            corrected = base[i] - minv_u[i] * scale
+            xdot[_at(6 + i, r)] = corrected if m_w > 0.0 else xdot[_at(6 + i, r)]
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def rhs_batch_into(
-    xdot: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork
+    xdot: np.ndarray, x: np.ndarray, env: np.ndarray, P: PlantArrays, work: BatchWork, n: int
 ) -> None:
-    """``plant.rhs_into`` for every run: the slope of column r of ``x`` (N_STATE, N) into
-    column r of ``xdot``, the thrusters' wrench taken from ``work.thr``."""
-    vec, mat, trig = work.vec, work.mat, work.trig
-    n = x.shape[1]
-    _trig_rows(trig, x, 3, 0)
-    R_t = mat[BM_RT]
-    _rzyx_rows(R_t, trig, 0)
-    tau_t = vec[B_TAU_T]
-    _tree_wrench_rows(tau_t, x, env, P, work)
+    """``plant.rhs_into`` for the first ``n`` runs of a block: the slope of run r's state
+    (rows of ``x``, ``BLOCK`` apart) into ``xdot``, the thrusters' wrench from ``work.thr``.
+    Compiled once and called for each stage (inlined four times into the step, its compile
+    ran past ten minutes and 24 GB)."""
+    _tree_loads_into(work.tree, x, env, P, n)
+    _contact_runs(x, env, P, work, n)
     if P.has_rov:
-        _trig_rows(trig, x, 15, T_ROV)
-        R_r = mat[BM_RR]
-        _rzyx_rows(R_r, trig, T_ROV)
-        tau_r = vec[B_TAU_R]
-        _rov_wrench_rows(tau_r, x, env, P, work)
-        any_grip = False
-        for r in range(n):
-            any_grip |= env[E_GRIP, r] > 0.0
-        if any_grip:
-            _coupling_rows(x, P, work)
-            w_rov = vec[B_WROV]
-            w_tree = vec[B_WTREE]
-            for i in range(6):
-                for r in range(n):
-                    grip = env[E_GRIP, r] > 0.0
-                    tau_r[i, r] = tau_r[i, r] + w_rov[i, r] if grip else tau_r[i, r]
-                    tau_t[i, r] = tau_t[i, r] + w_tree[i, r] if grip else tau_t[i, r]
-        T_r = mat[BM_TR]
-        _tzyx_rows(T_r, trig, T_ROV)
-        _mv3_rows(xdot[12:15], R_r, x[18:21])
-        _mv3_rows(xdot[15:18], T_r, x[21:24])
-        _mv6c_rows(xdot[18:24], P.rov_M_inv, tau_r)
+        _coupling_into(x, P, work, n)
+        _slopes_into(xdot, x, env, P, work, n)
     else:
-        for i in range(12, N_STATE):
-            for r in range(n):
-                xdot[i, r] = 0.0
-    T_t = mat[BM_TT]
-    _tzyx_rows(T_t, trig, 0)
-    _mv3_rows(xdot[0:3], R_t, x[6:9])
-    _mv3_rows(xdot[3:6], T_t, x[9:12])
-    _tree_acceleration_rows(xdot[6:12], x, tau_t, env, P, work)
+        _tree_only_slopes_into(xdot, x, P, work, n)
+    _wire_mass_into(xdot, x, env, P, work, n)
 
 
 @njit(inline="always", **JIT_NOALLOC)
-def thruster_wrench_batch_into(n_rps: np.ndarray, P: PlantArrays, work: BatchWork) -> None:
-    """``plant.thruster_wrench_into`` for every run, into ``work.thr`` (6, N)."""
+def _thruster_wrench_into(
+    n_rps: np.ndarray, c0: int, P: PlantArrays, work: BatchWork, n: int
+) -> None:
+    """``plant.thruster_wrench_into`` for runs c0 .. c0 + n of ``n_rps`` (n_thrusters, N),
+    into ``work.thr``."""
     f, thr = work.f, work.thr
-    m, n = n_rps.shape[0], n_rps.shape[1]
+    T = P.thr_T
+    m = n_rps.shape[0]
     for j in range(m):
         kp, kn, nmax = P.thr_k_pos[j], P.thr_k_neg[j], P.thr_n_max[j]
         for r in range(n):
-            f[j, r] = thrust_of_one(n_rps[j, r], kp, kn, nmax)
-    T = P.thr_T
+            f[_at(j, r)] = thrust_of_one(n_rps[j, c0 + r], kp, kn, nmax)
     for i in range(6):
         for r in range(n):
-            thr[i, r] = 0.0
+            thr[_at(i, r)] = 0.0
         for j in range(m):
             t = T[i, j]
             for r in range(n):
-                thr[i, r] += t * f[j, r]
+                thr[_at(i, r)] += t * f[_at(j, r)]
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _stage_into(xs: np.ndarray, x0: np.ndarray, h: float, k: np.ndarray, n: int) -> None:
+    """The next stage's state x0 + h k of the block's first n runs."""
+    for i in range(N_STATE):
+        for r in range(n):
+            xs[_at(i, r)] = x0[_at(i, r)] + h * k[_at(i, r)]
 
 
 @njit(**JIT_NOALLOC)
@@ -751,37 +768,33 @@ def rk4_batch_into(
 ) -> None:
     """One RK4 step of every run, in place: column r of ``x_sb`` (N_STATE, N) becomes what
     ``plant.rk4_step_into`` makes of it with ``n_rps[:, r]`` (n_thrusters, N) and
-    ``env[:, r]`` (N_ENV, N), bit for bit. ``work`` from ``make_batch_work(n_thrusters, N)``;
-    nothing is allocated and the shapes are not checked (``rk4_batch`` checks them)."""
-    n_state, n = x_sb.shape[0], x_sb.shape[1]
-    thruster_wrench_batch_into(n_rps, P, work)
-    xs = work.xs
-    k = work.k
-    k1, k2, k3, k4 = k[0], k[1], k[2], k[3]
+    ``env[:, r]`` (N_ENV, N), bit for bit, in blocks of ``BLOCK`` runs copied into the
+    block's flat work arrays. ``work`` from ``make_batch_work``; nothing is allocated and
+    the shapes are not checked (``rk4_batch`` checks them)."""
+    x0, xs, ew = work.x0, work.xs, work.env
+    k1, k2, k3, k4 = work.k[0], work.k[1], work.k[2], work.k[3]
     h2 = 0.5 * dt
-    for i in range(n_state):
-        for r in range(n):
-            xs[i, r] = x_sb[i, r]
-    for stage in range(4):
-        rhs_batch_into(k[stage], xs, env, P, work)
-        if stage == 0:
-            for i in range(n_state):
-                for r in range(n):
-                    xs[i, r] = x_sb[i, r] + h2 * k1[i, r]
-        elif stage == 1:
-            for i in range(n_state):
-                for r in range(n):
-                    xs[i, r] = x_sb[i, r] + h2 * k2[i, r]
-        elif stage == 2:
-            for i in range(n_state):
-                for r in range(n):
-                    xs[i, r] = x_sb[i, r] + dt * k3[i, r]
     h6 = dt / 6.0
-    for i in range(n_state):
-        for r in range(n):
-            x_sb[i, r] = x_sb[i, r] + h6 * (
-                ((k1[i, r] + 2.0 * k2[i, r]) + 2.0 * k3[i, r]) + k4[i, r]
-            )
+    for c0 in range(0, x_sb.shape[1], BLOCK):
+        n = min(BLOCK, x_sb.shape[1] - c0)
+        for i in range(N_STATE):
+            for r in range(n):
+                x0[_at(i, r)] = x_sb[i, c0 + r]
+        for i in range(N_ENV):
+            for r in range(n):
+                ew[_at(i, r)] = env[i, c0 + r]
+        _thruster_wrench_into(n_rps, c0, P, work, n)
+        rhs_batch_into(k1, x0, ew, P, work, n)
+        _stage_into(xs, x0, h2, k1, n)
+        rhs_batch_into(k2, xs, ew, P, work, n)
+        _stage_into(xs, x0, h2, k2, n)
+        rhs_batch_into(k3, xs, ew, P, work, n)
+        _stage_into(xs, x0, dt, k3, n)
+        rhs_batch_into(k4, xs, ew, P, work, n)
+        for i in range(N_STATE):
+            for r in range(n):
+                a = _at(i, r)
+                x_sb[i, c0 + r] = x0[a] + h6 * (((k1[a] + 2.0 * k2[a]) + 2.0 * k3[a]) + k4[a])
 
 
 def rk4_batch(
