@@ -33,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from missions import schema
 from missions.setup import build_simulation
 from sim import plant
-from sim.batch_plant import BatchWork, make_batch_work, rk4_batch_into
+from sim.batch_plant import BatchWork, make_batch_work, rhs_batch_into, rk4_batch_into
 from sim.gnc import JIT_NOALLOC
 
 BATCH_SIZES = (1, 8, 64, 256)
@@ -139,13 +139,17 @@ def measure(n: int, landing: bool, run_steps: int, repeats: int) -> dict:
 
 def vector_counts(landing: bool) -> dict:
     """AVX-512 use in the batch step, compiled afresh (numba shows no assembly of a kernel
-    loaded from its cache): lines of assembly with a zmm register, <8 x double> in the IR."""
-    fresh = njit(error_model="numpy", _nrt=False)(rk4_batch_into.py_func)
+    loaded from its cache): lines of assembly with a zmm register, <8 x double> in the IR,
+    of the step and of a stage's right-hand side (``rhs_batch_into``, a function of its own
+    that the step calls four times)."""
     P, dt, x, n_rps, env = docking_inputs(8, landing)
-    fresh(x, n_rps, env, P, dt, make_batch_work(n_rps.shape[0], 8))
-    sig = fresh.signatures[0]
-    asm = fresh.inspect_asm(sig)
-    ir = fresh.inspect_llvm(sig)
+    work = make_batch_work(n_rps.shape[0], 8)
+    step = njit(error_model="numpy", _nrt=False)(rk4_batch_into.py_func)
+    step(x, n_rps, env, P, dt, work)  # also leaves the block's states in work.x0, work.env
+    rhs = njit(error_model="numpy", _nrt=False)(rhs_batch_into.py_func)
+    rhs(work.k[0], work.x0, work.env, P, work, 8)
+    asm = "\n".join(f.inspect_asm(f.signatures[0]) for f in (step, rhs))
+    ir = "\n".join(f.inspect_llvm(f.signatures[0]) for f in (step, rhs))
     lines = asm.splitlines()
     return {
         "asm_lines": len(lines),

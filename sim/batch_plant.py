@@ -22,7 +22,8 @@ through flat work arrays whose rows lie a constant ``BLOCK`` apart (``_at``), so
 can tell the rows apart without checks at run time. An earlier form computed each
 intermediate as a row of N runs in a 2-D work array, one small loop per row: the same bits,
 but some 300 loops a stage whose set-up and remainders cost more than their arithmetic at a
-batch's 8 to 32 runs (a batch step of 8 runs 8.7 us, now 5.0; of 32 runs 15.5, now 12.5).
+batch's 8 to 32 runs (a step of 8 hanging runs 8.7 us, now 4.5; of 32 runs 15.6, now 11.7:
+``docs/speed.md``, twenty-third pass).
 Sines and cosines come from ``sim.trig.sincos`` (branch-free), as in the scalar plant.
 
 What differs between runs is a select per run: gripping (``E_GRIP``: the coupling is
