@@ -9,7 +9,7 @@ surface on, the tree hanging far above the frame); each run's state is perturbed
 contact code run by run). Each figure is the best of ``--repeats`` timings of ``--steps``
 steps, compiled code calling the step in a loop (no Python between steps).
 
-    .venv/bin/python benchmarks/batch_plant_benchmark.py [--landing] [--json]
+    .venv/bin/python benchmarks/batch_plant_benchmark.py [--landing] [--sizes 8,32] [--json]
 
 Prints ns per run and step, the real-time factor (simulated time over wall time) of one run
 and of the whole batch, and the speed-up over the scalar step; ``--asm`` also counts the
@@ -165,8 +165,14 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--asm", action="store_true", help="count zmm / <8 x double> too")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument(
+        "--sizes",
+        default=",".join(str(n) for n in BATCH_SIZES),
+        help="runs a batch, comma-separated (default %(default)s)",
+    )
     args = parser.parse_args()
-    rows = [measure(n, args.landing, args.run_steps, args.repeats) for n in BATCH_SIZES]
+    sizes = [int(v) for v in args.sizes.split(",")]
+    rows = [measure(n, args.landing, args.run_steps, args.repeats) for n in sizes]
     res: dict = {
         "configuration": "full-docking-current-0.3, " + ("landing" if args.landing else "hanging"),
         "batches": rows,
