@@ -119,8 +119,8 @@ def compile_all(part: str | None = None) -> None:
 
         runs = [Simulation(ps, tree_depth_m=100.0) for _ in range(2)]
         run_together([sim.step_jobs(2) for sim in runs])
-        # the batch plant's step called from Python (its tests and tools): it calls the
-        # batch kernel's own ``rk4_batch_into``, compiled just above
+        # the batch plant's step called from Python (its tests and tools): ``rk4_batch_into``
+        # around the batch kernel's own ``rk4_block_into``, compiled just above
         batch_plant.rk4_batch(
             np.zeros((plant.N_STATE, 2)), np.zeros((m, 2)), np.zeros((plant.N_ENV, 2)), arrays, 0.01
         )

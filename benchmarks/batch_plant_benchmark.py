@@ -108,7 +108,7 @@ def measure(n: int, landing: bool, run_steps: int, repeats: int) -> dict:
     x_rs = np.array(x.T, order="C")
     n_rs, env_rs = np.array(n_rps.T, order="C"), np.array(env.T, order="C")
     m = n_rps.shape[0]
-    bwork = make_batch_work(m, n)
+    bwork = make_batch_work(m)
     swork = plant.make_work(m)
 
     def reset_b() -> None:
@@ -143,7 +143,7 @@ def vector_counts(landing: bool) -> dict:
     of the step and of a stage's right-hand side (``rhs_batch_into``, a function of its own
     that the step calls four times)."""
     P, dt, x, n_rps, env = docking_inputs(8, landing)
-    work = make_batch_work(n_rps.shape[0], 8)
+    work = make_batch_work(n_rps.shape[0])
     step = njit(error_model="numpy", _nrt=False)(rk4_batch_into.py_func)
     step(x, n_rps, env, P, dt, work)  # also leaves the block's states in work.x0, work.env
     rhs = njit(error_model="numpy", _nrt=False)(rhs_batch_into.py_func)

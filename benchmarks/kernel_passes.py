@@ -13,11 +13,12 @@ between the passes is what it is for. It also counts how many runs are within re
 landing surface at each step (those take the scalar contact in the plant pass) and what the
 plant pass costs with and without them. Compiling the copy takes two to three minutes.
 
-``--again`` also runs each step's structure-of-arrays plant step a second time at once, on a
-copy of its result with the same inputs and work space (the result thrown away): the same
-arithmetic with its data just used, so the difference to the pass itself is what the rest of
-the kernel's step costs the plant pass in the processor's caches (the copy's own runs go as
-without it; only the time around them grows).
+``--again`` also runs each step's structure-of-arrays plant step a second time at once, on
+the block's columns still loaded (the same inputs and work space; the result thrown away):
+the same arithmetic with its data just used, so the difference to the pass itself is what
+loading and storing the columns and the rest of the kernel's step cost the plant pass in the
+processor's caches (the runs themselves go as without it; only the time around them grows).
+With more than ``BLOCK`` runs only the last block is stepped again.
 """
 
 from __future__ import annotations
@@ -82,12 +83,12 @@ N_ACC = 16
 @njit(error_model="numpy", _nrt=False, cache=True)
 def timed_steps(
     pos, length, ok, active, k0, x, held_y, xhat, Pc, cs, target, n_rps, env, noise, fresh,
-    PS, CS, QS, dt, log_at, work, W, same_plant, P0, x_sb, n_sb, env_sb, bwork, scratch, keep, acc,
-    x_again, again,
+    PS, CS, QS, dt, log_at, work, W, same_plant, P0, bwork, scratch, keep, acc, again,
 ):  # fmt: skip
     """``batch_steps`` with the cycles of each pass added into ``acc`` (see ``PASSES``); with
-    ``again``, the structure-of-arrays plant step run once more on ``x_again`` (a copy of the
-    pass's result) and its cycles into ``acc[AGAIN]``."""
+    ``again``, the structure-of-arrays plant step of the pass's last block run once more on
+    the columns still loaded in ``bwork`` (its result thrown away: the runs' rows have theirs)
+    and its cycles into ``acc[AGAIN]``."""
     n_runs = pos.shape[0]
     m = CS.f_lo.shape[1]
     n_keep = keep.shape[0]
@@ -134,17 +135,12 @@ def timed_steps(
                 if land > 0.0 and not x[r, 2] + reach < land:
                     near += 1
         c0 = cycles()
-        plants_into(
-            active, same_plant, pos, x, n_rps, env, PS, P0, dt, work, x_sb, n_sb, env_sb, bwork
-        )
+        w = plants_into(active, same_plant, pos, x, n_rps, env, PS, P0, dt, work, bwork)
         spent = cycles() - c0
         acc[5] += spent
-        if again:
-            for i in range(x_sb.shape[0]):
-                for r in range(x_sb.shape[1]):
-                    x_again[i, r] = x_sb[i, r]
+        if again and w > 0:
             c0 = cycles()
-            batch_plant.rk4_batch_into(x_again, n_sb, env_sb, P0, dt, bwork)
+            batch_plant.rk4_block_into(P0, dt, bwork, w)
             acc[AGAIN] += cycles() - c0
         if near == 0:
             acc[FAR_STEPS] += 1
@@ -194,12 +190,10 @@ def measure(runs: int, again: bool = False) -> dict:
     acc = np.zeros(N_ACC, np.int64)
 
     def steps(s: batch._Slots) -> int:
-        x_sb, n_sb, env_sb, bwork = s.plant_columns()
         return timed_steps(
             s.pos, s.length, s.ok, s.active, s.k0, s.x, s.held_y, s.xhat, s.Pc, s.cs, s.target,
             s.n_rps, s.env, s.noise, s.fresh, s.PS, s.CS, s.QS, s.dt_s, s.log_at, s.work, s.W,
-            s.same_plant, s.P0, x_sb, n_sb, env_sb, bwork, s.scratch, s.keep, acc,
-            np.empty_like(x_sb), again,
+            s.same_plant, s.P0, s.bwork, s.scratch, s.keep, acc, again,
         )  # fmt: skip
 
     bb._warm(runs)

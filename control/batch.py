@@ -31,10 +31,9 @@ from sim import batch_plant, plant
 
 T = TypeVar("T")
 
-PLANT_LANES = 8
-"""The plant pass's widths are multiples of this many runs: the doubles in an AVX-512
-register, so the structure-of-arrays loops over the runs have no scalar remainder (on AVX2,
-two registers' worth)."""
+PLANT_LANES = batch_plant.LANES
+"""The plant pass's blocks are padded to multiples of this many runs (``sim.batch_plant``):
+the structure-of-arrays loops over the runs then have no scalar remainder."""
 
 
 def _stacked(template: Any, n_runs: int) -> Any:
@@ -94,20 +93,10 @@ class _Slots:
         # the batch's plant (the first run's) and who has it: those runs step together
         self.P0 = s.arrays
         self.same_plant = np.zeros(n_runs, np.bool_)
-        m = s.arrays.thr_T.shape[1]
-        # the plant pass's columns, one set per width: a multiple of PLANT_LANES up to the
-        # batch's size (``plant_columns`` picks the narrowest that holds the runs under way)
-        self._columns = {
-            w: (
-                np.zeros((plant.N_STATE, w)),
-                np.zeros((m, w)),
-                np.zeros((first.env.shape[1], w)),
-                batch_plant.make_batch_work(m, w),
-            )
-            for w in sorted(
-                {min(n_runs, k) for k in range(PLANT_LANES, n_runs + PLANT_LANES, PLANT_LANES)}
-            )
-        }
+        # the plant pass's block: the runs under way on the batch's plant are loaded into
+        # its columns straight from their rows (``batchkernel.plants_into``), as many as
+        # there are, so the step narrows as runs end
+        self.bwork = batch_plant.make_batch_work(s.arrays.thr_T.shape[1])
 
     def _inputs(self, job: ChunkJob, length: int) -> None:
         """(Re)make the chunk buffers for chunks of up to ``length`` steps, keeping what the
@@ -176,7 +165,13 @@ class _Slots:
         for i in p_new:
             self.PS[i][r] = s.arrays[i]
         if p_new:
-            self.same_plant[r] = s.arrays is self.P0 or _same_values(s.arrays, self.P0)
+            if s.arrays is self.P0:
+                self.same_plant[r] = True
+            elif self.seen_P[r] is None or not self.same_plant[r]:
+                self.same_plant[r] = _same_values(s.arrays, self.P0)
+            else:
+                # the fields kept are the objects that were the batch plant's values
+                self.same_plant[r] = all(np.array_equal(s.arrays[i], self.P0[i]) for i in p_new)
         for i in c_new:
             self.CS[i][r] = s.C[i]
         self.seen_P[r], self.seen_C[r] = s.arrays, s.C
@@ -228,18 +223,7 @@ class _Slots:
             int(self.ok[r]),
         )
 
-    def plant_columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
-        """The plant pass's arrays (x_sb, n_sb, env_sb, bwork) for the next ``steps``: the
-        narrowest set with a column for every run under way on the batch's plant (runs only
-        leave during a call). As runs end, the structure-of-arrays step narrows with them."""
-        under_way = int(np.count_nonzero((self.pos < self.length) & self.same_plant))
-        for w, arrays in self._columns.items():
-            if w >= under_way:
-                return arrays
-        raise AssertionError("the widest set has a column for every run")
-
     def steps(self) -> int:
-        x_sb, n_sb, env_sb, bwork = self.plant_columns()
         return batch_steps(
             self.pos,
             self.length,
@@ -265,10 +249,7 @@ class _Slots:
             self.W,
             self.same_plant,
             self.P0,
-            x_sb,
-            n_sb,
-            env_sb,
-            bwork,
+            self.bwork,
             self.scratch,
             self.keep,
         )

@@ -174,6 +174,20 @@ def quality_view(S: Any, r: int) -> QualityState:
 
 
 @njit(inline="always", **JIT_NOALLOC)
+def _block_step(
+    x: np.ndarray, n_cols: int, m: int, P0: plant.PlantArrays, dt: float, bwork: Any
+) -> int:
+    """Step the block's ``n_cols`` loaded columns (padded, ``batch_plant.pad_block``) and
+    put each column's new state back into its run's row of ``x`` (``bwork.runs``). Returns
+    the padded width."""
+    w = batch_plant.pad_block(bwork, n_cols, m)
+    batch_plant.rk4_block_into(P0, dt, bwork, w)
+    for c in range(n_cols):
+        batch_plant.store_column(bwork, c, x[bwork.runs[c]])
+    return w
+
+
+@njit(inline="always", **JIT_NOALLOC)
 def plants_into(
     active: np.ndarray,
     same_plant: np.ndarray,
@@ -185,60 +199,39 @@ def plants_into(
     P0: plant.PlantArrays,
     dt: float,
     work: plant.PlantWork,
-    x_sb: np.ndarray,
-    n_sb: np.ndarray,
-    env_sb: np.ndarray,
     bwork: batch_plant.BatchWork,
-) -> None:
+) -> int:
     """``batch_steps``' plant pass: one RK4 step of every active run's plant (``x[r]`` in
     place, at propeller speeds ``n_rps[r]`` and its row ``env[r, pos[r]]``). The active runs
-    on the batch's own plant (``same_plant``) go together in one step of the columns of
-    ``x_sb`` (N_STATE, w), the runs innermost (``sim.batch_plant``, the same bits as alone),
-    packed into its first columns in run order: runs that have ended or wait between chunks
-    take no column (an ended run left landed on the frame would otherwise take the scalar
-    contact in every stage to the batch's end). The caller gives arrays w wide, at least as
-    many columns as such runs (``control.batch._Slots.plant_columns``: a multiple of the
-    vector width; fewer raises ValueError); columns left over repeat the first with no
-    landing surface, so they cost the plain step and nothing more. Any other run by
-    itself."""
+    on the batch's own plant (``same_plant``) go together in the structure-of-arrays step of
+    ``sim.batch_plant``: each run's state, speeds and row go straight into the next column of
+    a block (``load_column``, in run order, ``BLOCK`` runs a block), the block steps
+    (padded to a multiple of ``LANES`` columns that repeat the first with no landing
+    surface, so they cost the plain step and nothing more) and each column's new state goes
+    straight back into its run's row. Runs that have ended or wait between chunks take no
+    column (an ended run left landed on the frame would otherwise take the scalar contact in
+    every stage to the batch's end). Any other run by itself. Returns the last block's
+    padded width (0: no block)."""
     n_runs = pos.shape[0]
-    m = n_sb.shape[0]
-    w = x_sb.shape[1]
+    m = n_rps.shape[1]
     c = 0
+    w = 0
     for r in range(n_runs):
         if active[r] and same_plant[r]:
-            if c == w:
-                raise ValueError("batch plant pass: more runs under way than plant columns")
-            for i in range(plant.N_STATE):
-                x_sb[i, c] = x[r, i]
-            for i in range(m):
-                n_sb[i, c] = n_rps[r, i]
-            env_r = env[r, pos[r]]
-            for i in range(env_r.shape[0]):
-                env_sb[i, c] = env_r[i]
+            batch_plant.load_column(bwork, c, x[r], n_rps[r], env[r, pos[r]])
+            bwork.runs[c] = r
             c += 1
+            if c == batch_plant.BLOCK:
+                w = _block_step(x, c, m, P0, dt, bwork)
+                c = 0
     if c > 0:
-        for col in range(c, w):
-            for i in range(plant.N_STATE):
-                x_sb[i, col] = x_sb[i, 0]
-            for i in range(m):
-                n_sb[i, col] = n_sb[i, 0]
-            for i in range(env_sb.shape[0]):
-                env_sb[i, col] = env_sb[i, 0]
-            env_sb[plant.E_LAND, col] = 0.0
-        batch_plant.rk4_batch_into(x_sb, n_sb, env_sb, P0, dt, bwork)
-    c = 0
+        w = _block_step(x, c, m, P0, dt, bwork)
     for r in range(n_runs):
-        if not active[r]:
-            continue
-        if same_plant[r]:
-            for i in range(plant.N_STATE):
-                x[r, i] = x_sb[i, c]
-            c += 1
-        else:
+        if active[r] and not same_plant[r]:
             # inlined: a call would pass run r's ``PlantArrays`` views one by one
             P = plant_view(PS, r)
             plant.rk4_step_inline(x[r], x[r], n_rps[r, 0:m], env[r, pos[r]], P, dt, work)
+    return w
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -278,9 +271,6 @@ def batch_steps(
     W: ControlWork,
     same_plant: np.ndarray,
     P0: plant.PlantArrays,
-    x_sb: np.ndarray,
-    n_sb: np.ndarray,
-    env_sb: np.ndarray,
     bwork: batch_plant.BatchWork,
     scratch: np.ndarray,
     keep: np.ndarray,
@@ -300,7 +290,7 @@ def batch_steps(
     Each step goes over the runs three times: sensors, control and thrusters (propeller
     speeds into ``n_rps[r]``); the plants' RK4 steps (the runs whose plant is the batch's
     ``P0``, ``same_plant[r]``, together in the structure-of-arrays step of
-    ``sim.batch_plant`` through ``x_sb`` (N_STATE, N), ``n_sb``, ``env_sb``, ``bwork``); the
+    ``sim.batch_plant``, in blocks loaded straight from the runs' rows into ``bwork``); the
     observers' predictions and the rows' plant columns. Per run these are
     ``loop._closed_steps``' calls in its order (sensors, control, allocation, thrusters, the
     RK4 step, ``observe_into``), with the same numbers."""
@@ -330,9 +320,7 @@ def batch_steps(
             )
             loop.allocate_into(f, tau6, C, W)
             loop.thrusters_into(n_rps[r, 0:m], f, C, row, W)
-        plants_into(
-            active, same_plant, pos, x, n_rps, env, PS, P0, dt, work, x_sb, n_sb, env_sb, bwork
-        )
+        plants_into(active, same_plant, pos, x, n_rps, env, PS, P0, dt, work, bwork)
         for r in range(n_runs):
             if not active[r]:
                 continue

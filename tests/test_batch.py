@@ -204,15 +204,14 @@ def test_runs_on_another_plant_step_by_themselves_in_the_batch_and_stay_as_alone
 
 
 def test_the_plant_pass_narrows_as_runs_end_and_each_run_stays_as_alone():
-    """The structure-of-arrays plant step takes only the runs under way, packed into its
-    first columns, in sets whose widths are multiples of eight (``PLANT_LANES``): ten runs
-    have widths 8 and 10. Requests of 30 to 120 steps end one after another, so the pass goes
-    from ten columns to eight, the packing shifts the later runs into earlier columns as the
-    earlier ones end, and the columns left over repeat the first: every run's rows and final
-    state are still those of the run alone, bit for bit. Fewer columns than runs under way is
-    refused, not stepped past the arrays' end."""
+    """The structure-of-arrays plant step takes only the runs under way, loaded straight
+    from their rows into a block's first columns and padded to a multiple of eight
+    (``PLANT_LANES``): ten runs take 16 columns, eight take 8. Requests of 30 to 120 steps end
+    one after another, so the pass narrows, the later runs move into earlier columns as the
+    earlier ones end, and the padding repeats the first column: every run's rows and final
+    state are still those of the run alone, bit for bit."""
     from control.batch import PLANT_LANES, _Slots
-    from control.batchkernel import batch_steps
+    from control.batchkernel import plants_into
 
     assert PLANT_LANES == 8
     base = params.load("full-scale")
@@ -235,20 +234,49 @@ def test_the_plant_pass_narrows_as_runs_end_and_each_run_stays_as_alone():
     sims = runs()
     jobs = [next(sim.step_jobs(10)) for sim in sims]
     slots = _Slots(jobs[0], 10, 100)
-    assert list(slots._columns) == [8, 10]
     assert all(slots.put(r, job) for r, job in enumerate(jobs))
-    assert slots.plant_columns()[0].shape == (24, 10)
-    slots.length[[1, 3]] = 0  # two runs between chunks: eight under way
-    assert slots.plant_columns()[0].shape == (24, 8)
-    slots.length[[1, 3]] = 10
-    narrow = slots._columns[8]
-    with pytest.raises(ValueError, match="more runs under way than plant columns"):
-        batch_steps(
-            slots.pos, slots.length, slots.ok, slots.active, slots.k0, slots.x, slots.held_y,
-            slots.xhat, slots.Pc, slots.cs, slots.target, slots.n_rps, slots.env, slots.noise,
-            slots.fresh, slots.PS, slots.CS, slots.QS, slots.dt_s, slots.log_at, slots.work,
-            slots.W, slots.same_plant, slots.P0, *narrow, slots.scratch, slots.keep,
+
+    def plant_pass(active: np.ndarray) -> int:
+        return plants_into(
+            active, slots.same_plant, slots.pos, slots.x, slots.n_rps, slots.env, slots.PS,
+            slots.P0, slots.dt_s, slots.work, slots.bwork,
         )  # fmt: skip
+
+    active = np.ones(10, np.bool_)
+    x_before = slots.x.copy()
+    assert plant_pass(active) == 16
+    assert list(slots.bwork.runs[:10]) == list(range(10))
+    assert np.all(np.abs(slots.x - x_before).max(axis=1) > 0.0)  # every run stepped
+    active[[1, 3]] = False  # two runs between chunks: eight under way
+    x_before = slots.x.copy()
+    assert plant_pass(active) == 8
+    assert list(slots.bwork.runs[:8]) == [0, 2, 4, 5, 6, 7, 8, 9]
+    assert np.array_equal(slots.x[[1, 3]], x_before[[1, 3]])  # they did not move
+    assert not np.array_equal(slots.x[0], x_before[0])
+    assert plant_pass(np.zeros(10, np.bool_)) == 0  # none under way: no block
+
+
+def test_more_runs_than_a_plant_block_each_as_alone():
+    """A batch wider than the plant pass's block (``sim.batch_plant.BLOCK`` runs) steps its
+    runs in several blocks; each run's rows are still the run's alone, bit for bit (the
+    second block's runs are the ones a wrong column's bookkeeping would swap)."""
+    from sim.batch_plant import BLOCK
+
+    base = params.load("full-scale")
+    n_runs = BLOCK + 3
+
+    def runs() -> list[Simulation]:
+        sims = [Simulation(base, tree_depth_m=100.0, seed=i) for i in range(n_runs)]
+        for i, sim in enumerate(sims):
+            sim.set_target(0.01 * i, -0.2, math.radians(0.5 * i))
+        return sims
+
+    alone = [sim.step(4).data for sim in runs()]
+    together = run_together([sim.step_jobs(4) for sim in runs()])
+    for a, o in zip(alone, together, strict=True):
+        assert o.error is None
+        assert np.array_equal(o.value.data, a)
+    assert len({a.tobytes() for a in alone}) == n_runs  # every run its own
 
 
 def test_a_lean_log_keeps_the_whole_logs_columns_in_a_batch_alone_and_mixed():

@@ -131,7 +131,7 @@ def test_batch_equals_scalar_bit_for_bit(n: int, has_rov: bool) -> None:
         corners, posts = _contact_sanity(x, env, P)
         assert corners >= 20 and posts >= 8, (corners, posts)  # the contact code is run
     expected = _scalar_steps(x, n_rps, env, P, dt, steps=5)
-    work = make_batch_work(n_rps.shape[0], n)
+    work = make_batch_work(n_rps.shape[0])
     xb = x.copy()
     for k in range(5):
         rk4_batch_into(xb, n_rps, env, P, dt, work)
@@ -171,7 +171,7 @@ def test_a_non_finite_run_leaves_the_others_alone() -> None:
     env[plant.E_PUSH, 12] = math.nan  # push on run 12 (a landing case)
     x[17, 14] = 2.0e6  # ROV heading of run 14 past sim.trig's range: NaN
     expected = _scalar_steps(x, n_rps, env, P, dt, steps=3)[-1]
-    work = make_batch_work(n_rps.shape[0], 16)
+    work = make_batch_work(n_rps.shape[0])
     for _ in range(3):
         rk4_batch_into(x, n_rps, env, P, dt, work)
     bad = [3, 9, 12, 14]
