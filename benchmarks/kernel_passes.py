@@ -46,6 +46,7 @@ from control.batchkernel import (
     plants_into,
     quality_view,
     row_at,
+    set_spring,
     steps_to_first_end,
 )
 from control.columns import N_LOG
@@ -83,7 +84,7 @@ N_ACC = 16
 @njit(error_model="numpy", _nrt=False, cache=True)
 def timed_steps(
     pos, length, ok, active, k0, x, held_y, xhat, Pc, cs, target, n_rps, env, noise, fresh,
-    PS, CS, QS, dt, log_at, work, W, same_plant, P0, bwork, scratch, keep, acc, again,
+    spring, PS, CS, QS, dt, log_at, work, W, same_plant, P0, bwork, scratch, keep, acc, again,
 ):  # fmt: skip
     """``batch_steps`` with the cycles of each pass added into ``acc`` (see ``PASSES``); with
     ``again``, the structure-of-arrays plant step of the pass's last block run once more on
@@ -104,6 +105,7 @@ def timed_steps(
             acc[RUN_STEPS] += 1
             c0 = cycles()
             j = pos[r]
+            set_spring(CS, r, spring[r, j])
             C = control_view(CS, r)
             Q = quality_view(QS, r)
             t = (k0[r] + j) * dt
@@ -192,8 +194,8 @@ def measure(runs: int, again: bool = False) -> dict:
     def steps(s: batch._Slots) -> int:
         return timed_steps(
             s.pos, s.length, s.ok, s.active, s.k0, s.x, s.held_y, s.xhat, s.Pc, s.cs, s.target,
-            s.n_rps, s.env, s.noise, s.fresh, s.PS, s.CS, s.QS, s.dt_s, s.log_at, s.work, s.W,
-            s.same_plant, s.P0, s.bwork, s.scratch, s.keep, acc, again,
+            s.n_rps, s.env, s.noise, s.fresh, s.spring, s.PS, s.CS, s.QS, s.dt_s, s.log_at,
+            s.work, s.W, s.same_plant, s.P0, s.bwork, s.scratch, s.keep, acc, again,
         )  # fmt: skip
 
     bb._warm(runs)

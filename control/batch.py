@@ -56,6 +56,7 @@ class _Slots:
     env: np.ndarray  # (runs, steps, N_ENV) the chunks' environment rows
     noise: np.ndarray  # (runs, steps, ...) their sensor noise
     fresh: np.ndarray  # (runs, steps, ...) their fresh-sample flags
+    spring: np.ndarray  # (runs, steps, 3) their control models' wire springs (ChunkJob.spring)
 
     def __init__(self, first: ChunkJob, n_runs: int, length: int) -> None:
         s = first.sim
@@ -106,11 +107,13 @@ class _Slots:
             np.zeros((n, length, job.env.shape[1])),
             np.zeros((n, length, *job.noise.shape[1:])),
             np.zeros((n, length, *job.fresh.shape[1:]), dtype=job.fresh.dtype),
+            np.zeros((n, length, 3)),
         )
         if hasattr(self, "env"):
-            for new, old in zip(bufs, (self.env, self.noise, self.fresh), strict=True):
+            olds = (self.env, self.noise, self.fresh, self.spring)
+            for new, old in zip(bufs, olds, strict=True):
                 new[:, : old.shape[1]] = old
-        self.env, self.noise, self.fresh = bufs
+        self.env, self.noise, self.fresh, self.spring = bufs
 
     @staticmethod
     def key_of(job: ChunkJob) -> tuple:
@@ -186,6 +189,11 @@ class _Slots:
         self.env[r, :n] = job.env
         self.noise[r, :n] = job.noise
         self.fresh[r, :n] = job.fresh
+        if job.spring is not None:
+            self.spring[r, :n] = job.spring
+        else:
+            self.spring[r, :n, 0] = s.C.k_h
+            self.spring[r, :n, 1:3] = s.C.p_eq
         out = job.out
         width = self.keep.shape[0]
         if out is None or not out.flags.c_contiguous or out.shape != (n, width):
@@ -240,6 +248,7 @@ class _Slots:
             self.env,
             self.noise,
             self.fresh,
+            self.spring,
             self.PS,
             self.CS,
             self.QS,

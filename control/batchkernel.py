@@ -162,6 +162,16 @@ def control_view(S: Any, r: int) -> ControlArrays:
 
 
 @njit(inline="always", **JIT_NOALLOC)
+def set_spring(CS: Any, r: int, spring_j: np.ndarray) -> None:
+    """Run r's control model's wire spring [k_h, p_eq north, east] into the stacked
+    configuration (``ControlArrays.k_h``, ``p_eq``), as the simulator's refresh puts it into
+    ``C`` between chunks."""
+    CS.k_h[r] = spring_j[0]
+    CS.p_eq[r, 0] = spring_j[1]
+    CS.p_eq[r, 1] = spring_j[2]
+
+
+@njit(inline="always", **JIT_NOALLOC)
 def quality_view(S: Any, r: int) -> QualityState:
     """Run r's ``QualityState`` out of the stacked ones (views: the checks update it)."""
     return QualityState(
@@ -262,6 +272,7 @@ def batch_steps(
     env: np.ndarray,
     noise: np.ndarray,
     fresh: np.ndarray,
+    spring: np.ndarray,
     PS: Any,
     CS: Any,
     QS: Any,
@@ -293,7 +304,9 @@ def batch_steps(
     ``sim.batch_plant``, in blocks loaded straight from the runs' rows into ``bwork``); the
     observers' predictions and the rows' plant columns. Per run these are
     ``loop._closed_steps``' calls in its order (sensors, control, allocation, thrusters, the
-    RK4 step, ``observe_into``), with the same numbers."""
+    RK4 step, ``observe_into``), with the same numbers. Before its step, run r's control
+    model's wire spring is set to ``spring[r, j]`` (``control.jobs.ChunkJob.spring``: a chunk
+    past whole seconds refreshes it there)."""
     n_runs = pos.shape[0]
     m = CS.f_lo.shape[1]
     n_keep = keep.shape[0]
@@ -307,6 +320,7 @@ def batch_steps(
             if not active[r]:
                 continue
             j = pos[r]
+            set_spring(CS, r, spring[r, j])
             C = control_view(CS, r)
             Q = quality_view(QS, r)
             t = (k0[r] + j) * dt

@@ -15,8 +15,8 @@ With ``control=False`` it is the open-loop plant of ``rov-console simulate``: th
 turn at ``set_thruster_speeds`` and the control columns of the rows stay zero.
 
 Stepping goes in chunks of at most ``chunk_steps`` that end on whole seconds (``REFRESH_S``),
-or of up to ``LONG_CHUNK_S`` while nothing but the wire's entries needs refreshing there
-(``_still``): ``_chunk_inputs`` makes the environment and sensor noise for a chunk (the place
+or of up to ``LONG_CHUNK_S`` while nothing but the wire's entries and the control model's
+wire spring needs refreshing there (``_still``; both ride in the chunk's rows): ``_chunk_inputs`` makes the environment and sensor noise for a chunk (the place
 where injected faults will change what the plant and the sensors see), then one compiled
 kernel advances the chunk (``control.loop``). Commands are applied between chunks. A state
 that stops being finite raises ``SimulationDiverged`` naming the time and which part went
@@ -100,8 +100,9 @@ wire's stiffnesses and drag offset (from the current at that step, the payout an
 tip), the control model's wire spring (its stiffness for the payout, its equilibrium under
 the crane tip), the point where the waves and the vessel's motion are evaluated, and the
 elastic wire's lumped mass. On the whole seconds of the step grid (steps 0, 1/dt, 2/dt...),
-and chunks end there (or, with only the wire's entries to refresh, run past them and refresh
-those at the rows of whole seconds: ``LONG_CHUNK_S``), so a run gives the same numbers however
+and chunks end there (or, with only the wire's entries and the control model's spring to
+refresh, run past them and refresh those at the rows of whole seconds: ``LONG_CHUNK_S``,
+``control.jobs.ChunkJob.spring``), so a run gives the same numbers however
 it is cut into requests (the console's ticks, the command line's requests, a batch). A second
 is short beside how fast any of them changes: the current walks by millimetres a second, the
 winch pays out at most 2 m/s on a wire hundreds of metres long (its horizontal stiffness moves
@@ -308,6 +309,11 @@ class Simulation:
         self._site_k_h = 0.0  # the control model's wire spring at the last refresh
         self._refresh_wire_k_h_m = math.nan  # the payout _site_k_h is for
         self._site_p_eq = np.zeros(2)
+        # the control model's spring as ``site.chunk_rows_into`` carries it through a chunk:
+        # [k_h, p_eq north, east, the payout k_h is for], from the three above before each
+        # chunk and back into them after it (the last whole second's, as a chunk ending there)
+        self._spring_held = np.zeros(4)
+        self._spring_rows = np.zeros((0, 3))  # the rows of the chunk whose inputs were made last
         self._refresh_point = np.zeros(5)  # tree north, east, depth; crane tip north, east
         self._pivot_tops = np.zeros((0, 3))  # the elastic wire's top, the last two steps
         self._refresh_wire_m = 0.0  # the payout at the last refresh [m]
@@ -861,23 +867,25 @@ class Simulation:
         return LogRows(out, self.n_thrusters, self.Q.counters.copy(), self.log_layout)
 
     def _still(self) -> bool:
-        """Nothing refreshed on a whole second can change for seconds to come but the
-        quasi-static wire's entries, which ``site.chunk_rows_into`` refreshes at the rows of
-        whole seconds itself: the winch and the crane at rest (the payout for the control
-        model's wire spring, the tip for its equilibrium), no sea (the waves and the vessel's
+        """Nothing refreshed on a whole second needs Python for seconds to come: the
+        quasi-static wire's entries and the control model's wire spring, which
+        ``site.chunk_rows_into`` refreshes at the rows of whole seconds itself (the spring's
+        rows go with the chunk: ``ChunkJob.spring``), no sea (the waves and the vessel's
         motion are evaluated where the tree was at the refresh), no elastic or MoorDyn wire,
         no faults. Then a chunk may run past whole seconds (``LONG_CHUNK_S``) and give the
-        same numbers as chunks of a second."""
-        return (
-            not self.faults
-            and self.wave_field is None
-            and self.wire_model == "quasi-static"
-            and self.wire_length_m == self.wire_target_m
-            and (
-                self.crane_speed_mps <= 0.0
-                or bool(np.array_equal(self.crane_tip_n, self.crane_target_n))
-            )
+        same numbers as chunks of a second. With the QP allocation (its steps in Python, on
+        ``C`` as it is) or a wire paid out to nothing (the refresh refuses it) that holds
+        only while the winch and the crane rest."""
+        if self.faults or self.wave_field is not None or self.wire_model != "quasi-static":
+            return False
+        winch_rests = self.wire_length_m == self.wire_target_m
+        crane_rests = self.crane_speed_mps <= 0.0 or bool(
+            np.array_equal(self.crane_tip_n, self.crane_target_n)
         )
+        if winch_rests and crane_rests:
+            return True
+        qp = self.control_on and self.C.alloc_kind == loop.ALLOC_EXTERNAL
+        return not qp and self.wire_length_m > 0.0 and self.wire_target_m > 0.0
 
     def _refreshing(self) -> bool:
         """This chunk starts on a whole second of the step grid (``REFRESH_S``)."""
@@ -1175,10 +1183,18 @@ class Simulation:
             x, held, self.xhat, self.P_cov, self.cs, log, ok = self._chunk_qp(env, noise)
         else:
             x, held, self.xhat, self.P_cov, self.cs, log, ok = yield ChunkJob(
-                self, env, noise.noise, noise.fresh, out
+                self, env, noise.noise, noise.fresh, out, self._spring_rows
             )
         if not whole and log.shape[1] == N_LOG:
             log = log[:, self.log_keep]
+        if self.control_on:
+            # the control model's spring of the chunk's last whole second (as if the chunk
+            # had ended there: chunks past whole seconds carry it in their rows)
+            spring = self._spring_held
+            self._site_k_h = float(spring[0])
+            self._site_p_eq = spring[1:3].copy()
+            self._refresh_wire_k_h_m = float(spring[3])
+            self._sync_site()
         if ok < n:
             self._diverged(x, ok)
         self.x, self.held_y = x, held
@@ -1258,6 +1274,11 @@ class Simulation:
         if self.faults:
             speeds, dirs = self._faulted_current(speeds, dirs)
         env = np.empty((n, plant.N_ENV))
+        spring = np.empty((n, 3))
+        held = self._spring_held
+        held[0] = self._site_k_h
+        held[1:3] = self._site_p_eq
+        held[3] = self._refresh_wire_k_h_m
         frame = self._frame_entries
         frame[0] = 0.0
         if self.docking_frame is not None:
@@ -1285,7 +1306,12 @@ class Simulation:
             self.step_index,
             self.refresh_steps,
             out,
+            held,
+            spring,
+            self.plant_ps.wire.submerged_weight_per_length(),  # as ``_refresh``
+            self.ps.tree.submerged_weight_newton if self.control_on else 0.0,
         )
+        self._spring_rows = spring
         if self.mdwire is not None:
             # the current the MoorDyn wire sees over this chunk: uniform over depth, the mean
             # speed and direction the quasi-static wire's drag offset takes (no waves)

@@ -176,6 +176,10 @@ def chunk_rows_into(
     first_step: int,
     refresh_steps: int,
     out: np.ndarray,
+    spring_held: np.ndarray,
+    spring: np.ndarray,
+    spring_w: float,
+    spring_W0: float,
 ) -> None:
     """A chunk's environment rows (n, N_ENV) into ``env`` in one call (the simulator makes
     them for every chunk; a dozen Python and numpy calls cost more than the arithmetic).
@@ -195,7 +199,17 @@ def chunk_rows_into(
     line to the target, the target once within a step). Each step moves on from the one
     before, so a run gives the same rows bit for bit however it is cut into chunks. Waves are
     added to the rows afterwards. ``out`` (6,) gets [payout at the end, crane tip at the end
-    (3), mean speed, mean direction over the chunk] (the means plain sums in order over n)."""
+    (3), mean speed, mean direction over the chunk] (the means plain sums in order over n).
+
+    The control model's wire spring refreshes with the wire's entries: ``spring_held`` (4,)
+    [stiffness k_h, equilibrium north, east, the payout k_h is for] is made anew at the same
+    rows, k_h from the payout there (``wire.horizontal_stiffness_c(spring_w, spring_W0,
+    payout)``, the simulator's refresh: the wire's weight per metre and the tree's submerged
+    weight as the control model has them; ``spring_W0`` <= 0 keeps it as given, for a run
+    without control) and the equilibrium under the crane tip there, and row j of ``spring``
+    (n, 3) gets the spring in force at step j. The control system takes it from there at
+    each step of a chunk that runs past whole seconds (``control.jobs.ChunkJob``), so such a
+    chunk may run while the winch and the crane move."""
     n = env.shape[0]
     sum_v = 0.0
     sum_b = 0.0
@@ -213,6 +227,15 @@ def chunk_rows_into(
         if (first_step + j) % refresh_steps == 0:
             tip_now[0], tip_now[1], tip_now[2] = tip0, tip1, tip2
             wire_entries_into(held, S, payout, tip_now, speeds_mps[j], directions_rad[j])
+            if spring_W0 > 0.0:
+                if payout != spring_held[3]:  # (the simulator's refresh keeps it as well)
+                    spring_held[0] = wire_mod.horizontal_stiffness_c(spring_w, spring_W0, payout)
+                    spring_held[3] = payout
+                spring_held[1] = tip0
+                spring_held[2] = tip1
+        spring[j, 0] = spring_held[0]
+        spring[j, 1] = spring_held[1]
+        spring[j, 2] = spring_held[2]
         row = env[j]
         for i in range(row.shape[0]):
             row[i] = held[i]

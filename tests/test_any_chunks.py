@@ -112,7 +112,9 @@ def test_long_chunks_while_the_winch_and_crane_rest_give_the_rows_of_short_ones(
     whole second, then 500, 500 and 100, then the 71 left. The walking current changes the
     entries at every refresh, so a refresh missed or taken at another step would show: the
     rows are bit for bit those of the same run in odd pieces (whose chunks never exceed a
-    second). Once the winch moves, chunks are a second again."""
+    second). With the winch moving, the same chunks (the control model's wire spring rides
+    in the chunk's rows: the next test); with the QP allocation, whose steps run in Python on
+    the configuration as it is, chunks are a second again while the winch moves."""
     whole, cut = _full_scale(control), _full_scale(control)
     for sim in (whole, cut):
         sim.step(37)
@@ -123,7 +125,48 @@ def test_long_chunks_while_the_winch_and_crane_rest_give_the_rows_of_short_ones(
     assert np.array_equal(whole.plant_state, cut.plant_state)
     whole.winch_to(whole.wire_length_m + 2.0, 0.1)
     _, sizes = _chunk_sizes(whole, 829)
-    assert sizes == [29, 100, 100, 100, 100, 100, 100, 100, 100]
+    assert sizes == [29, 500, 300]
+    if control:
+        whole.set_allocation("qp")
+        _, sizes = _chunk_sizes(whole, 229)
+        assert sizes == [100, 100, 29]
+
+
+def _moving(sim: Simulation) -> Simulation:
+    """The winch paying out 3 m at 0.2 m/s and the crane moving 2 m at 0.1 m/s from the next
+    step on: the control model's wire spring (its stiffness for the payout, its equilibrium
+    under the tip) changes at every whole second for 15 s and more."""
+    sim.winch_to(sim.wire_length_m + 3.0, 0.2)
+    sim.move_vessel(sim.crane_tip_n + np.array([2.0, -0.5, 0.0]), 0.1)
+    return sim
+
+
+def test_long_chunks_while_the_winch_and_crane_move_alone_and_in_a_batch() -> None:
+    """With the winch and the crane moving, a request runs past whole seconds in chunks of up
+    to ``LONG_CHUNK_S``, the control model's wire spring refreshed at each whole second inside
+    them (``ChunkJob.spring``): alone (``ChunkJob.run`` runs the pieces between the seconds
+    with ``C`` holding each one's spring) and in a batch (the kernel puts each step's spring
+    into the run's configuration), the rows are bit for bit those of the same run in odd
+    pieces, whose chunks never pass a whole second. The spring really changed: the
+    configuration after the request holds the last second's, not the first's."""
+    from control.batch import run_together
+
+    runs = [_moving(_full_scale(True)) for _ in range(3)]
+    for sim in runs:
+        sim.step(37)
+    k_h0, p_eq0 = runs[0].C.k_h, runs[0].C.p_eq.copy()
+    rows_alone, sizes = _chunk_sizes(runs[0], 1234)
+    assert sizes == [63, 500, 500, 100, 71]
+    rows_cut = _rows(runs[1], [5, 58, 100, 250, 301, 99, 1, 120, 300])
+    (together,) = run_together([runs[2].step_jobs(1234)])
+    assert together.error is None
+    assert np.array_equal(rows_alone, rows_cut)
+    assert np.array_equal(together.value.data, rows_cut)
+    for sim in runs:
+        assert np.array_equal(sim.plant_state, runs[1].plant_state)
+        assert sim.C.k_h == runs[1].C.k_h and np.array_equal(sim.C.p_eq, runs[1].C.p_eq)
+    assert runs[0].C.k_h < k_h0  # 2.5 m more wire, a softer spring
+    assert runs[0].C.p_eq[0] > p_eq0[0] + 1.0  # the tip went 2 m north
 
 
 def test_the_elastic_wire_in_a_seaway_with_vessel_motion_is_the_same_in_any_pieces() -> None:

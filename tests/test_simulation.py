@@ -13,7 +13,7 @@ from control import loop
 from control.config import ControlSettings
 from control.simulation import Simulation, SimulationDiverged
 from sim import environment as envmod
-from sim import params, plant, sensors, site
+from sim import params, plant, sensors, site, wire
 from tests.helpers import steady_current
 
 FULL = params.load("full-scale")
@@ -461,8 +461,15 @@ def test_chunk_rows_are_the_numpy_forms_numbers(crane_mps, winch_mps, frame_on, 
         site.wire_entries_into(expected, S, args[0], tip, speeds[0], dirs[0])
     # a chunk from step 0 refreshes at its first row; one from step 1 (73 steps, whole
     # seconds every 100) holds the entries it is given
-    site.chunk_rows_into(env, S, speeds, dirs, *args, held, 0 if refresh else 1, 100, out)
+    spring_held, spring = np.full(4, 7.0), np.full((n, 3), np.nan)
+    site.chunk_rows_into(
+        env, S, speeds, dirs, *args, held, 0 if refresh else 1, 100, out,
+        spring_held, spring, S.w, 0.0,
+    )  # fmt: skip
     np.testing.assert_array_equal(held, expected)
+    # no control model (its tree's weight 0): the spring held as given, on every row
+    np.testing.assert_array_equal(spring_held, np.full(4, 7.0))
+    np.testing.assert_array_equal(spring, np.full((n, 3), 7.0))
     ref, last_length, last_tip, mean_v, mean_b = _numpy_chunk_rows(S, speeds, dirs, *args, held)
     np.testing.assert_array_equal(env, ref)
     np.testing.assert_array_equal(out, [last_length, *last_tip, mean_v, mean_b])
@@ -482,7 +489,10 @@ def test_a_chunk_past_whole_seconds_gives_the_rows_of_chunks_cut_there():
     with a refresh every 50 steps, the winch paying out and the crane moving, its rows are
     bit for bit those of four chunks cut at steps 50, 100 and 150 (each starting from where
     the one before left the payout and the tip), and the entries it holds at the end are
-    those made at step 150 from that step's current, payout and tip."""
+    those made at step 150 from that step's current, payout and tip. So are the control
+    model's wire spring's rows (its stiffness for the payout, its equilibrium under the tip,
+    made anew on the same rows): at step 150 the simulator's own refresh's numbers
+    (``wire.horizontal_stiffness`` of that payout, the tip there)."""
     n = 132
     S, speeds, dirs, tip, push = _walk_inputs(5, n)
     tip_to = tip + np.array([0.3, -0.2, 0.1])
@@ -494,9 +504,16 @@ def test_a_chunk_past_whole_seconds_gives_the_rows_of_chunks_cut_there():
     held_whole = held.copy()
     env = np.full((n, plant.N_ENV), np.nan)
     out = np.full(6, np.nan)
-    site.chunk_rows_into(env, S, speeds, dirs, *winch, tip, *rest, held_whole, 40, 50, out)
+    W0 = 0.8 * S.W0  # the control model's tree (another weight than the plant's)
+    spring_whole, spring = np.array([1.0, 2.0, 3.0, math.nan]), np.full((n, 3), np.nan)
+    site.chunk_rows_into(
+        env, S, speeds, dirs, *winch, tip, *rest, held_whole, 40, 50, out,
+        spring_whole, spring, S.w, W0,
+    )  # fmt: skip
+    assert np.array_equal(spring[:10], np.tile([1.0, 2.0, 3.0], (10, 1)))  # before step 50
 
     held_cut = held.copy()
+    spring_cut, spring_parts = np.array([1.0, 2.0, 3.0, math.nan]), []
     pieces, wire_m, at, made = [], winch[0], tip.copy(), None
     for a, b in ((0, 10), (10, 60), (60, 110), (110, n)):
         part = np.full((b - a, plant.N_ENV), np.nan)
@@ -504,16 +521,25 @@ def test_a_chunk_past_whole_seconds_gives_the_rows_of_chunks_cut_there():
         if 40 + a == 150:
             made = np.zeros(plant.N_ENV)
             site.wire_entries_into(made, S, wire_m, at, speeds[a], dirs[a])
+            spring_made = [wire.horizontal_stiffness(S.w, W0, wire_m), at[0], at[1], wire_m]
+        part_spring = np.full((b - a, 3), np.nan)
         site.chunk_rows_into(
             part, S, speeds[a:b], dirs[a:b], wire_m, *winch[1:], at, *rest,
-            held_cut, 40 + a, 50, part_out,
+            held_cut, 40 + a, 50, part_out, spring_cut, part_spring, S.w, W0,
         )  # fmt: skip
         pieces.append(part)
+        spring_parts.append(part_spring)
         wire_m, at = float(part_out[0]), part_out[1:4].copy()
     np.testing.assert_array_equal(env, np.vstack(pieces))
     np.testing.assert_array_equal(held_whole, held_cut)
     np.testing.assert_array_equal(held_whole, made)
     np.testing.assert_array_equal(out[0:4], [wire_m, *at])
+    np.testing.assert_array_equal(spring, np.vstack(spring_parts))
+    np.testing.assert_array_equal(spring_whole, spring_cut)
+    np.testing.assert_array_equal(spring_whole, spring_made)
+    # the spring moved at the whole seconds (the payout grew, the tip moved) and held between
+    assert spring[10, 0] != spring[60, 0] and spring[10, 1] != spring[60, 1]
+    assert np.array_equal(spring[10:60], np.tile(spring[10], (50, 1)))
     # the entries did change at the whole seconds (the payout grew, the current changed)
     assert env[9, plant.E_KZ] != env[10, plant.E_KZ] != env[60, plant.E_KZ]
     assert np.array_equal(env[10:60, plant.E_KH], np.full(50, env[10, plant.E_KH]))
