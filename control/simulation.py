@@ -16,9 +16,10 @@ turn at ``set_thruster_speeds`` and the control columns of the rows stay zero.
 
 Stepping goes in chunks of at most ``chunk_steps`` that end on whole seconds (``REFRESH_S``),
 or of up to ``LONG_CHUNK_S`` while nothing but the wire's entries and the control model's
-wire spring needs refreshing there (``_still``; both ride in the chunk's rows): ``_chunk_inputs`` makes the environment and sensor noise for a chunk (the place
-where injected faults will change what the plant and the sensors see), then one compiled
-kernel advances the chunk (``control.loop``). Commands are applied between chunks. A state
+wire spring needs refreshing there (``_still``; both ride in the chunk's rows):
+``_chunk_inputs`` makes the environment and sensor noise for a chunk (the place where
+injected faults will change what the plant and the sensors see), then one compiled kernel
+advances the chunk (``control.loop``). Commands are applied between chunks. A state
 that stops being finite raises ``SimulationDiverged`` naming the time and which part went
 non-finite.
 """
