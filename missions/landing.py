@@ -150,6 +150,18 @@ class Thrusters:
         inside = np.all(a[:, None] * s + b[:, None] * t <= c[:, None] + self._tol, axis=0)
         return float(max(np.max(s[inside], initial=0.0), 0.0))
 
+    def reach_each(self, directions: FloatArray) -> FloatArray:
+        """``reach`` of each row of ``directions`` (k, 3), the same numbers: with as many
+        thrusters as equations, each row's p = T3^-1 d as ``reach`` makes it and the first
+        limit of all rows at once (``plan_landing`` asks for some 150 poses, 8 us each one by
+        one); any other layout one row at a time."""
+        if self._nullity != 0 or len(directions) == 0:
+            return np.array([self.reach(d) for d in directions], dtype=float)
+        p = np.array([self._pinv @ d for d in directions])
+        with np.errstate(divide="ignore"):
+            limit = np.where(p > 0.0, self._hi / p, np.where(p < 0.0, self._lo / p, np.inf))
+        return np.array([float(max(np.min(row), 0.0)) for row in limit])
+
     def _reach_highs(self, direction: FloatArray) -> float:
         m = self.T3.shape[1]
         c = np.zeros(m + 1)
@@ -188,14 +200,17 @@ def pose_loads(
     """``pose_load`` of each pose (north, east, psi) of ``poses`` (k, 3): the forces from one
     compiled call for all of them (``sim.plant.hold_needed_xyn``)."""
     needed_all = plant.hold_needed_xyn(np.ascontiguousarray(poses, float), depth_m, env, sim.arrays)
-    loads = []
-    for needed in needed_all:
-        norm = float(np.linalg.norm(needed))
-        if norm == 0.0:
-            loads.append(PoseLoad(needed, needed.copy()))
-        else:
-            loads.append(PoseLoad(needed, needed / norm * thrusters.reach(needed / norm)))
-    return loads
+    norms = np.array([float(np.linalg.norm(needed)) for needed in needed_all])
+    moving = norms != 0.0
+    units = needed_all[moving] / norms[moving, None]
+    reach = np.zeros(len(needed_all))
+    reach[moving] = thrusters.reach_each(units)
+    unit_all = np.zeros_like(needed_all)
+    unit_all[moving] = units
+    return [
+        PoseLoad(needed, unit * r if m else needed.copy())
+        for needed, unit, r, m in zip(needed_all, unit_all, reach, moving, strict=True)
+    ]
 
 
 def plan_landing(sim: Simulation, frame: DockingFrame, target_n: FloatArray, depth_m: float):

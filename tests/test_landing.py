@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from missions import landing, runner, schema
-from sim import params
+from sim import params, plant
 
 LAYOUT = params.load("full-scale").spec.docking.to_numeric()
 
@@ -223,6 +223,18 @@ def _vectored_four() -> object:
     return SimpleNamespace(arrays=arrays)
 
 
+def _thrusters(layout: str) -> landing.Thrusters:
+    """The thrusters of a library ROV (``full-scale``, ``model-scale``) or of
+    ``_vectored_four``."""
+    from control.simulation import Simulation
+    from sim import params as params_mod
+
+    if layout == "vectored-four":
+        return landing.Thrusters(_vectored_four())  # type: ignore[arg-type]
+    depth = 400.0 if layout == "full-scale" else 2.0
+    return landing.Thrusters(Simulation(params_mod.load(layout), tree_depth_m=depth))
+
+
 @pytest.mark.parametrize("layout", ["full-scale", "model-scale", "vectored-four"])
 def test_closed_form_reach_is_the_linear_programmes_optimum(layout):
     """The thrusters' reach in a direction, in closed form, equals scipy's HiGHS optimum of
@@ -230,18 +242,50 @@ def test_closed_form_reach_is_the_linear_programmes_optimum(layout):
     feasibility tolerance is 1e-7 absolute on forces of 1e2-1e4 N; the two agree to some
     1e-14 in fact), for both ROVs (as many thrusters in the plane as equations) and a
     layout with one thruster more (the two-unknown vertex enumeration)."""
-    from control.simulation import Simulation
-    from sim import params as params_mod
-
-    if layout == "vectored-four":
-        sim = _vectored_four()
-    else:
-        depth = 400.0 if layout == "full-scale" else 2.0
-        sim = Simulation(params_mod.load(layout), tree_depth_m=depth)
-    thrusters = landing.Thrusters(sim)
+    thrusters = _thrusters(layout)
     assert thrusters._nullity == (1 if layout == "vectored-four" else 0)
     rng = np.random.default_rng(3)
     for _ in range(500):
         d = rng.normal(size=3)
         d /= np.linalg.norm(d)
         assert thrusters.reach(d) == pytest.approx(thrusters._reach_highs(d), rel=1e-9)
+
+
+@pytest.mark.parametrize("layout", ["full-scale", "model-scale", "vectored-four"])
+def test_reach_of_many_directions_is_reach_of_each(layout):
+    """``Thrusters.reach_each`` (the landing plan's poses at once) gives each direction's
+    ``reach`` bit for bit: 300 random directions, some along a single axis (a thruster's
+    p of exactly zero takes the no-limit branch) and one of zero force."""
+    thrusters = _thrusters(layout)
+    rng = np.random.default_rng(8)
+    d = rng.normal(size=(300, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    d[:3] = np.eye(3)
+    d[3] = 0.0
+    one_by_one = np.array([thrusters.reach(row) for row in d])
+    assert np.array_equal(thrusters.reach_each(d), one_by_one)
+    assert np.all(one_by_one[4:] > 0.0)
+    assert thrusters.reach_each(np.zeros((0, 3))).shape == (0,)
+
+
+def test_pose_loads_at_once_are_each_poses_load():
+    """``pose_loads`` of many poses (one compiled call for the forces, the reaches at once)
+    gives each pose what it gives alone: the same needed and available forces, bit for bit,
+    over a turn of headings in a 0.4 m/s current."""
+    from control.simulation import Simulation
+    from sim import params as params_mod
+
+    sim = Simulation(params_mod.load("full-scale"), tree_depth_m=400.0)
+    thrusters = landing.Thrusters(sim)
+    env = landing._environment(sim, 390.0, 0.4, 0.7)
+    poses = np.column_stack(
+        [np.full(40, 3.0), np.full(40, -2.0), np.linspace(-math.pi, math.pi, 40)]
+    )
+    together = landing.pose_loads(sim, thrusters, poses, env, 390.0)
+    for pose, load in zip(poses, together, strict=True):
+        # one pose, as pose_loads made it pose by pose before (the forces, the norm, reach)
+        (needed,) = plant.hold_needed_xyn(pose[None, :].copy(), 390.0, env, sim.arrays)
+        unit = needed / float(np.linalg.norm(needed))
+        assert np.array_equal(load.needed_xyn, needed)
+        assert np.array_equal(load.available_xyn, unit * thrusters.reach(unit))
+    assert len({round(load.utilisation, 9) for load in together}) > 20  # the poses differ
