@@ -68,6 +68,7 @@ class _Slots:
         self.QS = _stacked(s.Q, n_runs)
         self.seen_P: list[Any] = [None] * n_runs
         self.seen_C: list[Any] = [None] * n_runs
+        self.seen_keep: list[Any] = [None] * n_runs  # a run's log columns, once they matched
         self.pos = np.zeros(n_runs, np.int64)
         self.length = np.zeros(n_runs, np.int64)
         self.ok = np.zeros(n_runs, np.int64)
@@ -161,8 +162,10 @@ class _Slots:
             return False
         if (self.seen_P[r] is None or p_new or c_new) and self.key_of(job) != self.key:
             return False
-        if s.log_keep is not self.keep and not np.array_equal(s.log_keep, self.keep):
-            return False  # a log of other columns (it runs alone)
+        if s.log_keep is not self.seen_keep[r]:
+            if s.log_keep is not self.keep and not np.array_equal(s.log_keep, self.keep):
+                return False  # a log of other columns (it runs alone)
+            self.seen_keep[r] = s.log_keep
         if n > self.env.shape[1]:
             self._inputs(job, n)
         for i in p_new:
