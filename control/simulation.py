@@ -325,6 +325,7 @@ class Simulation:
         self.rng_current, self.rng_dropouts, self.rng_noise, rng_waves = (
             np.random.default_rng(s) for s in streams
         )
+        self._noise_stream = sensors.NoiseStream(self.rng_dropouts, self.rng_noise)
         self.current_params = current or steady_current(0.0, 0.0)
         self.current_state = envmod.initial_current(self.current_params)
         self.wave_field = envmod.make_wave_field(waves, rng_waves) if waves is not None else None
@@ -925,9 +926,7 @@ class Simulation:
         if self.faults:
             self._faults_before_chunk()
         env = self._environment_chunk(n)
-        noise = sensors.draw_noise(
-            self.sensor_cfg, self.rng_dropouts, self.rng_noise, self.step_index, n
-        )
+        noise = self._noise_stream.take(self.sensor_cfg, self.step_index, n)
         if self.faults:
             self._faults_in_chunk(env, noise)
         self._vessel_in_chunk(env, n)

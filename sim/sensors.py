@@ -119,26 +119,95 @@ def draw_noise(
     uniforms = dropouts.random((n, N_SENSORS))
     noise = normals.standard_normal((n, N_Y))
     fresh = np.empty((n, N_SENSORS), dtype=np.bool_)
-    _scale_and_keep(noise, fresh, uniforms, due, cfg.noise_std, cfg.dropout_probability)
+    # the normals scaled in place
+    _scale_and_keep_into(noise, fresh, noise, uniforms, due, cfg.noise_std, cfg.dropout_probability)
     return NoiseChunk(noise=noise, fresh=fresh)
 
 
+class NoiseStream:
+    """``draw_noise`` for a run's steps in order, drawn ahead in blocks of ``BLOCK_STEPS``
+    steps: each generator is read in step order as ``draw_noise`` reads it (``dropouts``
+    N_SENSORS uniforms a step, ``normals`` N_Y standard normals), so ``take(cfg, k, n)`` for
+    consecutive pieces gives the numbers ``draw_noise`` gives for them, bit for bit, however
+    the run is cut. The draws are made in compiled code (numba's ``Generator`` methods run
+    numpy's algorithms on the generator's own state: the same numbers), some 3.6 ns a number
+    against numpy's 7-8, which pays once numba's 7 us a call for each generator is spread
+    over a block (``docs/speed.md``, twenty-fourth pass). The generators must not be read by
+    anyone else while the stream holds them."""
+
+    BLOCK_STEPS = 2048
+    """Steps drawn at a time (2048 x 16 numbers, 256 kB)."""
+
+    def __init__(self, dropouts: np.random.Generator, normals: np.random.Generator) -> None:
+        self.dropouts = dropouts
+        self.normals = normals
+        self._uniforms = np.empty((0, N_SENSORS))
+        self._normals = np.empty((0, N_Y))
+        self._at = 0  # the next step's row in the block
+
+    def take(self, cfg: SensorConfig, first_step: int, n: int) -> NoiseChunk:
+        """The next n steps' noise and sample pattern (steps first_step ...)."""
+        decimation, period = cfg.pattern_key
+        due = _due_pattern(decimation, first_step % period, n)
+        noise = np.empty((n, N_Y))
+        fresh = np.empty((n, N_SENSORS), dtype=np.bool_)
+        done = 0
+        while done < n:
+            if self._at == self._normals.shape[0]:
+                if self._normals.shape[0] == 0:
+                    self._uniforms = np.empty((self.BLOCK_STEPS, N_SENSORS))
+                    self._normals = np.empty((self.BLOCK_STEPS, N_Y))
+                _draw_block_into(self._normals, self._uniforms, self.dropouts, self.normals)
+                self._at = 0
+            k = min(n - done, self._normals.shape[0] - self._at)
+            a, b = self._at, self._at + k
+            _scale_and_keep_into(
+                noise[done : done + k],
+                fresh[done : done + k],
+                self._normals[a:b],
+                self._uniforms[a:b],
+                due[done : done + k],
+                cfg.noise_std,
+                cfg.dropout_probability,
+            )
+            self._at = b
+            done += k
+        return NoiseChunk(noise=noise, fresh=fresh)
+
+
 @njit(**JIT_NOALLOC)
-def _scale_and_keep(
+def _draw_block_into(
+    normals_out: np.ndarray,
+    uniforms_out: np.ndarray,
+    dropouts: np.random.Generator,
+    normals: np.random.Generator,
+) -> None:
+    """A block's draws, step by step: N_SENSORS uniforms from ``dropouts``, N_Y standard
+    normals from ``normals`` (each generator in the order ``draw_noise``'s arrays take)."""
+    for k in range(normals_out.shape[0]):
+        for j in range(uniforms_out.shape[1]):
+            uniforms_out[k, j] = dropouts.random()
+        for i in range(normals_out.shape[1]):
+            normals_out[k, i] = normals.standard_normal()
+
+
+@njit(**JIT_NOALLOC)
+def _scale_and_keep_into(
     noise: np.ndarray,
     fresh: np.ndarray,
+    normals: np.ndarray,
     uniforms: np.ndarray,
     due: np.ndarray,
     noise_std: np.ndarray,
     dropout: np.ndarray,
 ) -> None:
-    """``draw_noise``'s arithmetic on its draws in one compiled call (three numpy operations
-    and their temporaries cost a single run's closed loop some 0.08 us a step): the normals
-    scaled in place, ``noise[k, i] * noise_std[i]`` (the product numpy's broadcast makes), and
-    ``fresh = due & (uniforms >= dropout)``."""
+    """The arithmetic on the draws in one compiled call (three numpy operations and their
+    temporaries cost a single run's closed loop some 0.08 us a step): ``noise[k, i] =
+    normals[k, i] * noise_std[i]`` (the product numpy's broadcast makes; ``normals`` may be
+    ``noise`` itself) and ``fresh = due & (uniforms >= dropout)``."""
     for k in range(noise.shape[0]):
         for i in range(noise.shape[1]):
-            noise[k, i] = noise[k, i] * noise_std[i]
+            noise[k, i] = normals[k, i] * noise_std[i]
         for j in range(fresh.shape[1]):
             fresh[k, j] = due[k, j] and uniforms[k, j] >= dropout[j]
 

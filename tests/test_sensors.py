@@ -72,3 +72,26 @@ def test_drawn_noise_in_pieces_is_the_noise_drawn_at_once() -> None:
         first += n
     assert np.array_equal(whole.noise, np.vstack([p.noise for p in parts]))
     assert np.array_equal(whole.fresh, np.vstack([p.fresh for p in parts]))
+
+
+@pytest.mark.parametrize("block_steps", [7, 100, 2048])
+def test_the_noise_stream_gives_draw_noises_numbers_in_any_pieces(block_steps: int) -> None:
+    """``NoiseStream`` draws ahead in blocks (compiled) and hands them out a chunk at a time:
+    pieces of 1, 36, 63, 250 and 13 steps, across block edges (blocks of 7 and 100 steps)
+    and with the sensors' settings changed between two pieces, are bit for bit what
+    ``draw_noise`` gives for the same pieces from generators of the same seeds."""
+    spec = params.load("full-scale").sensors
+    cfg = sensors.sensor_config(spec, 0.01)
+    cfg_a = sensors.SensorConfig(cfg.decimation, cfg.noise_std, np.linspace(0.1, 0.4, 5))
+    cfg_b = sensors.SensorConfig(cfg.decimation, 3.0 * cfg.noise_std, np.full(5, 0.2))
+    stream = sensors.NoiseStream(np.random.default_rng(5), np.random.default_rng(6))
+    stream.BLOCK_STEPS = block_steps
+    d, g = np.random.default_rng(5), np.random.default_rng(6)
+    first = 0
+    for n, cfg_k in ((1, cfg_a), (36, cfg_a), (63, cfg_b), (250, cfg_a), (13, cfg_b)):
+        got = stream.take(cfg_k, first, n)
+        expected = sensors.draw_noise(cfg_k, d, g, first, n)
+        assert np.array_equal(got.noise.view(np.int64), expected.noise.view(np.int64))
+        assert np.array_equal(got.fresh, expected.fresh)
+        first += n
+    assert 0 < expected.fresh.sum() < expected.fresh.size
