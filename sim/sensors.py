@@ -7,8 +7,9 @@ The measurement vector ``y`` (11 numbers) is laid out as
      u, v, w (DVL, ROV axes, m/s), p, q, r (gyro, ROV axes, rad/s)]
 
 Sensor k samples on plant steps that are whole multiples of its decimation (plant rate / sensor
-rate, which must be an integer). Noise and dropouts are drawn up front for a chunk of steps from
-a seeded generator, so a run is reproducible and the compiled loop stays free of Python.
+rate, which must be an integer). Noise and dropouts are drawn up front from seeded generators
+(``draw_noise`` for a chunk of steps; a simulation's ``NoiseStream`` in blocks ahead of its
+chunks, the same numbers), so a run is reproducible and the compiled loop stays free of Python.
 """
 
 from __future__ import annotations
