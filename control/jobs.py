@@ -71,21 +71,29 @@ class ChunkJob:
         """Run the chunk alone, now (its rows straight into ``out`` when given)."""
         cuts = self.pieces()
         if len(cuts) == 2:
-            return self._run_piece(0, self.n, self.sim.C, self.out)
+            return self._run_piece(0, self.n, self._config_at(0, self.sim.C), self.out)
         s = self.sim
         out = self.out if self.out is not None else np.empty((self.n, s.log_keep.shape[0]))
         state = (s.x, s.held_y, s.xhat, s.P_cov, s.cs)
         C = s.C
         for a, b in itertools.pairwise(cuts):
-            assert self.spring is not None
-            k_h, p_n, p_e = self.spring[a]
-            if k_h != C.k_h or p_n != C.p_eq[0] or p_e != C.p_eq[1]:  # as ``_sync_site``
-                C = C._replace(k_h=float(k_h), p_eq=self.spring[a, 1:3].copy())
+            C = self._config_at(a, C)
             x, held_y, xhat, P_cov, cs, _, done = self._run_piece(a, b, C, out[a:b], state)
             state = (x, held_y, xhat, P_cov, cs)
             if done < b - a:
                 return x, held_y, xhat, P_cov, cs, out, a + done
         return (*state, out, self.n)
+
+    def _config_at(self, a: int, C: Any) -> Any:
+        """``C`` holding row a's spring (``C`` itself when it does already: the batch's
+        kernel puts every row's spring into the configuration, so alone the rows decide
+        too)."""
+        if self.spring is None:
+            return C
+        k_h, p_n, p_e = self.spring[a]
+        if k_h != C.k_h or p_n != C.p_eq[0] or p_e != C.p_eq[1]:  # as ``_sync_site``
+            return C._replace(k_h=float(k_h), p_eq=self.spring[a, 1:3].copy())
+        return C
 
     def _run_piece(
         self,
