@@ -24,6 +24,7 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -61,6 +62,12 @@ def alone(runs: int, indices: list[int]) -> tuple[float, float]:
 
 def together(runs: int, indices: list[int]) -> tuple[float, float]:
     """(simulated s, wall s) of the runs in one batch."""
+    sim_s, wall, _ = together_results(runs, indices)
+    return sim_s, wall
+
+
+def together_results(runs: int, indices: list[int]) -> tuple[float, float, list[Any]]:
+    """``together``, and each run's result (``MissionResult``, no log) in order."""
     drivers = _drivers(runs, indices)
     t0 = time.perf_counter()
     outcomes = run_together([d.run_to_end_jobs(log=False) for d in drivers])
@@ -68,7 +75,7 @@ def together(runs: int, indices: list[int]) -> tuple[float, float]:
     bad = [o.error for o in outcomes if o.error is not None]
     if bad:
         raise RuntimeError(f"{len(bad)} runs failed: {bad[0]}")
-    return sum(d.sim.t_s for d in drivers), wall
+    return sum(d.sim.t_s for d in drivers), wall, [o.value for o in outcomes]
 
 
 def _warm(runs: int) -> None:

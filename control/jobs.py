@@ -48,11 +48,12 @@ class ChunkJob:
     spring: np.ndarray | None = None
     """(n, 3) the control model's wire spring in force at each step, [k_h, p_eq north, east]
     (``site.chunk_rows_into``: it refreshes on whole seconds, as the wire's entries); None,
-    ``C``'s throughout. Row 0 is ``C``'s own. A chunk that runs past whole seconds while the
-    winch or the crane moves has others further on: the batch's kernel puts each row into
-    the run's configuration before its step, and ``run`` runs the chunk in pieces between
-    the rows where it changes, each with ``C`` holding that piece's spring (the chunks of a
-    second the simulator would otherwise have cut, with the same numbers)."""
+    ``C``'s throughout. Row 0 is ``C``'s own as the simulation makes a job. A chunk that runs
+    past whole seconds while the winch or the crane moves has others further on: the batch's
+    kernel puts each row into the run's configuration before its step, and ``run`` runs the
+    chunk in pieces between the rows where it changes, each with ``C`` holding that piece's
+    spring (the chunks of a second the simulator would otherwise have cut, with the same
+    numbers)."""
 
     @property
     def n(self) -> int:

@@ -8,6 +8,7 @@ import json
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from app import scores
@@ -98,3 +99,34 @@ def test_scores_of_a_file_that_is_not_a_database_is_one_line(tmp_path: Path) -> 
     done = cli("scores", "--db", str(bad))
     assert done.returncode == 2 and "not a scores database" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_saturation_and_settling_read_every_column_of_their_blocks() -> None:
+    """``utilisation_figures`` counts a row as saturated when any thruster is at
+    ``SATURATED``, and ``settling_time`` finds the reference's last change in any of its
+    three columns: a log whose only saturated thruster is the last one (rows 10-14 and 30)
+    and whose only late reference change is the heading's (row 60, the tree following at row
+    70) gives 6 rows x 0.1 s saturated and 10 rows x 0.1 s to settle. Exact: both figures
+    are a count of rows times dt."""
+    from control.columns import LAYOUT, LogRows
+    from missions.scoring import SATURATED, settling_time, utilisation_figures
+
+    data = np.zeros((100, LAYOUT.width))
+    util = LAYOUT.slice("thruster_utilisation")
+    last = util.start + 3  # the fourth of four thrusters
+    data[10:15, last] = SATURATED
+    data[30, last] = 1.0
+    data[:, util.start] = SATURATED - 0.01  # the first thruster busy, never saturated
+    ref = LAYOUT.slice("eta_ref_n")
+    data[:5, ref.start] = -1.0  # an early change of the north reference (rows 0-4 -> 5)
+    data[60:, ref.start + 2] = 0.5  # the heading's reference changes at row 60
+    tree = LAYOUT.slice("tree_eta_n")
+    data[:70, tree.start + 5] = 0.0  # the tree's heading 0.5 rad off until row 70
+    data[70:, tree.start + 5] = 0.5
+    rows = LogRows(data, n_thrusters=4)
+    umax, sat = utilisation_figures(rows, 0.1)
+    assert umax == 1.0
+    assert sat == 6 * 0.1  # 6 rows, as the figure is made: a count times dt
+    # the heading error (28.6 deg) is outside 2 deg up to row 69: settled from row 70 on,
+    # counted from row 60, the reference's last change
+    assert settling_time(rows, 0.1, 0.1, 2.0) == 10 * 0.1
