@@ -78,6 +78,13 @@ def together_results(runs: int, indices: list[int]) -> tuple[float, float, list[
     return sum(d.sim.t_s for d in drivers), wall, [o.value for o in outcomes]
 
 
+def rate_and_figures(runs: int) -> tuple[float, list[Any]]:
+    """One batch of the runs: simulated s a wall s, and each run's figures (RMS north and
+    east, the final pose), for comparisons that check both ways give the same."""
+    sim_s, wall, results = together_results(runs, list(range(runs)))
+    return sim_s / wall, [(r.rms_north_m, r.rms_east_m, r.final_eta_n) for r in results]
+
+
 def _warm(runs: int) -> None:
     alone(runs, [0])
     together(runs, [0, 1])

@@ -63,12 +63,6 @@ CHANGES: dict[str, tuple[Any, str, Callable[..., Any]]] = {
 }
 
 
-def _batch(runs: int) -> tuple[float, list[Any]]:
-    """Simulated s a wall s of one batch of the runs, and each run's figures."""
-    sim_s, wall, results = bb.together_results(runs, list(range(runs)))
-    return sim_s / wall, [(r.rms_north_m, r.rms_east_m, r.final_eta_n) for r in results]
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=32)
@@ -86,7 +80,7 @@ def main() -> None:
             for way in order:
                 setattr(owner, attr, before if way == "before" else after)
                 try:
-                    rate, figures[way] = _batch(args.runs)
+                    rate, figures[way] = bb.rate_and_figures(args.runs)
                 finally:
                     setattr(owner, attr, after)
                 rates[way].append(rate)

@@ -39,11 +39,12 @@ from numba.extending import intrinsic
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks import batch_benchmark as bb
-from control import batch, loop
+from control import batch, batch_ekf, loop
 from control.batchkernel import (
     control_view,
     plant_view,
     plants_into,
+    predict_block,
     quality_view,
     row_at,
     set_spring,
@@ -73,7 +74,7 @@ PASSES = (
     "allocation",
     "thrusters",
     "plant pass (all runs, structure of arrays)",
-    "EKF prediction",
+    "EKF prediction (blocks of runs: control.batch_ekf)",
     "log row's plant columns, and the kept columns written out",
 )
 # acc[k] for k < 8: cycles per pass; then these counters
@@ -84,7 +85,8 @@ N_ACC = 16
 @njit(error_model="numpy", _nrt=False, cache=True)
 def timed_steps(
     pos, length, ok, active, k0, x, held_y, xhat, Pc, cs, target, n_rps, env, noise, fresh,
-    spring, PS, CS, QS, dt, log_at, work, W, same_plant, P0, bwork, scratch, keep, acc, again,
+    spring, PS, CS, QS, dt, log_at, work, W, same_plant, P0, bwork, scratch, keep, same_model,
+    C0, ebwork, acc, again,
 ):  # fmt: skip
     """``batch_steps`` with the cycles of each pass added into ``acc`` (see ``PASSES``); with
     ``again``, the structure-of-arrays plant step of the pass's last block run once more on
@@ -151,6 +153,7 @@ def timed_steps(
             acc[NEAR_STEPS] += 1
             acc[NEAR_CYCLES] += spent
             acc[NEAR_RUNS] += near
+        n_cols = 0
         for r in range(n_runs):
             if not active[r]:
                 continue
@@ -159,8 +162,19 @@ def timed_steps(
             C = control_view(CS, r)
             log_row = scratch[r]
             env_k = env[r, j]
-            # loop.observe_into, its two parts timed apart
-            loop.predict_from_row_into(env_k, xhat[r], Pc[r], C, dt, log_row, W)
+            # the observer's prediction as batch_steps makes it (its block after the loop),
+            # timed apart from the row's plant columns
+            if C.feedback_ekf:
+                tau_tree = loop.observer_input_into(env_k, C, log_row, W)
+                if same_model[r]:
+                    batch_ekf.load_run(ebwork, n_cols, xhat[r], Pc[r], tau_tree, C.k_h, C.p_eq)
+                    ebwork.runs[n_cols] = r
+                    n_cols += 1
+                    if n_cols == batch_ekf.BLOCK:
+                        predict_block(xhat, Pc, n_cols, C0, dt, ebwork)
+                        n_cols = 0
+                else:
+                    loop.predict_from_row_into(env_k, xhat[r], Pc[r], C, dt, log_row, W)
             c1 = cycles()
             t_next = (k0[r] + j) * dt + dt
             loop.write_plant_row(log_row, t_next, x[r], held_y[r], env_k, plant_view(PS, r), work)
@@ -173,6 +187,10 @@ def timed_steps(
                 kept[i] = log_row[keep[i]]
             acc[6] += c1 - c0
             acc[7] += cycles() - c1
+        if n_cols > 0:
+            c0 = cycles()
+            predict_block(xhat, Pc, n_cols, C0, dt, ebwork)
+            acc[6] += cycles() - c0
     return h
 
 
@@ -195,7 +213,8 @@ def measure(runs: int, again: bool = False) -> dict:
         return timed_steps(
             s.pos, s.length, s.ok, s.active, s.k0, s.x, s.held_y, s.xhat, s.Pc, s.cs, s.target,
             s.n_rps, s.env, s.noise, s.fresh, s.spring, s.PS, s.CS, s.QS, s.dt_s, s.log_at,
-            s.work, s.W, s.same_plant, s.P0, s.bwork, s.scratch, s.keep, acc, again,
+            s.work, s.W, s.same_plant, s.P0, s.bwork, s.scratch, s.keep, s.same_model, s.C0,
+            s.ebwork, acc, again,
         )  # fmt: skip
 
     bb._warm(runs)

@@ -24,9 +24,10 @@ from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 
-from control import loop
+from control import batch_ekf, loop
 from control.batchkernel import batch_steps
 from control.jobs import ChunkJob, ChunkResult
+from control.loop import ControlArrays
 from sim import batch_plant, plant
 
 T = TypeVar("T")
@@ -43,6 +44,14 @@ def _stacked(template: Any, n_runs: int) -> Any:
         a = np.asarray(value)
         fields.append(np.zeros((n_runs, *a.shape), dtype=a.dtype))
     return type(template)(*fields)
+
+
+_MODEL_FIELDS = tuple(
+    ControlArrays._fields.index(name) for name in ("M", "M_inv", "D_l", "D_nl", "T_b", "GQG")
+)
+"""The fields of ``ControlArrays`` that make the observer's control model (all but the wire
+spring, which is each run's own): runs whose values of these are the batch's first run's
+predict together (``control.batch_ekf``)."""
 
 
 def _same_values(a: Any, b: Any) -> bool:
@@ -99,6 +108,14 @@ class _Slots:
         # its columns straight from their rows (``batchkernel.plants_into``), as many as
         # there are, so the step narrows as runs end
         self.bwork = batch_plant.make_batch_work(s.arrays.thr_T.shape[1])
+        # the batch's control model (the first run's, copied) and who has it: their
+        # observers predict together (``control.batch_ekf``)
+        arrays: dict[str, Any] = {
+            k: v.copy() for k, v in zip(s.C._fields, s.C, strict=True) if isinstance(v, np.ndarray)
+        }
+        self.C0 = s.C._replace(**arrays)
+        self.same_model = np.zeros(n_runs, np.bool_)
+        self.ebwork = batch_ekf.make_ekf_block()
 
     def _inputs(self, job: ChunkJob, length: int) -> None:
         """(Re)make the chunk buffers for chunks of up to ``length`` steps, keeping what the
@@ -180,6 +197,8 @@ class _Slots:
                 self.same_plant[r] = all(np.array_equal(s.arrays[i], self.P0[i]) for i in p_new)
         for i in c_new:
             self.CS[i][r] = s.C[i]
+        if self.seen_C[r] is None or any(i in _MODEL_FIELDS for i in c_new):
+            self.same_model[r] = all(np.array_equal(s.C[i], self.C0[i]) for i in _MODEL_FIELDS)
         self.seen_P[r], self.seen_C[r] = s.arrays, s.C
         for stack, value in zip(self.QS, s.Q, strict=True):
             stack[r] = value
@@ -264,6 +283,9 @@ class _Slots:
             self.bwork,
             self.scratch,
             self.keep,
+            self.same_model,
+            self.C0,
+            self.ebwork,
         )
 
 

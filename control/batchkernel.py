@@ -19,7 +19,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
-from control import loop
+from control import batch_ekf, loop
 from control.columns import N_LOG
 from control.loop import ControlArrays, ControlWork, QualityState
 from sim import batch_plant, plant, sensors
@@ -245,6 +245,25 @@ def plants_into(
 
 
 @njit(inline="always", **JIT_NOALLOC)
+def predict_block(
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    n_cols: int,
+    C0: ControlArrays,
+    dt: float,
+    ebwork: batch_ekf.EkfBlock,
+) -> None:
+    """The observers' predictions of the block's ``n_cols`` loaded runs (``batch_ekf``, on
+    the batch's control model ``C0``), each run's new state and covariance back into its
+    rows of ``xhat`` and ``Pc`` (``ebwork.runs``)."""
+    w = batch_ekf.pad_block(ebwork, n_cols)
+    batch_ekf.predict_block_into(ebwork, w, dt, C0.M, C0.M_inv, C0.D_l, C0.D_nl, C0.T_b, C0.GQG)
+    for c in range(n_cols):
+        r = ebwork.runs[c]
+        batch_ekf.store_run(ebwork, c, xhat[r], Pc[r])
+
+
+@njit(inline="always", **JIT_NOALLOC)
 def steps_to_first_end(pos: np.ndarray, length: np.ndarray) -> int:
     """The steps until the first run with a chunk under way (``pos[r] < length[r]``) ends it
     (0 when none is under way): how far ``batch_steps`` goes in one call."""
@@ -285,6 +304,9 @@ def batch_steps(
     bwork: batch_plant.BatchWork,
     scratch: np.ndarray,
     keep: np.ndarray,
+    same_model: np.ndarray,
+    C0: ControlArrays,
+    ebwork: batch_ekf.EkfBlock,
 ) -> int:
     """Advance every run with a chunk under way (``pos[r] < length[r]``) step by step, all of
     them one step before any takes the next, until the first of them reaches the end of its
@@ -302,7 +324,9 @@ def batch_steps(
     speeds into ``n_rps[r]``); the plants' RK4 steps (the runs whose plant is the batch's
     ``P0``, ``same_plant[r]``, together in the structure-of-arrays step of
     ``sim.batch_plant``, in blocks loaded straight from the runs' rows into ``bwork``); the
-    observers' predictions and the rows' plant columns. Per run these are
+    observers' predictions and the rows' plant columns (the runs with an observer on the
+    batch's control model ``C0``, ``same_model[r]``, predicted together in
+    ``control.batch_ekf``'s blocks through ``ebwork``, after the pass). Per run these are
     ``loop._closed_steps``' calls in its order (sensors, control, allocation, thrusters, the
     RK4 step, ``observe_into``), with the same numbers. Before its step, run r's control
     model's wire spring is set to ``spring[r, j]`` (``control.jobs.ChunkJob.spring``: a chunk
@@ -335,24 +359,28 @@ def batch_steps(
             loop.allocate_into(f, tau6, C, W)
             loop.thrusters_into(n_rps[r, 0:m], f, C, row, W)
         plants_into(active, same_plant, pos, x, n_rps, env, PS, P0, dt, work, bwork)
+        c = 0
         for r in range(n_runs):
             if not active[r]:
                 continue
             j = pos[r]
             t = (k0[r] + j) * dt
-            loop.observe_into(
-                x[r],
-                env[r, j],
-                xhat[r],
-                Pc[r],
-                control_view(CS, r),
-                plant_view(PS, r),
-                dt,
-                t + dt,
-                held_y[r],
-                scratch[r],
-                work,
-                W,
+            C = control_view(CS, r)
+            if C.feedback_ekf:
+                # the observer's prediction (``loop.observe_into``'s first part): the runs
+                # on the batch's control model together (``predict_block``), others alone
+                tau_tree = loop.observer_input_into(env[r, j], C, scratch[r], W)
+                if same_model[r]:
+                    batch_ekf.load_run(ebwork, c, xhat[r], Pc[r], tau_tree, C.k_h, C.p_eq)
+                    ebwork.runs[c] = r
+                    c += 1
+                    if c == batch_ekf.BLOCK:
+                        predict_block(xhat, Pc, c, C0, dt, ebwork)
+                        c = 0
+                else:
+                    loop.predict_from_row_into(env[r, j], xhat[r], Pc[r], C, dt, scratch[r], W)
+            loop.write_plant_row(
+                scratch[r], t + dt, x[r], held_y[r], env[r, j], plant_view(PS, r), work
             )
             whole = scratch[r]
             kept = row_at(log_at[r] + j * row_bytes, n_keep)
@@ -362,4 +390,6 @@ def batch_steps(
             if not plant.all_finite(x[r]):
                 ok[r] = j
                 pos[r] = length[r]
+        if c > 0:
+            predict_block(xhat, Pc, c, C0, dt, ebwork)
     return h

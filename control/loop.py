@@ -694,6 +694,26 @@ def thrusters_into(
 
 
 @njit(inline="always", **JIT_NOALLOC)
+def observer_input_into(
+    env_k: np.ndarray, C: ControlArrays, log_row: np.ndarray, W: ControlWork
+) -> np.ndarray:
+    """The observer's input over the step just taken: the achieved wrench of the step's log
+    row moved to the tree (eq. 3.6), zero when the ROV does not hold the tree (by the row's
+    mode and, flown by hand, the grip). A view into ``W``: read it before ``W`` is reused."""
+    ach3 = W.vec[W_ACH3, 0:3]
+    ach3[0] = log_row[L_TAU_ACH]
+    ach3[1] = log_row[L_TAU_ACH + 1]
+    ach3[2] = log_row[L_TAU_ACH + 5]
+    tau_tree = W.vec[W_TAU_OBS, 0:3]
+    _matvec_into(tau_tree, C.A_inv, ach3)
+    mode = int(log_row[L_MODE])
+    on_tree = mode == MODE_TREE or (mode == MODE_MANUAL and env_k[plant.E_GRIP] > 0.5)
+    if not on_tree:
+        tau_tree[0] = tau_tree[1] = tau_tree[2] = 0.0
+    return tau_tree
+
+
+@njit(inline="always", **JIT_NOALLOC)
 def predict_from_row_into(
     env_k: np.ndarray,
     xhat: np.ndarray,
@@ -706,17 +726,7 @@ def predict_from_row_into(
     """The observer's prediction over the step just taken (``xhat``, ``Pc`` in place), from
     the achieved wrench and the mode in the step's log row (``observe_into``'s first part)."""
     if C.feedback_ekf:
-        # the observer's input: the achieved wrench moved to the tree (eq. 3.6)
-        ach3 = W.vec[W_ACH3, 0:3]
-        ach3[0] = log_row[L_TAU_ACH]
-        ach3[1] = log_row[L_TAU_ACH + 1]
-        ach3[2] = log_row[L_TAU_ACH + 5]
-        tau_tree = W.vec[W_TAU_OBS, 0:3]
-        _matvec_into(tau_tree, C.A_inv, ach3)
-        mode = int(log_row[L_MODE])
-        on_tree = mode == MODE_TREE or (mode == MODE_MANUAL and env_k[plant.E_GRIP] > 0.5)
-        if not on_tree:
-            tau_tree[0] = tau_tree[1] = tau_tree[2] = 0.0
+        tau_tree = observer_input_into(env_k, C, log_row, W)
         ekf.predict_into(
             xhat,
             Pc,

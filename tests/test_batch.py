@@ -11,6 +11,7 @@ import pytest
 
 from app.campaign import runner
 from control.batch import run_together
+from control.config import ControlSettings
 from control.simulation import Simulation, SimulationDiverged
 from missions import campaign as cm
 from missions.driver import MissionDriver
@@ -45,6 +46,17 @@ def _same_result(alone, together) -> None:
     for name in ("rms_north_m", "rms_east_m", "rms_heading_deg", "max_thruster_utilisation"):
         assert getattr(together, name) == getattr(alone, name), name
     assert [x.miss_m for x in together.landings] == [x.miss_m for x in alone.landings]
+
+
+def _each_as_alone(runs, steps: int) -> list:
+    """Each of ``runs()``'s simulations stepped alone, then fresh ones together: every run's
+    rows the same both ways. Returns the rows alone."""
+    alone = [sim.step(steps) for sim in runs()]
+    together = run_together([sim.step_jobs(steps) for sim in runs()])
+    for a, o in zip(alone, together, strict=True):
+        assert o.error is None
+        assert np.array_equal(o.value.data, a.data)
+    return alone
 
 
 def test_docking_runs_in_one_batch_log_every_row_as_alone():
@@ -189,11 +201,7 @@ def test_runs_on_another_plant_step_by_themselves_in_the_batch_and_stay_as_alone
             sim.set_target(3.0, 0.0, 0.0)
         return sims
 
-    alone = [sim.step(300) for sim in runs()]
-    together = run_together([sim.step_jobs(300) for sim in runs()])
-    for a, o in zip(alone, together, strict=True):
-        assert o.error is None
-        assert np.array_equal(o.value.data, a.data)
+    alone = _each_as_alone(runs, 300)
     assert np.array_equal(alone[0].data, alone[2].data)  # the same run twice
     assert not np.array_equal(alone[0].data, alone[1].data)
     sims = runs()
@@ -257,16 +265,18 @@ def test_the_plant_pass_narrows_as_runs_end_and_each_run_stays_as_alone():
 
 
 def test_more_runs_than_a_plant_block_each_as_alone():
-    """A batch wider than the plant pass's block (``sim.batch_plant.BLOCK`` runs) steps its
-    runs in several blocks; each run's rows are still the run's alone, bit for bit (the
-    second block's runs are the ones a wrong column's bookkeeping would swap)."""
+    """A batch wider than the plant pass's block (``sim.batch_plant.BLOCK`` runs, twice the
+    observers' ``control.batch_ekf.BLOCK``) steps its runs in several blocks; each run's rows
+    are still the run's alone, bit for bit (the second block's runs are the ones a wrong
+    column's bookkeeping would swap)."""
     from sim.batch_plant import BLOCK
 
     base = params.load("full-scale")
     n_runs = BLOCK + 3
+    ekf = ControlSettings(feedback="ekf", feedforward=True)  # the observers' blocks too
 
     def runs() -> list[Simulation]:
-        sims = [Simulation(base, tree_depth_m=100.0, seed=i) for i in range(n_runs)]
+        sims = [Simulation(base, tree_depth_m=100.0, seed=i, settings=ekf) for i in range(n_runs)]
         for i, sim in enumerate(sims):
             sim.set_target(0.01 * i, -0.2, math.radians(0.5 * i))
         return sims
@@ -327,3 +337,36 @@ def _column(name: str):
     from control.columns import LOG_COLUMNS
 
     return next(c for c in LOG_COLUMNS if c.name == name)
+
+
+def test_observers_on_another_control_model_predict_by_themselves_and_stay_as_alone():
+    # the observers of the runs on the batch's control model (the first run's) predict
+    # together (control.batch_ekf); a run whose control model differs (its observer's bias
+    # time constants: T_b) predicts by itself; a run without an observer not at all
+    from control.batch import _Slots
+
+    spec = params.load_spec("full-scale")
+    base = params.build(spec)
+    observer = spec.observer.model_copy(update={"bias_time_constant_s": [300.0, 600.0, 900.0]})
+    other = params.build(spec.model_copy(update={"observer": observer}))
+    ekf = ControlSettings(feedback="ekf", feedforward=True)
+
+    def runs():
+        sims = [
+            Simulation(base, tree_depth_m=100.0, seed=1, settings=ekf),
+            Simulation(other, tree_depth_m=100.0, seed=2, settings=ekf, plant_ps=base),
+            Simulation(base, tree_depth_m=100.0, seed=3, settings=ekf),
+            Simulation(base, tree_depth_m=100.0, seed=4),
+        ]
+        for sim in sims:
+            sim.set_target(3.0, -1.0, math.radians(5.0))
+        return sims
+
+    _each_as_alone(runs, 300)
+    sims = runs()
+    jobs = [next(sim.step_jobs(10)) for sim in sims]
+    slots = _Slots(jobs[0], 4, 100)
+    assert all(slots.put(r, job) for r, job in enumerate(jobs))
+    assert slots.same_model.tolist() == [True, False, True, True]
+    assert slots.same_plant.tolist() == [True, True, True, True]
+    assert [bool(sim.C.feedback_ekf) for sim in sims] == [True, True, True, False]
