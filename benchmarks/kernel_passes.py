@@ -42,6 +42,8 @@ from benchmarks import batch_benchmark as bb
 from control import batch, batch_ekf, loop
 from control.batchkernel import (
     control_view,
+    env_row,
+    flags_at,
     plant_view,
     plants_into,
     predict_block,
@@ -84,9 +86,9 @@ N_ACC = 16
 
 @njit(error_model="numpy", _nrt=False, cache=True)
 def timed_steps(
-    pos, length, ok, active, k0, x, held_y, xhat, Pc, cs, target, n_rps, env, noise, fresh,
-    spring, PS, CS, QS, dt, log_at, work, W, same_plant, P0, bwork, scratch, keep, same_model,
-    C0, ebwork, acc, again,
+    pos, length, ok, active, k0, x, held_y, xhat, Pc, cs, target, n_rps, env_at, noise_at,
+    fresh_at, spring_at, PS, CS, QS, dt, log_at, work, W, same_plant, P0, bwork, scratch, keep,
+    same_model, C0, ebwork, acc, again,
 ):  # fmt: skip
     """``batch_steps`` with the cycles of each pass added into ``acc`` (see ``PASSES``); with
     ``again``, the structure-of-arrays plant step of the pass's last block run once more on
@@ -107,7 +109,7 @@ def timed_steps(
             acc[RUN_STEPS] += 1
             c0 = cycles()
             j = pos[r]
-            set_spring(CS, r, spring[r, j])
+            set_spring(CS, r, row_at(spring_at[r] + j * 24, 3))
             C = control_view(CS, r)
             Q = quality_view(QS, r)
             t = (k0[r] + j) * dt
@@ -116,10 +118,12 @@ def timed_steps(
                 row[i] = 0.0
             xr, hr = x[r], held_y[r]
             c1 = cycles()
-            sensors.sample_into(hr, xr, hr, noise[r, j], fresh[r, j], sensors.Y_SENSOR)
+            noise_j = row_at(noise_at[r] + j * (sensors.N_Y * 8), sensors.N_Y)
+            fresh_j = flags_at(fresh_at[r] + j * sensors.N_SENSORS, sensors.N_SENSORS)
+            sensors.sample_into(hr, xr, hr, noise_j, fresh_j, sensors.Y_SENSOR)
             c2 = cycles()
             loop.control_step_into(
-                tau6, t, xr, hr, fresh[r, j], xhat[r], Pc[r], cs[r], target[r], C, Q, dt, row, W
+                tau6, t, xr, hr, fresh_j, xhat[r], Pc[r], cs[r], target[r], C, Q, dt, row, W
             )
             c3 = cycles()
             loop.allocate_into(f, tau6, C, W)
@@ -135,11 +139,11 @@ def timed_steps(
         for r in range(n_runs):
             if active[r]:
                 acc[ACTIVE] += 1
-                land = env[r, pos[r], plant.E_LAND]
+                land = env_row(env_at, r, pos[r])[plant.E_LAND]
                 if land > 0.0 and not x[r, 2] + reach < land:
                     near += 1
         c0 = cycles()
-        w = plants_into(active, same_plant, pos, x, n_rps, env, PS, P0, dt, work, bwork)
+        w = plants_into(active, same_plant, pos, x, n_rps, env_at, PS, P0, dt, work, bwork)
         spent = cycles() - c0
         acc[5] += spent
         if again and w > 0:
@@ -161,7 +165,7 @@ def timed_steps(
             j = pos[r]
             C = control_view(CS, r)
             log_row = scratch[r]
-            env_k = env[r, j]
+            env_k = env_row(env_at, r, j)
             # the observer's prediction as batch_steps makes it (its block after the loop),
             # timed apart from the row's plant columns
             if C.feedback_ekf:
@@ -212,9 +216,9 @@ def measure(runs: int, again: bool = False) -> dict:
     def steps(s: batch._Slots) -> int:
         return timed_steps(
             s.pos, s.length, s.ok, s.active, s.k0, s.x, s.held_y, s.xhat, s.Pc, s.cs, s.target,
-            s.n_rps, s.env, s.noise, s.fresh, s.spring, s.PS, s.CS, s.QS, s.dt_s, s.log_at,
-            s.work, s.W, s.same_plant, s.P0, s.bwork, s.scratch, s.keep, s.same_model, s.C0,
-            s.ebwork, acc, again,
+            s.n_rps, s.env_at, s.noise_at, s.fresh_at, s.spring_at, s.PS, s.CS, s.QS, s.dt_s,
+            s.log_at, s.work, s.W, s.same_plant, s.P0, s.bwork, s.scratch, s.keep, s.same_model,
+            s.C0, s.ebwork, acc, again,
         )  # fmt: skip
 
     bb._warm(runs)

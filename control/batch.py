@@ -28,7 +28,7 @@ from control import batch_ekf, loop
 from control.batchkernel import batch_steps
 from control.jobs import ChunkJob, ChunkResult
 from control.loop import ControlArrays
-from sim import batch_plant, plant
+from sim import batch_plant, plant, sensors
 
 T = TypeVar("T")
 
@@ -62,12 +62,7 @@ def _same_values(a: Any, b: Any) -> bool:
 class _Slots:
     """The stacked arrays of a batch of ``n_runs`` runs shaped like the first job's run."""
 
-    env: np.ndarray  # (runs, steps, N_ENV) the chunks' environment rows
-    noise: np.ndarray  # (runs, steps, ...) their sensor noise
-    fresh: np.ndarray  # (runs, steps, ...) their fresh-sample flags
-    spring: np.ndarray  # (runs, steps, 3) their control models' wire springs (ChunkJob.spring)
-
-    def __init__(self, first: ChunkJob, n_runs: int, length: int) -> None:
+    def __init__(self, first: ChunkJob, n_runs: int) -> None:
         s = first.sim
         self.n_runs = n_runs
         self.dt_s = s.dt_s
@@ -95,7 +90,14 @@ class _Slots:
         # ``row_at``): no slot of rows to zero and copy out
         self.rows: list[np.ndarray | None] = [None] * n_runs
         self.log_at = np.zeros(n_runs, np.int64)
-        self._inputs(first, length)
+        # each run's chunk inputs are read where its job made them, at these addresses
+        # (``batchkernel.row_at``): the environment rows, the sensors' noise and fresh flags
+        # and the control model's wire spring, kept alive here while the chunk runs
+        self.inputs: list[tuple[np.ndarray, ...] | None] = [None] * n_runs
+        self.env_at = np.zeros(n_runs, np.int64)
+        self.noise_at = np.zeros(n_runs, np.int64)
+        self.fresh_at = np.zeros(n_runs, np.int64)
+        self.spring_at = np.zeros(n_runs, np.int64)
         self.work = plant.make_work(s.arrays.thr_T.shape[1])
         self.W = loop.make_control_work()
         # each run's whole row is made here, then the columns its log keeps go to its rows
@@ -116,22 +118,6 @@ class _Slots:
         self.C0 = s.C._replace(**arrays)
         self.same_model = np.zeros(n_runs, np.bool_)
         self.ebwork = batch_ekf.make_ekf_block()
-
-    def _inputs(self, job: ChunkJob, length: int) -> None:
-        """(Re)make the chunk buffers for chunks of up to ``length`` steps, keeping what the
-        runs under way have in them."""
-        n = self.n_runs
-        bufs = (
-            np.zeros((n, length, job.env.shape[1])),
-            np.zeros((n, length, *job.noise.shape[1:])),
-            np.zeros((n, length, *job.fresh.shape[1:]), dtype=job.fresh.dtype),
-            np.zeros((n, length, 3)),
-        )
-        if hasattr(self, "env"):
-            olds = (self.env, self.noise, self.fresh, self.spring)
-            for new, old in zip(bufs, olds, strict=True):
-                new[:, : old.shape[1]] = old
-        self.env, self.noise, self.fresh, self.spring = bufs
 
     @staticmethod
     def key_of(job: ChunkJob) -> tuple:
@@ -183,8 +169,6 @@ class _Slots:
             if s.log_keep is not self.keep and not np.array_equal(s.log_keep, self.keep):
                 return False  # a log of other columns (it runs alone)
             self.seen_keep[r] = s.log_keep
-        if n > self.env.shape[1]:
-            self._inputs(job, n)
         for i in p_new:
             self.PS[i][r] = s.arrays[i]
         if p_new:
@@ -208,14 +192,27 @@ class _Slots:
         self.Pc[r] = s.P_cov
         self.cs[r] = s.cs
         self.target[r] = s.target
-        self.env[r, :n] = job.env
-        self.noise[r, :n] = job.noise
-        self.fresh[r, :n] = job.fresh
+        env = np.ascontiguousarray(job.env, dtype=np.float64)  # (the job's own, as a rule)
+        noise = np.ascontiguousarray(job.noise, dtype=np.float64)
+        fresh = np.ascontiguousarray(job.fresh, dtype=np.bool_)
         if job.spring is not None:
-            self.spring[r, :n] = job.spring
+            spring = np.ascontiguousarray(job.spring, dtype=np.float64)
         else:
-            self.spring[r, :n, 0] = s.C.k_h
-            self.spring[r, :n, 1:3] = s.C.p_eq
+            spring = np.empty((n, 3))
+            spring[:, 0] = s.C.k_h
+            spring[:, 1:3] = s.C.p_eq
+        if (
+            env.shape != (n, plant.N_ENV)
+            or noise.shape != (n, sensors.N_Y)
+            or fresh.shape != (n, sensors.N_SENSORS)
+            or spring.shape != (n, 3)
+        ):
+            return False  # inputs of another width than the kernel reads (it runs alone)
+        self.inputs[r] = (env, noise, fresh, spring)
+        self.env_at[r] = env.ctypes.data
+        self.noise_at[r] = noise.ctypes.data
+        self.fresh_at[r] = fresh.ctypes.data
+        self.spring_at[r] = spring.ctypes.data
         out = job.out
         width = self.keep.shape[0]
         if out is None or not out.flags.c_contiguous or out.shape != (n, width):
@@ -240,6 +237,7 @@ class _Slots:
         assert rows is not None and len(rows) == n
         self.rows[r] = None
         self.log_at[r] = 0
+        self.inputs[r] = None
         if job.out is not None and rows is not job.out:
             job.out[...] = rows
             rows = job.out
@@ -267,10 +265,10 @@ class _Slots:
             self.cs,
             self.target,
             self.n_rps,
-            self.env,
-            self.noise,
-            self.fresh,
-            self.spring,
+            self.env_at,
+            self.noise_at,
+            self.fresh_at,
+            self.spring_at,
             self.PS,
             self.CS,
             self.QS,
@@ -311,7 +309,7 @@ def run_together(gens: Sequence[Generator[ChunkJob, ChunkResult, T]]) -> list[Ou
         try:
             job = next(gen) if result is None else gen.send(result)
             if slots is None:
-                slots = _Slots(job, n_runs, max(job.n, job.sim.chunk_steps))
+                slots = _Slots(job, n_runs)
             while not slots.put(r, job):
                 job = gen.send(job.run())  # a chunk of another shape: alone, now
         except StopIteration as stop:

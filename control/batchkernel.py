@@ -1,9 +1,10 @@
 """The compiled kernel of ``control.batch``: the closed loop of many runs advanced together.
 
-Each run keeps its own state, inputs and configuration as one slice of arrays stacked over
-the runs (run index first): the states ``x[r]``, ``held_y[r]``, ``xhat[r]`` ...; its chunk's
-environment rows, sensor noise and log rows ``env[r, j]``, ``noise[r, j]``, ``log[r, j]``;
-and its configuration as ``PlantArrays``, ``ControlArrays`` and ``QualityState`` whose every
+Each run keeps its own state and configuration as one slice of arrays stacked over the runs
+(run index first): the states ``x[r]``, ``held_y[r]``, ``xhat[r]`` ...; its chunk's inputs
+(environment rows, sensor noise and fresh flags, the control model's wire spring) and log
+rows stay in the run's own arrays, read and written at their addresses (``row_at``); and
+its configuration as ``PlantArrays``, ``ControlArrays`` and ``QualityState`` whose every
 field has a leading run axis (``plant_view`` and friends give run r's own, as views). Run r's
 step is ``control.loop._closed_steps``' step, the same calls on the same numbers, so a run in
 a batch gives the same figures as the run alone.
@@ -26,28 +27,25 @@ from sim import batch_plant, plant, sensors
 from sim.gnc import JIT_NOALLOC
 
 
-def _row_at(typingctx: Any, address: Any, length: Any) -> Any:
-    """The ``length`` float64 numbers at memory ``address`` as a 1-D array (a view: no copy,
-    no owner). Lets the kernel write each run's log rows straight into the rows its
-    ``Simulation`` asked for (arrays of different runs, not one stacked array) instead of
-    into a slot copied out afterwards. The caller keeps that memory alive while the kernel
-    runs (``control.batch._Slots.rows``)."""
+def _view_at(dtype: Any, itemsize: int, address: Any, length: Any) -> Any:
+    """Typing and code of an intrinsic that views the ``length`` items of ``dtype`` at memory
+    ``address`` as a 1-D array (no copy, no owner)."""
     if not isinstance(address, types.Integer) or not isinstance(length, types.Integer):
         return None
-    array_type = types.Array(types.float64, 1, "C")
+    array_type = types.Array(dtype, 1, "C")
 
     def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
         address_v, length_v = args
         n = context.cast(builder, length_v, signature.args[1], types.intp)
         ary = make_array(array_type)(context, builder)
-        data = builder.inttoptr(address_v, context.get_value_type(types.CPointer(types.float64)))
-        itemsize = context.get_constant(types.intp, 8)
+        data = builder.inttoptr(address_v, context.get_data_type(dtype).as_pointer())
+        size = context.get_constant(types.intp, itemsize)
         populate_array(
             ary,
             data=data,
             shape=cgutils.pack_array(builder, [n]),
-            strides=cgutils.pack_array(builder, [itemsize]),
-            itemsize=itemsize,
+            strides=cgutils.pack_array(builder, [size]),
+            itemsize=size,
             meminfo=None,
         )
         return ary._getvalue()
@@ -55,7 +53,23 @@ def _row_at(typingctx: Any, address: Any, length: Any) -> Any:
     return array_type(address, length), codegen
 
 
+def _row_at(typingctx: Any, address: Any, length: Any) -> Any:
+    """The ``length`` float64 numbers at memory ``address`` as a 1-D array (a view: no copy,
+    no owner). Lets the kernel write each run's log rows straight into the rows its
+    ``Simulation`` asked for (arrays of different runs, not one stacked array) instead of
+    into a slot copied out afterwards, and read each run's chunk inputs (environment rows,
+    noise, wire spring) where its job made them. The caller keeps that memory alive while
+    the kernel runs (``control.batch._Slots.rows``, ``inputs``)."""
+    return _view_at(types.float64, 8, address, length)
+
+
+def _flags_at(typingctx: Any, address: Any, length: Any) -> Any:
+    """``row_at`` for booleans (one byte each): a run's fresh-sample flags of a step."""
+    return _view_at(types.boolean, 1, address, length)
+
+
 row_at: Any = intrinsic(_row_at)
+flags_at: Any = intrinsic(_flags_at)
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -204,7 +218,7 @@ def plants_into(
     pos: np.ndarray,
     x: np.ndarray,
     n_rps: np.ndarray,
-    env: np.ndarray,
+    env_at: np.ndarray,
     PS: Any,
     P0: plant.PlantArrays,
     dt: float,
@@ -212,7 +226,8 @@ def plants_into(
     bwork: batch_plant.BatchWork,
 ) -> int:
     """``batch_steps``' plant pass: one RK4 step of every active run's plant (``x[r]`` in
-    place, at propeller speeds ``n_rps[r]`` and its row ``env[r, pos[r]]``). The active runs
+    place, at propeller speeds ``n_rps[r]`` and its environment row ``pos[r]``, read where
+    its chunk's rows are, at address ``env_at[r]``: ``env_row``). The active runs
     on the batch's own plant (``same_plant``) go together in the structure-of-arrays step of
     ``sim.batch_plant``: each run's state, speeds and row go straight into the next column of
     a block (``load_column``, in run order, ``BLOCK`` runs a block), the block steps
@@ -228,7 +243,7 @@ def plants_into(
     w = 0
     for r in range(n_runs):
         if active[r] and same_plant[r]:
-            batch_plant.load_column(bwork, c, x[r], n_rps[r], env[r, pos[r]])
+            batch_plant.load_column(bwork, c, x[r], n_rps[r], env_row(env_at, r, pos[r]))
             bwork.runs[c] = r
             c += 1
             if c == batch_plant.BLOCK:
@@ -240,8 +255,16 @@ def plants_into(
         if active[r] and not same_plant[r]:
             # inlined: a call would pass run r's ``PlantArrays`` views one by one
             P = plant_view(PS, r)
-            plant.rk4_step_inline(x[r], x[r], n_rps[r, 0:m], env[r, pos[r]], P, dt, work)
+            env_j = env_row(env_at, r, pos[r])
+            plant.rk4_step_inline(x[r], x[r], n_rps[r, 0:m], env_j, P, dt, work)
     return w
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def env_row(env_at: np.ndarray, r: int, j: int) -> np.ndarray:
+    """Run r's environment row j (``N_ENV`` numbers) in its chunk's C-contiguous
+    (steps, N_ENV) rows at address ``env_at[r]``."""
+    return row_at(env_at[r] + j * (plant.N_ENV * 8), plant.N_ENV)
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -288,10 +311,10 @@ def batch_steps(
     cs: np.ndarray,
     target: np.ndarray,
     n_rps: np.ndarray,
-    env: np.ndarray,
-    noise: np.ndarray,
-    fresh: np.ndarray,
-    spring: np.ndarray,
+    env_at: np.ndarray,
+    noise_at: np.ndarray,
+    fresh_at: np.ndarray,
+    spring_at: np.ndarray,
     PS: Any,
     CS: Any,
     QS: Any,
@@ -314,9 +337,11 @@ def batch_steps(
     writes its log row j: the step's whole row (``N_LOG`` numbers) is made in ``scratch[r]``
     (zeroed first), then the columns ``keep`` (K indices into the whole row, in order) are
     copied to the K numbers at address ``log_at[r] + j K 8`` (a C-contiguous (steps, K) array
-    of the run's own). ``keep`` is every column for a whole log; a lean log (a campaign's
-    runs: ``Simulation.keep_log_columns``) keeps the few its scores and legs read, and
-    writes a sixth of the bytes a step. A run whose
+    of the run's own). Its inputs at step j are rows j of its chunk's own C-contiguous arrays
+    at addresses ``env_at[r]`` (steps, N_ENV), ``noise_at[r]`` (steps, N_Y), ``fresh_at[r]``
+    (steps, N_SENSORS) booleans and ``spring_at[r]`` (steps, 3). ``keep`` is every column
+    for a whole log; a lean log (a campaign's runs: ``Simulation.keep_log_columns``) keeps
+    the few its scores and legs read, and writes a sixth of the bytes a step. A run whose
     plant state stops being finite at step j ends its chunk there: ``ok[r] = j``,
     ``pos[r] = length[r]``; its rows from j on are left unwritten. Returns the steps taken.
 
@@ -329,12 +354,13 @@ def batch_steps(
     ``control.batch_ekf``'s blocks through ``ebwork``, after the pass). Per run these are
     ``loop._closed_steps``' calls in its order (sensors, control, allocation, thrusters, the
     RK4 step, ``observe_into``), with the same numbers. Before its step, run r's control
-    model's wire spring is set to ``spring[r, j]`` (``control.jobs.ChunkJob.spring``: a chunk
-    past whole seconds refreshes it there)."""
+    model's wire spring is set to its chunk's spring row j (``control.jobs.ChunkJob.spring``:
+    a chunk past whole seconds refreshes it there)."""
     n_runs = pos.shape[0]
     m = CS.f_lo.shape[1]
     n_keep = keep.shape[0]
     row_bytes = n_keep * 8
+    n_y, n_sensors = sensors.N_Y, sensors.N_SENSORS
     tau6 = W.vec[loop.W_TAU6, 0:6]
     f = W.vec[loop.W_F, 0:m]
     h = steps_to_first_end(pos, length)
@@ -344,7 +370,7 @@ def batch_steps(
             if not active[r]:
                 continue
             j = pos[r]
-            set_spring(CS, r, spring[r, j])
+            set_spring(CS, r, row_at(spring_at[r] + j * 24, 3))
             C = control_view(CS, r)
             Q = quality_view(QS, r)
             t = (k0[r] + j) * dt
@@ -352,13 +378,15 @@ def batch_steps(
             for i in range(N_LOG):
                 row[i] = 0.0
             xr, hr = x[r], held_y[r]
-            sensors.sample_into(hr, xr, hr, noise[r, j], fresh[r, j], sensors.Y_SENSOR)
+            noise_j = row_at(noise_at[r] + j * (n_y * 8), n_y)
+            fresh_j = flags_at(fresh_at[r] + j * n_sensors, n_sensors)
+            sensors.sample_into(hr, xr, hr, noise_j, fresh_j, sensors.Y_SENSOR)
             loop.control_step_into(
-                tau6, t, xr, hr, fresh[r, j], xhat[r], Pc[r], cs[r], target[r], C, Q, dt, row, W
+                tau6, t, xr, hr, fresh_j, xhat[r], Pc[r], cs[r], target[r], C, Q, dt, row, W
             )
             loop.allocate_into(f, tau6, C, W)
             loop.thrusters_into(n_rps[r, 0:m], f, C, row, W)
-        plants_into(active, same_plant, pos, x, n_rps, env, PS, P0, dt, work, bwork)
+        plants_into(active, same_plant, pos, x, n_rps, env_at, PS, P0, dt, work, bwork)
         c = 0
         for r in range(n_runs):
             if not active[r]:
@@ -366,10 +394,11 @@ def batch_steps(
             j = pos[r]
             t = (k0[r] + j) * dt
             C = control_view(CS, r)
+            env_j = env_row(env_at, r, j)
             if C.feedback_ekf:
                 # the observer's prediction (``loop.observe_into``'s first part): the runs
                 # on the batch's control model together (``predict_block``), others alone
-                tau_tree = loop.observer_input_into(env[r, j], C, scratch[r], W)
+                tau_tree = loop.observer_input_into(env_j, C, scratch[r], W)
                 if same_model[r]:
                     batch_ekf.load_run(ebwork, c, xhat[r], Pc[r], tau_tree, C.k_h, C.p_eq)
                     ebwork.runs[c] = r
@@ -378,9 +407,9 @@ def batch_steps(
                         predict_block(xhat, Pc, c, C0, dt, ebwork)
                         c = 0
                 else:
-                    loop.predict_from_row_into(env[r, j], xhat[r], Pc[r], C, dt, scratch[r], W)
+                    loop.predict_from_row_into(env_j, xhat[r], Pc[r], C, dt, scratch[r], W)
             loop.write_plant_row(
-                scratch[r], t + dt, x[r], held_y[r], env[r, j], plant_view(PS, r), work
+                scratch[r], t + dt, x[r], held_y[r], env_j, plant_view(PS, r), work
             )
             whole = scratch[r]
             kept = row_at(log_at[r] + j * row_bytes, n_keep)

@@ -206,7 +206,7 @@ def test_runs_on_another_plant_step_by_themselves_in_the_batch_and_stay_as_alone
     assert not np.array_equal(alone[0].data, alone[1].data)
     sims = runs()
     jobs = [next(sim.step_jobs(10)) for sim in sims]
-    slots = _Slots(jobs[0], 3, 100)
+    slots = _Slots(jobs[0], 3)
     assert all(slots.put(r, job) for r, job in enumerate(jobs))
     assert slots.same_plant.tolist() == [True, False, True]
 
@@ -241,12 +241,12 @@ def test_the_plant_pass_narrows_as_runs_end_and_each_run_stays_as_alone():
 
     sims = runs()
     jobs = [next(sim.step_jobs(10)) for sim in sims]
-    slots = _Slots(jobs[0], 10, 100)
+    slots = _Slots(jobs[0], 10)
     assert all(slots.put(r, job) for r, job in enumerate(jobs))
 
     def plant_pass(active: np.ndarray) -> int:
         return plants_into(
-            active, slots.same_plant, slots.pos, slots.x, slots.n_rps, slots.env, slots.PS,
+            active, slots.same_plant, slots.pos, slots.x, slots.n_rps, slots.env_at, slots.PS,
             slots.P0, slots.dt_s, slots.work, slots.bwork,
         )  # fmt: skip
 
@@ -365,8 +365,53 @@ def test_observers_on_another_control_model_predict_by_themselves_and_stay_as_al
     _each_as_alone(runs, 300)
     sims = runs()
     jobs = [next(sim.step_jobs(10)) for sim in sims]
-    slots = _Slots(jobs[0], 4, 100)
+    slots = _Slots(jobs[0], 4)
     assert all(slots.put(r, job) for r, job in enumerate(jobs))
     assert slots.same_model.tolist() == [True, False, True, True]
     assert slots.same_plant.tolist() == [True, True, True, True]
     assert [bool(sim.C.feedback_ekf) for sim in sims] == [True, True, True, False]
+
+
+def test_the_kernel_reads_each_runs_inputs_where_its_job_made_them():
+    """The batch reads a run's chunk inputs (environment rows, noise, fresh flags, spring) at
+    their addresses, not from copies in its slots: inputs laid out otherwise (Fortran order,
+    a strided view) are read from a contiguous copy and give the rows alone; inputs of a
+    width the kernel does not read leave the run out of the batch (it runs alone)."""
+    import dataclasses
+
+    from control.batch import _Slots
+
+    base = params.load("full-scale")
+    ekf = ControlSettings(feedback="ekf", feedforward=True)
+
+    def runs() -> list[Simulation]:
+        sims = [Simulation(base, tree_depth_m=100.0, seed=i, settings=ekf) for i in range(3)]
+        for i, sim in enumerate(sims):
+            sim.set_target(1.0 + i, -0.5, math.radians(3.0 * i))
+            sim.winch_to(sim.wire_length_m + 0.5, 0.1)  # a spring that changes inside chunks
+        return sims
+
+    def laid_out_otherwise(gen):
+        job = next(gen)
+        while True:
+            job.env = np.asfortranarray(job.env)
+            job.noise = np.repeat(job.noise, 2, axis=0)[::2]  # a strided view
+            try:
+                job = gen.send((yield job))
+            except StopIteration as stop:
+                return stop.value
+
+    alone = [sim.step(250).data for sim in runs()]
+    together = run_together([laid_out_otherwise(sim.step_jobs(250)) for sim in runs()])
+    for a, o in zip(alone, together, strict=True):
+        assert o.error is None
+        assert np.array_equal(o.value.data, a)
+    assert len({a.tobytes() for a in alone}) == 3
+
+    jobs = [next(sim.step_jobs(10)) for sim in runs()]
+    slots = _Slots(jobs[0], 3)
+    wide = dataclasses.replace(jobs[1], env=np.zeros((10, jobs[1].env.shape[1] + 1)))
+    assert not slots.put(1, wide)
+    assert slots.length[1] == 0 and slots.inputs[1] is None  # nothing started
+    assert slots.put(0, jobs[0])
+    assert slots.inputs[0] is not None and slots.inputs[0][0] is jobs[0].env  # not copied
