@@ -85,6 +85,35 @@ def rate_and_figures(runs: int) -> tuple[float, list[Any]]:
     return sim_s / wall, [(r.rms_north_m, r.rms_east_m, r.final_eta_n) for r in results]
 
 
+def compare_ways(name: str, owner: Any, attr: str, before: Any, runs: int, rounds: int) -> None:
+    """A speed pass's change against the code before it, in one process: ``rounds`` rounds of
+    one batch of ``runs`` docking runs each way (their order alternating), "before" with
+    ``owner.attr`` set to ``before`` for the batch, "after" as the code is. Prints every
+    rate, the medians and the median of the rounds' ratios; exits if any run's figures
+    differ between the two ways."""
+    after = getattr(owner, attr)
+    rates: dict[str, list[float]] = {"before": [], "after": []}
+    figures: dict[str, list[Any]] = {}
+    for rnd in range(rounds):
+        for way in ("before", "after") if rnd % 2 == 0 else ("after", "before"):
+            setattr(owner, attr, before if way == "before" else after)
+            try:
+                rate, figures[way] = rate_and_figures(runs)
+            finally:
+                setattr(owner, attr, after)
+            rates[way].append(rate)
+        if figures["before"] != figures["after"]:
+            raise SystemExit(f"{name}: the runs' figures differ between the two ways")
+    b, a = rates["before"], rates["after"]
+    print(f"{name}: one batch of {runs} docking runs on one core, {rounds} rounds")
+    print(f"  before {', '.join(f'{v:,.0f}' for v in b)}x: median {statistics.median(b):,.0f}")
+    print(f"  after  {', '.join(f'{v:,.0f}' for v in a)}x: median {statistics.median(a):,.0f}")
+    ratios = [y / x for x, y in zip(b, a, strict=True)]
+    print(f"  after / before, round by round: median {statistics.median(ratios):.3f}")
+    print("  every run's figures the same both ways")
+    sys.stdout.flush()
+
+
 def _warm(runs: int) -> None:
     alone(runs, [0])
     together(runs, [0, 1])

@@ -20,7 +20,6 @@ median of the rounds' ratios.
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -72,28 +71,7 @@ def main() -> None:
     bb._warm(args.runs)
     for name in args.only or sorted(CHANGES):
         owner, attr, before = CHANGES[name]
-        after = getattr(owner, attr)
-        rates: dict[str, list[float]] = {"before": [], "after": []}
-        figures: dict[str, list[Any]] = {}
-        for rnd in range(args.rounds):
-            order = ("before", "after") if rnd % 2 == 0 else ("after", "before")
-            for way in order:
-                setattr(owner, attr, before if way == "before" else after)
-                try:
-                    rate, figures[way] = bb.rate_and_figures(args.runs)
-                finally:
-                    setattr(owner, attr, after)
-                rates[way].append(rate)
-            if figures["before"] != figures["after"]:
-                raise SystemExit(f"{name}: the runs' figures differ between the two ways")
-        b, a = rates["before"], rates["after"]
-        print(f"{name}: one batch of {args.runs} docking runs on one core, {args.rounds} rounds")
-        print(f"  before {', '.join(f'{v:,.0f}' for v in b)}x: median {statistics.median(b):,.0f}")
-        print(f"  after  {', '.join(f'{v:,.0f}' for v in a)}x: median {statistics.median(a):,.0f}")
-        ratios = [y / x for x, y in zip(b, a, strict=True)]
-        print(f"  after / before, round by round: median {statistics.median(ratios):.3f}")
-        print("  every run's figures the same both ways")
-        sys.stdout.flush()
+        bb.compare_ways(name, owner, attr, before, args.runs, args.rounds)
 
 
 if __name__ == "__main__":

@@ -16,10 +16,8 @@ rounds' ratios.
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 from pathlib import Path
-from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -43,26 +41,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     args = parser.parse_args()
     bb._warm(args.runs)
-    rates: dict[str, list[float]] = {"before": [], "after": []}
-    figures: dict[str, list[Any]] = {}
-    for rnd in range(args.rounds):
-        order = ("before", "after") if rnd % 2 == 0 else ("after", "before")
-        for way in order:
-            batch._Slots.put = _put_run_by_run if way == "before" else _put  # type: ignore[method-assign]
-            try:
-                rate, figures[way] = bb.rate_and_figures(args.runs)
-            finally:
-                batch._Slots.put = _put  # type: ignore[method-assign]
-            rates[way].append(rate)
-        if figures["before"] != figures["after"]:
-            raise SystemExit("the runs' figures differ between the two ways")
-    b, a = rates["before"], rates["after"]
-    print(f"ekf-blocks: one batch of {args.runs} docking runs on one core, {args.rounds} rounds")
-    print(f"  before {', '.join(f'{v:,.0f}' for v in b)}x: median {statistics.median(b):,.0f}")
-    print(f"  after  {', '.join(f'{v:,.0f}' for v in a)}x: median {statistics.median(a):,.0f}")
-    ratios = [y / x for x, y in zip(b, a, strict=True)]
-    print(f"  after / before, round by round: median {statistics.median(ratios):.3f}")
-    print("  every run's figures the same both ways")
+    bb.compare_ways("ekf-blocks", batch._Slots, "put", _put_run_by_run, args.runs, args.rounds)
 
 
 if __name__ == "__main__":

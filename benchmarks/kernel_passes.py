@@ -39,11 +39,12 @@ from numba.extending import intrinsic
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks import batch_benchmark as bb
-from control import batch, batch_ekf, loop
+from control import batch, loop
 from control.batchkernel import (
     control_view,
     env_row,
     flags_at,
+    observe_run,
     plant_view,
     plants_into,
     predict_block,
@@ -168,17 +169,9 @@ def timed_steps(
             env_k = env_row(env_at, r, j)
             # the observer's prediction as batch_steps makes it (its block after the loop),
             # timed apart from the row's plant columns
-            if C.feedback_ekf:
-                tau_tree = loop.observer_input_into(env_k, C, log_row, W)
-                if same_model[r]:
-                    batch_ekf.load_run(ebwork, n_cols, xhat[r], Pc[r], tau_tree, C.k_h, C.p_eq)
-                    ebwork.runs[n_cols] = r
-                    n_cols += 1
-                    if n_cols == batch_ekf.BLOCK:
-                        predict_block(xhat, Pc, n_cols, C0, dt, ebwork)
-                        n_cols = 0
-                else:
-                    loop.predict_from_row_into(env_k, xhat[r], Pc[r], C, dt, log_row, W)
+            n_cols = observe_run(
+                r, env_k, C, same_model[r], xhat, Pc, log_row, n_cols, C0, dt, ebwork, W
+            )
             c1 = cycles()
             t_next = (k0[r] + j) * dt + dt
             loop.write_plant_row(log_row, t_next, x[r], held_y[r], env_k, plant_view(PS, r), work)

@@ -154,11 +154,40 @@ class _Slots:
                 changed.append(i)
         return changed
 
+    @staticmethod
+    def _inputs(job: ChunkJob) -> tuple[np.ndarray, ...] | None:
+        """The job's environment rows, noise, fresh flags and spring rows as the kernel reads
+        them (C-contiguous: the job's own arrays as a rule, a copy of one laid out
+        otherwise; a job without spring rows holds ``C``'s throughout), or None when one of
+        them is not as wide as the kernel reads."""
+        n = job.n
+        env = np.ascontiguousarray(job.env, dtype=np.float64)
+        noise = np.ascontiguousarray(job.noise, dtype=np.float64)
+        fresh = np.ascontiguousarray(job.fresh, dtype=np.bool_)
+        if job.spring is not None:
+            spring = np.ascontiguousarray(job.spring, dtype=np.float64)
+        else:
+            spring = np.empty((n, 3))
+            spring[:, 0] = job.sim.C.k_h
+            spring[:, 1:3] = job.sim.C.p_eq
+        if (
+            env.shape != (n, plant.N_ENV)
+            or noise.shape != (n, sensors.N_Y)
+            or fresh.shape != (n, sensors.N_SENSORS)
+            or spring.shape != (n, 3)
+        ):
+            return None
+        return env, noise, fresh, spring
+
     def put(self, r: int, job: ChunkJob) -> bool:
         """Start run r's chunk (its state, configuration and inputs into slot r) and say so;
         False, and nothing started, when the run's arrays do not fit the batch."""
         s = job.sim
         n = job.n
+        inputs = self._inputs(job)
+        if inputs is None:
+            return False  # inputs of another width than the kernel reads (it runs alone)
+        env, noise, fresh, spring = inputs
         p_new = self._changed(self.PS, self.seen_P[r], s.arrays)
         c_new = self._changed(self.CS, self.seen_C[r], s.C)
         if p_new is None or c_new is None:
@@ -192,23 +221,7 @@ class _Slots:
         self.Pc[r] = s.P_cov
         self.cs[r] = s.cs
         self.target[r] = s.target
-        env = np.ascontiguousarray(job.env, dtype=np.float64)  # (the job's own, as a rule)
-        noise = np.ascontiguousarray(job.noise, dtype=np.float64)
-        fresh = np.ascontiguousarray(job.fresh, dtype=np.bool_)
-        if job.spring is not None:
-            spring = np.ascontiguousarray(job.spring, dtype=np.float64)
-        else:
-            spring = np.empty((n, 3))
-            spring[:, 0] = s.C.k_h
-            spring[:, 1:3] = s.C.p_eq
-        if (
-            env.shape != (n, plant.N_ENV)
-            or noise.shape != (n, sensors.N_Y)
-            or fresh.shape != (n, sensors.N_SENSORS)
-            or spring.shape != (n, 3)
-        ):
-            return False  # inputs of another width than the kernel reads (it runs alone)
-        self.inputs[r] = (env, noise, fresh, spring)
+        self.inputs[r] = inputs
         self.env_at[r] = env.ctypes.data
         self.noise_at[r] = noise.ctypes.data
         self.fresh_at[r] = fresh.ctypes.data

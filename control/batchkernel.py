@@ -261,6 +261,41 @@ def plants_into(
 
 
 @njit(inline="always", **JIT_NOALLOC)
+def observe_run(
+    r: int,
+    env_j: np.ndarray,
+    C: ControlArrays,
+    on_model: bool,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    log_row: np.ndarray,
+    c: int,
+    C0: ControlArrays,
+    dt: float,
+    ebwork: batch_ekf.EkfBlock,
+    W: ControlWork,
+) -> int:
+    """Run r's observer prediction over the step just taken (``loop.observe_into``'s first
+    part), from its step's log row: on the batch's control model (``on_model``) the run goes
+    into column ``c`` of the block (predicted, ``predict_block``, when the block is full),
+    on another by itself at once; without an observer nothing. Returns the block's columns
+    loaded now."""
+    if not C.feedback_ekf:
+        return c
+    tau_tree = loop.observer_input_into(env_j, C, log_row, W)
+    if not on_model:
+        loop.predict_with_input_into(tau_tree, xhat[r], Pc[r], C, dt, W)
+        return c
+    batch_ekf.load_run(ebwork, c, xhat[r], Pc[r], tau_tree, C.k_h, C.p_eq)
+    ebwork.runs[c] = r
+    c += 1
+    if c == batch_ekf.BLOCK:
+        predict_block(xhat, Pc, c, C0, dt, ebwork)
+        c = 0
+    return c
+
+
+@njit(inline="always", **JIT_NOALLOC)
 def env_row(env_at: np.ndarray, r: int, j: int) -> np.ndarray:
     """Run r's environment row j (``N_ENV`` numbers) in its chunk's C-contiguous
     (steps, N_ENV) rows at address ``env_at[r]``."""
@@ -395,19 +430,7 @@ def batch_steps(
             t = (k0[r] + j) * dt
             C = control_view(CS, r)
             env_j = env_row(env_at, r, j)
-            if C.feedback_ekf:
-                # the observer's prediction (``loop.observe_into``'s first part): the runs
-                # on the batch's control model together (``predict_block``), others alone
-                tau_tree = loop.observer_input_into(env_j, C, scratch[r], W)
-                if same_model[r]:
-                    batch_ekf.load_run(ebwork, c, xhat[r], Pc[r], tau_tree, C.k_h, C.p_eq)
-                    ebwork.runs[c] = r
-                    c += 1
-                    if c == batch_ekf.BLOCK:
-                        predict_block(xhat, Pc, c, C0, dt, ebwork)
-                        c = 0
-                else:
-                    loop.predict_from_row_into(env_j, xhat[r], Pc[r], C, dt, scratch[r], W)
+            c = observe_run(r, env_j, C, same_model[r], xhat, Pc, scratch[r], c, C0, dt, ebwork, W)
             loop.write_plant_row(
                 scratch[r], t + dt, x[r], held_y[r], env_j, plant_view(PS, r), work
             )

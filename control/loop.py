@@ -726,24 +726,37 @@ def predict_from_row_into(
     """The observer's prediction over the step just taken (``xhat``, ``Pc`` in place), from
     the achieved wrench and the mode in the step's log row (``observe_into``'s first part)."""
     if C.feedback_ekf:
-        tau_tree = observer_input_into(env_k, C, log_row, W)
-        ekf.predict_into(
-            xhat,
-            Pc,
-            tau_tree,
-            dt,
-            C.M_inv,
-            C.M,
-            C.D_l,
-            C.D_nl,
-            C.k_h,
-            C.p_eq,
-            C.T_b,
-            C.GQG,
-            W.vec[W_F0, 0:9],
-            W.mat[MW_PHI],
-            W.mat[MW_TMP],
-        )
+        predict_with_input_into(observer_input_into(env_k, C, log_row, W), xhat, Pc, C, dt, W)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def predict_with_input_into(
+    tau_tree: np.ndarray,
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    C: ControlArrays,
+    dt: float,
+    W: ControlWork,
+) -> None:
+    """The observer's prediction (``xhat``, ``Pc`` in place) on C's control model, with the
+    input ``tau_tree`` (``observer_input_into``'s)."""
+    ekf.predict_into(
+        xhat,
+        Pc,
+        tau_tree,
+        dt,
+        C.M_inv,
+        C.M,
+        C.D_l,
+        C.D_nl,
+        C.k_h,
+        C.p_eq,
+        C.T_b,
+        C.GQG,
+        W.vec[W_F0, 0:9],
+        W.mat[MW_PHI],
+        W.mat[MW_TMP],
+    )
 
 
 @njit(inline="always", **JIT_NOALLOC)

@@ -413,5 +413,6 @@ def test_the_kernel_reads_each_runs_inputs_where_its_job_made_them():
     wide = dataclasses.replace(jobs[1], env=np.zeros((10, jobs[1].env.shape[1] + 1)))
     assert not slots.put(1, wide)
     assert slots.length[1] == 0 and slots.inputs[1] is None  # nothing started
+    assert slots.seen_P[1] is None and slots.seen_C[1] is None  # nothing of it taken
     assert slots.put(0, jobs[0])
     assert slots.inputs[0] is not None and slots.inputs[0][0] is jobs[0].env  # not copied
