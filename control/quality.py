@@ -65,6 +65,24 @@ def quality_config(noise_std: NDArray[np.float64], dt: float) -> QualityConfig:
 
 
 @njit(inline="always", **JIT)
+def variance(h: np.ndarray) -> float:
+    """``h.var()`` of a 1-D array, numba's operations in numba's order (the mean a sum from
+    0.0 in index order over the length, then the squared deviations' sum the same way over
+    the length), in plain loops: the same bits at half the cost of the method's iterator
+    (the gyro's check of every step, 112 -> 62 ns; docs/speed.md, twenty-sixth pass)."""
+    n = h.shape[0]
+    c = 0.0
+    for j in range(n):
+        c += h[j]
+    m = c / n
+    ssd = 0.0
+    for j in range(n):
+        v = h[j] - m
+        ssd += v * v
+    return ssd / n
+
+
+@njit(inline="always", **JIT)
 def check_sample(
     k: int,
     y: np.ndarray,
@@ -119,7 +137,7 @@ def check_sample(
         for j in range(WINDOW - 1):
             h[j] = h[j + 1]
         h[WINDOW - 1] = d if seen else 0.0
-        if h.var() > var_limit[i]:
+        if variance(h) > var_limit[i]:
             flagged = True
         last[i] = y[i]
     if flagged:

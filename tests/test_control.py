@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from numba import njit
 
 from control import loop, model, quality
 from control.config import ControlSettings, Gains
@@ -210,6 +211,33 @@ def test_signal_checks_count_each_failure():
         yv[0] += rng.normal(0, 1.5)
         check(0, yv, 20.0 + 2 * i)
     assert counters[0, quality.VARIANCE] >= 1
+
+
+@njit
+def _numba_var(h):
+    return h.var()
+
+
+def test_the_checks_variance_is_numbas_method_bit_for_bit():
+    # quality.variance replaces ``h.var()`` in the compiled checks: the same bits on
+    # histories of differences (tiny, huge, mixed signs, zeros of both signs, exact ties),
+    # and the same non-numbers
+    rng = np.random.default_rng(3)
+    cases = [rng.normal(size=quality.WINDOW) * 10.0 ** rng.integers(-12, 6) for _ in range(2000)]
+    cases += [rng.integers(-3, 4, quality.WINDOW).astype(float) * 0.1 for _ in range(200)]
+    cases += [
+        np.zeros(quality.WINDOW),
+        np.full(quality.WINDOW, -0.0),
+        np.r_[np.full(quality.WINDOW - 1, 1e300), -1e300],
+        np.r_[np.zeros(quality.WINDOW - 1), np.inf],
+        np.r_[np.zeros(quality.WINDOW - 1), np.nan],
+    ]
+    for h in cases:
+        want, got = _numba_var(h), quality.variance(h)
+        assert np.float64(want).tobytes() == np.float64(got).tobytes() or (
+            math.isnan(want) and math.isnan(got)
+        ), h
+    assert quality.variance(np.arange(4.0)) == 1.25  # (2.25 + 0.25 + 0.25 + 2.25) / 4
 
 
 def test_startup_check_accepts_the_right_r_and_flags_the_flipped_one():
