@@ -98,11 +98,14 @@ def _third_order_axis(
     max_speed: float,
     max_accel: float,
     dt: float,
+    decay_m1: float,
 ) -> tuple[float, float, float]:
     """``reference.third_order_kernel`` for one axis, on scalars: the same operations in the
     same order (numpy's minimum, maximum, copysign and expm1 on scalars are the kernels its
     array form applies element by element), so the same bits, without its ~30 temporary
-    3-vectors. Returns (delta_pos, vel+, acc+)."""
+    3-vectors. ``decay_m1`` is the acceleration's decay over the step less one,
+    ``np.expm1(k_acc * -dt)`` (``third_order_step_into`` works it out once for axes of one
+    k_acc). Returns (delta_pos, vel+, acc+)."""
     abs_error = np.abs(e)
     pull = np.minimum(
         k_pos * abs_error, np.sqrt((2.0 * reference.BRAKING_FRACTION) * max_accel * abs_error)
@@ -114,7 +117,6 @@ def _third_order_axis(
         np.maximum(accel_cmd, (-max_speed - settled_speed) / dt), (max_speed - settled_speed) / dt
     )
     accel_cmd = np.minimum(np.maximum(accel_cmd, -max_accel), max_accel)
-    decay_m1 = np.expm1(k_acc * -dt)
     decay = decay_m1 + 1.0
     phi = -decay_m1 / k_acc
     acc_gap = a - accel_cmd
@@ -139,8 +141,17 @@ def third_order_step(
 def third_order_step_into(
     out: np.ndarray, state: np.ndarray, target: np.ndarray, dt: float, params: np.ndarray
 ) -> None:
-    """``third_order_step`` into ``out`` (9,), which may be ``state`` itself."""
+    """``third_order_step`` into ``out`` (9,), which may be ``state`` itself. An axis whose
+    k_acc is the one before's (the parameter sets give the three axes one bandwidth and one
+    damping) takes that axis's decay, the same number, not a second libm ``expm1`` (some
+    15 ns each, a fifth of the control law's step; docs/speed.md, twenty-sixth pass)."""
+    k_prev = np.nan
+    decay_m1 = np.nan
     for i in range(3):
+        k_acc = params[2, i]
+        if not k_acc == k_prev or k_acc == 0.0:  # (NaN never equal; +-0 not the same)
+            decay_m1 = np.expm1(k_acc * -dt)
+            k_prev = k_acc
         delta, vel, acc = _third_order_axis(
             target[i] - state[i],
             state[3 + i],
@@ -152,6 +163,7 @@ def third_order_step_into(
             params[3, i],
             params[4, i],
             dt,
+            decay_m1,
         )
         out[i] = state[i] + delta
         out[3 + i] = vel

@@ -520,12 +520,14 @@ def test_compiled_kernels_do_the_numpy_arithmetic() -> None:
             np.testing.assert_allclose(a, b, rtol=1e-14, atol=1e-15)
 
 
-def test_the_loops_third_order_step_is_the_array_kernel_to_the_bit() -> None:
+@pytest.mark.parametrize("frequencies", [0.5, [0.5, 0.7, 0.5], [0.4, 0.4, 0.9]])
+def test_the_loops_third_order_step_is_the_array_kernel_to_the_bit(frequencies) -> None:
     """refkernel.third_order_step runs the kernel per axis on scalars (no temporary arrays):
     the same operations in the same order as the compiled array form, so the same bits, over
-    states inside and outside the speed and acceleration limits."""
+    states inside and outside the speed and acceleration limits; with one k_acc for the
+    three axes (one decay for all) and with axes of their own."""
     rng = np.random.default_rng(11)
-    params = ThirdOrderParams(**GOOD_THIRD)
+    params = ThirdOrderParams(**{**GOOD_THIRD, "natural_frequency_rad_s": frequencies})
     packed = refkernel.pack_third_order(params)
     for _ in range(500):
         state = rng.normal(0.0, 1.0, 9) * np.repeat([3.0, 0.3, 0.05], 3)
