@@ -42,14 +42,17 @@ from benchmarks import batch_benchmark as bb
 from control import batch, loop
 from control.batchkernel import (
     control_view,
+    end_column,
     env_row,
     flags_at,
     observe_run,
     plant_view,
     plants_into,
     predict_block,
+    prefetch_step,
     quality_view,
     row_at,
+    sense_ahead,
     set_spring,
     steps_to_first_end,
 )
@@ -71,25 +74,27 @@ def _cycles(typingctx: Any) -> Any:
 cycles: Any = intrinsic(_cycles)
 
 PASSES = (
-    "log row zeroed",
-    "sensors",
-    "control step (checks, EKF corrections, reference, controller)",
+    "log row zeroed (runs not sensed ahead)",
+    "sensors (runs not sensed ahead)",
+    "control step (the control law; checks and corrections of runs not sensed ahead)",
     "allocation",
     "thrusters",
     "plant pass (all runs, structure of arrays)",
-    "EKF prediction (blocks of runs: control.batch_ekf)",
+    "EKF prediction and corrections (blocks of runs: control.batch_ekf)",
     "log row's plant columns, and the kept columns written out",
+    "next step's row zeroed, sensors and signal checks (sense_ahead)",
 )
-# acc[k] for k < 8: cycles per pass; then these counters
-RUN_STEPS, FAR_STEPS, FAR_CYCLES, NEAR_STEPS, NEAR_CYCLES, NEAR_RUNS, ACTIVE, AGAIN = range(8, 16)
-N_ACC = 16
+SENSE = 8
+# acc[k] for k < 9: cycles per pass; then these counters
+RUN_STEPS, FAR_STEPS, FAR_CYCLES, NEAR_STEPS, NEAR_CYCLES, NEAR_RUNS, ACTIVE, AGAIN = range(9, 17)
+N_ACC = 17
 
 
 @njit(error_model="numpy", _nrt=False, cache=True)
 def timed_steps(
     pos, length, ok, active, k0, x, held_y, xhat, Pc, cs, target, n_rps, env_at, noise_at,
     fresh_at, spring_at, PS, CS, QS, dt, log_at, work, W, same_plant, P0, bwork, scratch, keep,
-    same_model, C0, ebwork, acc, again,
+    same_model, C0, ebwork, sensed, acc, again,
 ):  # fmt: skip
     """``batch_steps`` with the cycles of each pass added into ``acc`` (see ``PASSES``); with
     ``again``, the structure-of-arrays plant step of the pass's last block run once more on
@@ -110,22 +115,28 @@ def timed_steps(
             acc[RUN_STEPS] += 1
             c0 = cycles()
             j = pos[r]
+            prefetch_step(r, j, length, env_at, noise_at, fresh_at, spring_at, log_at, n_keep * 8)
             set_spring(CS, r, row_at(spring_at[r] + j * 24, 3))
             C = control_view(CS, r)
             Q = quality_view(QS, r)
             t = (k0[r] + j) * dt
             row = scratch[r]
-            for i in range(N_LOG):
-                row[i] = 0.0
             xr, hr = x[r], held_y[r]
-            c1 = cycles()
-            noise_j = row_at(noise_at[r] + j * (sensors.N_Y * 8), sensors.N_Y)
-            fresh_j = flags_at(fresh_at[r] + j * sensors.N_SENSORS, sensors.N_SENSORS)
-            sensors.sample_into(hr, xr, hr, noise_j, fresh_j, sensors.Y_SENSOR)
-            c2 = cycles()
-            loop.control_step_into(
-                tau6, t, xr, hr, fresh_j, xhat[r], Pc[r], cs[r], target[r], C, Q, dt, row, W
-            )
+            if sensed[r]:
+                sensed[r] = False
+                c1 = c2 = cycles()
+                loop.control_law_into(tau6, xr, hr, xhat[r], cs[r], target[r], C, dt, row, W)
+            else:
+                for i in range(N_LOG):
+                    row[i] = 0.0
+                c1 = cycles()
+                noise_j = row_at(noise_at[r] + j * (sensors.N_Y * 8), sensors.N_Y)
+                fresh_j = flags_at(fresh_at[r] + j * sensors.N_SENSORS, sensors.N_SENSORS)
+                sensors.sample_into(hr, xr, hr, noise_j, fresh_j, sensors.Y_SENSOR)
+                c2 = cycles()
+                loop.control_step_into(
+                    tau6, t, xr, hr, fresh_j, xhat[r], Pc[r], cs[r], target[r], C, Q, dt, row, W
+                )
             c3 = cycles()
             loop.allocate_into(f, tau6, C, W)
             c4 = cycles()
@@ -169,24 +180,45 @@ def timed_steps(
             env_k = env_row(env_at, r, j)
             # the observer's prediction as batch_steps makes it (its block after the loop),
             # timed apart from the row's plant columns
-            n_cols = observe_run(
-                r, env_k, C, same_model[r], xhat, Pc, log_row, n_cols, C0, dt, ebwork, W
+            in_block = observe_run(
+                r, env_k, C, same_model[r], xhat, Pc, log_row, n_cols, dt, ebwork, W
             )
             c1 = cycles()
             t_next = (k0[r] + j) * dt + dt
             loop.write_plant_row(log_row, t_next, x[r], held_y[r], env_k, plant_view(PS, r), work)
-            pos[r] = j + 1
-            if not plant.all_finite(x[r]):
-                ok[r] = j
-                pos[r] = length[r]
             kept = row_at(log_at[r] + j * n_keep * 8, n_keep)
             for i in range(n_keep):
                 kept[i] = log_row[keep[i]]
-            acc[6] += c1 - c0
-            acc[7] += cycles() - c1
+            pos[r] = j + 1
+            c2 = cycles()
+            if not plant.all_finite(x[r]):
+                ok[r] = j
+                pos[r] = length[r]
+            elif in_block and j + 1 < length[r]:
+                j1 = j + 1
+                sense_ahead(
+                    (k0[r] + j1) * dt,
+                    x[r],
+                    held_y[r],
+                    row_at(noise_at[r] + j1 * (sensors.N_Y * 8), sensors.N_Y),
+                    flags_at(fresh_at[r] + j1 * sensors.N_SENSORS, sensors.N_SENSORS),
+                    C,
+                    quality_view(QS, r),
+                    log_row,
+                    n_cols,
+                    ebwork,
+                    W,
+                )
+                sensed[r] = True
+            c3 = cycles()
+            if in_block:
+                n_cols = end_column(xhat, Pc, n_cols, C0, dt, ebwork, scratch)
+            acc[6] += c1 - c0 + cycles() - c3
+            acc[7] += c2 - c1
+            acc[SENSE] += c3 - c2
         if n_cols > 0:
             c0 = cycles()
-            predict_block(xhat, Pc, n_cols, C0, dt, ebwork)
+            predict_block(xhat, Pc, n_cols, C0, dt, ebwork, scratch)
             acc[6] += cycles() - c0
     return h
 
@@ -211,7 +243,7 @@ def measure(runs: int, again: bool = False) -> dict:
             s.pos, s.length, s.ok, s.active, s.k0, s.x, s.held_y, s.xhat, s.Pc, s.cs, s.target,
             s.n_rps, s.env_at, s.noise_at, s.fresh_at, s.spring_at, s.PS, s.CS, s.QS, s.dt_s,
             s.log_at, s.work, s.W, s.same_plant, s.P0, s.bwork, s.scratch, s.keep, s.same_model,
-            s.C0, s.ebwork, acc, again,
+            s.C0, s.ebwork, s.sensed, acc, again,
         )  # fmt: skip
 
     bb._warm(runs)

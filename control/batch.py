@@ -118,6 +118,10 @@ class _Slots:
         self.C0 = s.C._replace(**arrays)
         self.same_model = np.zeros(n_runs, np.bool_)
         self.ebwork = batch_ekf.make_ekf_block()
+        # the runs whose next step's sensors, signal checks and corrections the kernel has
+        # made at the end of their last step (``batchkernel.sense_ahead``): never a run at
+        # the end of its chunk, so never one whose chunk is taken back
+        self.sensed = np.zeros(n_runs, np.bool_)
 
     @staticmethod
     def key_of(job: ChunkJob) -> tuple:
@@ -236,6 +240,7 @@ class _Slots:
         self.pos[r] = 0
         self.length[r] = n
         self.ok[r] = n
+        self.sensed[r] = False
         return True
 
     def take(self, r: int, job: ChunkJob) -> ChunkResult:
@@ -297,6 +302,7 @@ class _Slots:
             self.same_model,
             self.C0,
             self.ebwork,
+            self.sensed,
         )
 
 

@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from sim.gnc import JIT, JIT_NOALLOC
+from sim.gnc import JIT, JIT_NOALLOC, ssa_scalar
 
 LANES = 8
 """The doubles in an AVX-512 register: ``pad_block`` pads a block's width to a multiple of
@@ -48,7 +48,20 @@ R_PHI = 171  # (81) Phi, row-major; only the 37 entries phi_times_into reads are
 R_TAU = 252  # (3) the input wrench in the tree's axes [N, N, N m]
 R_SPRING = 255  # (3) the control model's wire spring: k_h [N/m], p_eq north, east [m]
 R_CS = 258  # (2) the heading's cosine and sine
-N_ROWS = 260
+# the corrections with the next step's samples (``correct_block_into``)
+R_ACC = 260  # (4) 1.0 where the sample is accepted: A_COMPASS, A_POSITION, A_GYRO, A_DVL
+R_Z = 264  # (6) the measurements: Z_PSI, Z_NORTH, Z_EAST (the fix's), Z_RATE, Z_U, Z_V
+R_MOUNT = 270  # (2) the ROV's mounting vector on the tree [m] (ControlArrays.r_mount)
+R_RVAR = 272  # (4) the measurement variances, in A_* order
+R_NIS = 276  # (3) normalised innovations squared: the compass's, the fix's two
+R_K = 279  # (18) the gain's two columns
+R_PROW = 297  # (18) the measured rows of P before the update
+R_ACOL = 315  # (18) the measured columns of the Joseph form's A
+R_E = 333  # (2) the innovations
+N_ROWS = 335
+
+A_COMPASS, A_POSITION, A_GYRO, A_DVL = 0, 1, 2, 3
+Z_PSI, Z_NORTH, Z_EAST, Z_RATE, Z_U, Z_V = 0, 1, 2, 3, 4, 5
 
 
 class EkfBlock(NamedTuple):
@@ -94,6 +107,32 @@ def load_run(
     a[_at(R_SPRING, c)] = k_h
     a[_at(R_SPRING + 1, c)] = p_eq[0]
     a[_at(R_SPRING + 2, c)] = p_eq[1]
+    for i in range(4):
+        a[_at(R_ACC + i, c)] = 0.0  # no samples unless ``load_samples`` brings them
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def load_samples(
+    wb: EkfBlock,
+    c: int,
+    accepted: np.ndarray,
+    z: np.ndarray,
+    r_mount: np.ndarray,
+    r_var: np.ndarray,
+) -> None:
+    """The samples column ``c``'s run corrects with after its prediction: ``accepted`` (4,)
+    1.0 or 0.0 in ``A_*`` order, the measurements ``z`` (6,) in ``Z_*`` order (the position
+    fix's raw north and east: the tree's origin is worked out in the block, from the heading
+    after the compass's correction), the ROV's mounting vector (2,) and the variances (4,)
+    in ``A_*`` order. After ``load_run``."""
+    a = wb.a
+    for i in range(4):
+        a[_at(R_ACC + i, c)] = accepted[i]
+        a[_at(R_RVAR + i, c)] = r_var[i]
+    for i in range(6):
+        a[_at(R_Z + i, c)] = z[i]
+    a[_at(R_MOUNT, c)] = r_mount[0]
+    a[_at(R_MOUNT + 1, c)] = r_mount[1]
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -370,3 +409,167 @@ def predict_block_into(
                 v = 0.5 * ((a[_at(k_ij, r)] + q_ij) + (a[_at(k_ji, r)] + q_ji))
                 a[_at(k_ij, r)] = v
                 a[_at(k_ji, r)] = v
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def accepted_at(wb: EkfBlock, c: int, k: int) -> bool:
+    """Whether column ``c`` corrected with its sample ``k`` (``A_*``)."""
+    return wb.a[_at(R_ACC + k, c)] > 0.5
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def nis_at(wb: EkfBlock, c: int, k: int) -> float:
+    """Column ``c``'s normalised innovation squared ``k`` (0: the compass's, 1 and 2: the
+    position fix's north and east) of its last correction."""
+    return wb.a[_at(R_NIS + k, c)]
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _any_accepted(a: np.ndarray, w: int, k: int) -> bool:
+    """Whether a column of the first ``w`` corrects with sample ``k``."""
+    for r in range(w):
+        if a[_at(R_ACC + k, r)] > 0.5:
+            return True
+    return False
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _joseph_entry(a: np.ndarray, r: int, i: int, j: int, rv: int, two: bool) -> float:
+    """Entry (i, j) of column r's updated covariance before the symmetrising: A - A H^T K^T
+    + K R K^T with A = (I - K H) P, from the gain (``R_K``), the measured rows of the old P
+    (``R_PROW``), the measured columns of A (``R_ACOL``) and the variance in row ``rv``
+    (``ekf.correct_into``'s sums in its order; one measured row without the second row's
+    terms, as ``ekf._correct_one_into``)."""
+    p_ij = a[_at(R_P + 9 * i + j, r)]
+    r0 = a[_at(rv, r)]
+    k0i, k0j = a[_at(R_K + i, r)], a[_at(R_K + j, r)]
+    if two:
+        k1i, k1j = a[_at(R_K + 9 + i, r)], a[_at(R_K + 9 + j, r)]
+        a_ij = p_ij - (k0i * a[_at(R_PROW + j, r)] + k1i * a[_at(R_PROW + 9 + j, r)])
+        return (a_ij - (a[_at(R_ACOL + i, r)] * k0j + a[_at(R_ACOL + 9 + i, r)] * k1j)) + (
+            k0i * r0 * k0j + k1i * r0 * k1j
+        )
+    a_ij = p_ij - k0i * a[_at(R_PROW + j, r)]
+    kr = k0i * r0
+    return a_ij - a[_at(R_ACOL + i, r)] * k0j + kr * k0j
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _joseph_into(a: np.ndarray, w: int, k: int, two: bool) -> None:
+    """The covariance's Joseph update of the columns that accept sample ``k``: each entry
+    pair (i, j), (j, i) worked out from the old entries (``_joseph_entry``), then
+    symmetrised ((P+ + P+^T) / 2, ``ekf._symmetrise``: the diagonal as it is) and written
+    where accepted; a pair reads no entry but its own, so the update is in place."""
+    acc = R_ACC + k
+    rv = R_RVAR + k
+    for i in range(9):
+        d = R_P + 10 * i
+        for r in range(w):
+            v = _joseph_entry(a, r, i, i, rv, two)
+            a[_at(d, r)] = v if a[_at(acc, r)] > 0.5 else a[_at(d, r)]
+        for j in range(i):
+            p_ij, p_ji = R_P + 9 * i + j, R_P + 9 * j + i
+            for r in range(w):
+                v = 0.5 * (_joseph_entry(a, r, i, j, rv, two) + _joseph_entry(a, r, j, i, rv, two))
+                keep = a[_at(acc, r)] > 0.5
+                a[_at(p_ij, r)] = v if keep else a[_at(p_ij, r)]
+                a[_at(p_ji, r)] = v if keep else a[_at(p_ji, r)]
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _correct_one_block(a: np.ndarray, w: int, k: int, row0: int, z: int, angle: bool) -> None:
+    """``ekf._correct_one_into`` of the columns that accept sample ``k`` (measurement row
+    ``R_Z + z`` of state ``row0``, an angle wrapped to [-pi, pi) when ``angle``); the
+    others keep their state and covariance."""
+    acc = R_ACC + k
+    for r in range(w):  # the innovation (the wrap's remainder call keeps this loop scalar)
+        e0 = a[_at(R_Z + z, r)] - a[_at(R_X + row0, r)]
+        if angle:
+            e0 = ssa_scalar(e0)
+        a[_at(R_E, r)] = e0
+    for r in range(w):
+        e0 = a[_at(R_E, r)]
+        s00 = a[_at(R_P + 10 * row0, r)] + a[_at(R_RVAR + k, r)]
+        i00 = 1.0 / s00
+        keep = a[_at(acc, r)] > 0.5
+        p_rr = a[_at(R_P + 10 * row0, r)]
+        for i in range(9):
+            ki = a[_at(R_P + 9 * i + row0, r)] * i00
+            a[_at(R_K + i, r)] = ki
+            xi = a[_at(R_X + i, r)]
+            a[_at(R_X + i, r)] = xi + ki * e0 if keep else xi
+            a[_at(R_PROW + i, r)] = a[_at(R_P + 9 * row0 + i, r)]
+            a[_at(R_ACOL + i, r)] = a[_at(R_P + 9 * i + row0, r)] - ki * p_rr
+        if k == A_COMPASS:
+            a[_at(R_NIS, r)] = e0 * e0 / s00
+    _joseph_into(a, w, k, False)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _correct_two_block(a: np.ndarray, w: int, k: int, row0: int, row1: int, z: int) -> None:
+    """``ekf.correct_into`` with two measured rows (``row0``, ``row1``; the measurements in
+    rows ``R_Z + z``, ``R_Z + z + 1``; the same variance for both) of the columns that
+    accept sample ``k``; the others keep their state and covariance."""
+    acc = R_ACC + k
+    for r in range(w):
+        e0 = a[_at(R_Z + z, r)] - a[_at(R_X + row0, r)]
+        e1 = a[_at(R_Z + z + 1, r)] - a[_at(R_X + row1, r)]
+        rv = a[_at(R_RVAR + k, r)]
+        s00 = a[_at(R_P + 10 * row0, r)] + rv
+        s01 = a[_at(R_P + 9 * row0 + row1, r)]
+        s10 = a[_at(R_P + 9 * row1 + row0, r)]
+        s11 = a[_at(R_P + 10 * row1, r)] + rv
+        det = s00 * s11 - s01 * s10
+        i00, i01, i10, i11 = s11 / det, -s01 / det, -s10 / det, s00 / det
+        keep = a[_at(acc, r)] > 0.5
+        for i in range(9):
+            p_i0 = a[_at(R_P + 9 * i + row0, r)]
+            p_i1 = a[_at(R_P + 9 * i + row1, r)]
+            k0i = p_i0 * i00 + p_i1 * i10
+            k1i = p_i0 * i01 + p_i1 * i11
+            a[_at(R_K + i, r)] = k0i
+            a[_at(R_K + 9 + i, r)] = k1i
+            xi = a[_at(R_X + i, r)]
+            a[_at(R_X + i, r)] = xi + (k0i * e0 + k1i * e1) if keep else xi
+            a[_at(R_PROW + i, r)] = a[_at(R_P + 9 * row0 + i, r)]
+            a[_at(R_PROW + 9 + i, r)] = a[_at(R_P + 9 * row1 + i, r)]
+        for i in range(9):
+            k0i, k1i = a[_at(R_K + i, r)], a[_at(R_K + 9 + i, r)]
+            a[_at(R_ACOL + i, r)] = a[_at(R_P + 9 * i + row0, r)] - (
+                k0i * a[_at(R_PROW + row0, r)] + k1i * a[_at(R_PROW + 9 + row0, r)]
+            )
+            a[_at(R_ACOL + 9 + i, r)] = a[_at(R_P + 9 * i + row1, r)] - (
+                k0i * a[_at(R_PROW + row1, r)] + k1i * a[_at(R_PROW + 9 + row1, r)]
+            )
+        if k == A_POSITION:
+            a[_at(R_NIS + 1, r)] = e0 * e0 / s00
+            a[_at(R_NIS + 2, r)] = e1 * e1 / s11
+    _joseph_into(a, w, k, True)
+
+
+@njit(**JIT_NOALLOC)
+def correct_block_into(wb: EkfBlock, w: int) -> None:
+    """The corrections of the block's first ``w`` columns (after ``predict_block_into``)
+    with the samples ``load_samples`` gave them, in ``loop._observe_into``'s order: the
+    compass (the heading, wrapped), the position fix (the tree's origin from the fix, the
+    mounting vector and the heading just corrected: ``loop.tree_measurements_into``'s
+    sums), the gyro (the yaw rate), the DVL (the tree's velocity at its origin). A sample
+    no column accepts costs nothing; a column that does not accept one keeps its numbers
+    bit for bit through it (a select, not a product with zero)."""
+    a = wb.a
+    if _any_accepted(a, w, A_COMPASS):
+        _correct_one_block(a, w, A_COMPASS, 2, Z_PSI, True)
+    if _any_accepted(a, w, A_POSITION):
+        for r in range(w):  # libm's cosine and sine of the heading, a loop of their own
+            a[_at(R_CS, r)] = np.cos(a[_at(R_X + 2, r)])
+            a[_at(R_CS + 1, r)] = np.sin(a[_at(R_X + 2, r)])
+        for r in range(w):
+            c, s = a[_at(R_CS, r)], a[_at(R_CS + 1, r)]
+            m0, m1 = a[_at(R_MOUNT, r)], a[_at(R_MOUNT + 1, r)]
+            a[_at(R_Z + Z_NORTH, r)] = a[_at(R_Z + Z_NORTH, r)] - (c * m0 - s * m1)
+            a[_at(R_Z + Z_EAST, r)] = a[_at(R_Z + Z_EAST, r)] - (s * m0 + c * m1)
+        _correct_two_block(a, w, A_POSITION, 0, 1, Z_NORTH)
+    if _any_accepted(a, w, A_GYRO):
+        _correct_one_block(a, w, A_GYRO, 5, Z_RATE, False)
+    if _any_accepted(a, w, A_DVL):
+        _correct_two_block(a, w, A_DVL, 3, 4, Z_U)

@@ -15,6 +15,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from llvmlite import ir
 from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
@@ -70,6 +71,63 @@ def _flags_at(typingctx: Any, address: Any, length: Any) -> Any:
 
 row_at: Any = intrinsic(_row_at)
 flags_at: Any = intrinsic(_flags_at)
+
+
+def _prefetch_line(typingctx: Any, address: Any) -> Any:
+    """Ask the processor to bring the cache line at memory ``address`` into its caches
+    (``llvm.prefetch``: a hint, which never faults and changes no number)."""
+    if not isinstance(address, types.Integer):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        i32 = ir.IntType(32)
+        ptr = builder.inttoptr(args[0], ir.IntType(8).as_pointer())
+        fnty = ir.FunctionType(ir.VoidType(), [ptr.type, i32, i32, i32])
+        fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.prefetch.p0")
+        # read, keep in every level, data
+        builder.call(fn, [ptr, ir.Constant(i32, 0), ir.Constant(i32, 3), ir.Constant(i32, 1)])
+        return context.get_dummy_value()
+
+    return types.none(address), codegen
+
+
+prefetch_line: Any = intrinsic(_prefetch_line)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def prefetch_span(address: int, n_bytes: int) -> None:
+    """Prefetch the cache lines of the ``n_bytes`` bytes at ``address``."""
+    for offset in range(0, n_bytes, 64):
+        prefetch_line(address + offset)
+    prefetch_line(address + n_bytes - 1)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def prefetch_step(
+    r: int,
+    j: int,
+    length: np.ndarray,
+    env_at: np.ndarray,
+    noise_at: np.ndarray,
+    fresh_at: np.ndarray,
+    spring_at: np.ndarray,
+    log_at: np.ndarray,
+    row_bytes: int,
+) -> None:
+    """Prefetch what run r's step j reads and writes after its control: its environment row
+    j (the plant pass, the row's site columns), its log row j, and its next step's noise,
+    fresh flags and spring rows (``sense_ahead``, the next step's start). Each run's chunk
+    inputs are its own arrays, made by Python before the chunk and long out of the caches
+    by the time the kernel reaches a row, and the runs' many streams are more than the
+    processor's prefetchers follow: without this the sensors' sampling alone waited some
+    80 ns a run-step on memory (docs/speed.md, twenty-sixth pass)."""
+    prefetch_span(env_at[r] + j * (plant.N_ENV * 8), plant.N_ENV * 8)
+    prefetch_span(log_at[r] + j * row_bytes, row_bytes)
+    if j + 1 < length[r]:
+        j1 = j + 1
+        prefetch_span(noise_at[r] + j1 * (sensors.N_Y * 8), sensors.N_Y * 8)
+        prefetch_span(fresh_at[r] + j1 * sensors.N_SENSORS, sensors.N_SENSORS)
+        prefetch_span(spring_at[r] + j1 * 24, 24)
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -270,27 +328,91 @@ def observe_run(
     Pc: np.ndarray,
     log_row: np.ndarray,
     c: int,
-    C0: ControlArrays,
     dt: float,
     ebwork: batch_ekf.EkfBlock,
     W: ControlWork,
-) -> int:
+) -> bool:
     """Run r's observer prediction over the step just taken (``loop.observe_into``'s first
-    part), from its step's log row: on the batch's control model (``on_model``) the run goes
-    into column ``c`` of the block (predicted, ``predict_block``, when the block is full),
-    on another by itself at once; without an observer nothing. Returns the block's columns
-    loaded now."""
+    part), from its step's log row: on the batch's control model (``on_model``) the run is
+    loaded into column ``c`` of the block, with no samples (``sense_ahead`` may add them;
+    ``end_column`` closes the column); on another it predicts by itself at once; without an
+    observer nothing. Returns whether the run took column ``c``."""
     if not C.feedback_ekf:
-        return c
+        return False
     tau_tree = loop.observer_input_into(env_j, C, log_row, W)
     if not on_model:
         loop.predict_with_input_into(tau_tree, xhat[r], Pc[r], C, dt, W)
-        return c
+        return False
     batch_ekf.load_run(ebwork, c, xhat[r], Pc[r], tau_tree, C.k_h, C.p_eq)
     ebwork.runs[c] = r
+    return True
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def sense_ahead(
+    t: float,
+    x: np.ndarray,
+    y: np.ndarray,
+    noise_j: np.ndarray,
+    fresh_j: np.ndarray,
+    C: ControlArrays,
+    Q: QualityState,
+    row: np.ndarray,
+    c: int,
+    ebwork: batch_ekf.EkfBlock,
+    W: ControlWork,
+) -> None:
+    """The start of a run's next step (at time ``t``), made at the end of this one so its
+    observer corrects in the block right after it predicts: the row zeroed, the sensors
+    sampled into the held values ``y`` from the plant's state ``x`` (``noise_j``,
+    ``fresh_j``: the next step's), the signal checks, and the accepted samples into column
+    ``c`` (``batch_ekf.load_samples``). The kernel's next step then starts at the control
+    law (``loop.control_law_into``); per run these are ``loop._closed_steps``' operations in
+    its order."""
+    for i in range(N_LOG):
+        row[i] = 0.0
+    sensors.sample_into(y, x, y, noise_j, fresh_j, sensors.Y_SENSOR)
+    accepted = W.vec[loop.W_ACCEPT, 0:5]
+    loop.accept_samples_into(accepted, t, y, fresh_j, C, Q, row)
+    acc = W.vec[loop.W_ACC4, 0:4]
+    acc[batch_ekf.A_COMPASS] = accepted[sensors.COMPASS]
+    acc[batch_ekf.A_POSITION] = accepted[sensors.POSITION]
+    acc[batch_ekf.A_GYRO] = accepted[sensors.GYRO]
+    acc[batch_ekf.A_DVL] = accepted[sensors.DVL]
+    z = W.vec[loop.W_Z6, 0:6]
+    z[batch_ekf.Z_PSI] = loop.tree_heading(y, C)
+    z[batch_ekf.Z_NORTH] = y[0]
+    z[batch_ekf.Z_EAST] = y[1]
+    z[batch_ekf.Z_RATE] = y[10]
+    z[batch_ekf.Z_U] = z[batch_ekf.Z_V] = 0.0
+    if acc[batch_ekf.A_DVL] > 0.5:  # the DVL's velocity moved to the tree's origin
+        uv = W.vec[loop.W_UV, 0:2]
+        loop.tree_measurements_into(W.vec[loop.W_NE, 0:2], uv, y, 0.0, C)
+        z[batch_ekf.Z_U] = uv[0]
+        z[batch_ekf.Z_V] = uv[1]
+    r_var = W.vec[loop.W_RVAR4, 0:4]
+    r_var[batch_ekf.A_COMPASS] = C.r_psi
+    r_var[batch_ekf.A_POSITION] = C.r_pos
+    r_var[batch_ekf.A_GYRO] = C.r_gyro
+    r_var[batch_ekf.A_DVL] = C.r_dvl
+    batch_ekf.load_samples(ebwork, c, acc, z, C.r_mount, r_var)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def end_column(
+    xhat: np.ndarray,
+    Pc: np.ndarray,
+    c: int,
+    C0: ControlArrays,
+    dt: float,
+    ebwork: batch_ekf.EkfBlock,
+    scratch: np.ndarray,
+) -> int:
+    """Close the block's column ``c`` (loaded by ``observe_run``): a full block is predicted
+    and corrected at once (``predict_block``). Returns the block's columns loaded now."""
     c += 1
     if c == batch_ekf.BLOCK:
-        predict_block(xhat, Pc, c, C0, dt, ebwork)
+        predict_block(xhat, Pc, c, C0, dt, ebwork, scratch)
         c = 0
     return c
 
@@ -310,15 +432,27 @@ def predict_block(
     C0: ControlArrays,
     dt: float,
     ebwork: batch_ekf.EkfBlock,
+    scratch: np.ndarray,
 ) -> None:
     """The observers' predictions of the block's ``n_cols`` loaded runs (``batch_ekf``, on
-    the batch's control model ``C0``), each run's new state and covariance back into its
-    rows of ``xhat`` and ``Pc`` (``ebwork.runs``)."""
+    the batch's control model ``C0``) and their corrections with the samples of their next
+    steps (``sense_ahead``), each run's new state and covariance back into its rows of
+    ``xhat`` and ``Pc`` and the corrections' innovations into its row ``scratch[r]``
+    (``ebwork.runs``)."""
     w = batch_ekf.pad_block(ebwork, n_cols)
     batch_ekf.predict_block_into(ebwork, w, dt, C0.M, C0.M_inv, C0.D_l, C0.D_nl, C0.T_b, C0.GQG)
+    batch_ekf.correct_block_into(ebwork, w)
     for c in range(n_cols):
         r = ebwork.runs[c]
         batch_ekf.store_run(ebwork, c, xhat[r], Pc[r])
+        loop.log_nis(
+            scratch[r],
+            batch_ekf.accepted_at(ebwork, c, batch_ekf.A_COMPASS),
+            batch_ekf.nis_at(ebwork, c, 0),
+            batch_ekf.accepted_at(ebwork, c, batch_ekf.A_POSITION),
+            batch_ekf.nis_at(ebwork, c, 1),
+            batch_ekf.nis_at(ebwork, c, 2),
+        )
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -365,6 +499,7 @@ def batch_steps(
     same_model: np.ndarray,
     C0: ControlArrays,
     ebwork: batch_ekf.EkfBlock,
+    sensed: np.ndarray,
 ) -> int:
     """Advance every run with a chunk under way (``pos[r] < length[r]``) step by step, all of
     them one step before any takes the next, until the first of them reaches the end of its
@@ -386,11 +521,17 @@ def batch_steps(
     ``sim.batch_plant``, in blocks loaded straight from the runs' rows into ``bwork``); the
     observers' predictions and the rows' plant columns (the runs with an observer on the
     batch's control model ``C0``, ``same_model[r]``, predicted together in
-    ``control.batch_ekf``'s blocks through ``ebwork``, after the pass). Per run these are
-    ``loop._closed_steps``' calls in its order (sensors, control, allocation, thrusters, the
-    RK4 step, ``observe_into``), with the same numbers. Before its step, run r's control
-    model's wire spring is set to its chunk's spring row j (``control.jobs.ChunkJob.spring``:
-    a chunk past whole seconds refreshes it there)."""
+    ``control.batch_ekf``'s blocks through ``ebwork``). Such a run whose chunk goes on also
+    starts its next step there (``sense_ahead``: its row zeroed, its sensors sampled, their
+    signal checks), so its observer corrects with the accepted samples in the block right
+    after it predicts (``batch_ekf.correct_block_into``), and ``sensed[r]`` tells the next
+    step to begin at the control law (``loop.control_law_into``); a run at its chunk's last
+    step, or off the model, starts its next step in the first pass as before. Per run these
+    are ``loop._closed_steps``' calls in its order (sensors, checks and corrections, control,
+    allocation, thrusters, the RK4 step, ``observe_into``), with the same numbers. Before
+    the control of its step, run r's control model's wire spring is set to its chunk's
+    spring row j (``control.jobs.ChunkJob.spring``: a chunk past whole seconds refreshes it
+    there; the checks and corrections do not read it)."""
     n_runs = pos.shape[0]
     m = CS.f_lo.shape[1]
     n_keep = keep.shape[0]
@@ -405,20 +546,25 @@ def batch_steps(
             if not active[r]:
                 continue
             j = pos[r]
+            prefetch_step(r, j, length, env_at, noise_at, fresh_at, spring_at, log_at, row_bytes)
             set_spring(CS, r, row_at(spring_at[r] + j * 24, 3))
             C = control_view(CS, r)
             Q = quality_view(QS, r)
             t = (k0[r] + j) * dt
             row = scratch[r]
-            for i in range(N_LOG):
-                row[i] = 0.0
             xr, hr = x[r], held_y[r]
-            noise_j = row_at(noise_at[r] + j * (n_y * 8), n_y)
-            fresh_j = flags_at(fresh_at[r] + j * n_sensors, n_sensors)
-            sensors.sample_into(hr, xr, hr, noise_j, fresh_j, sensors.Y_SENSOR)
-            loop.control_step_into(
-                tau6, t, xr, hr, fresh_j, xhat[r], Pc[r], cs[r], target[r], C, Q, dt, row, W
-            )
+            if sensed[r]:  # sampled, checked and corrected at the end of its last step
+                sensed[r] = False
+                loop.control_law_into(tau6, xr, hr, xhat[r], cs[r], target[r], C, dt, row, W)
+            else:
+                for i in range(N_LOG):
+                    row[i] = 0.0
+                noise_j = row_at(noise_at[r] + j * (n_y * 8), n_y)
+                fresh_j = flags_at(fresh_at[r] + j * n_sensors, n_sensors)
+                sensors.sample_into(hr, xr, hr, noise_j, fresh_j, sensors.Y_SENSOR)
+                loop.control_step_into(
+                    tau6, t, xr, hr, fresh_j, xhat[r], Pc[r], cs[r], target[r], C, Q, dt, row, W
+                )
             loop.allocate_into(f, tau6, C, W)
             loop.thrusters_into(n_rps[r, 0:m], f, C, row, W)
         plants_into(active, same_plant, pos, x, n_rps, env_at, PS, P0, dt, work, bwork)
@@ -430,18 +576,34 @@ def batch_steps(
             t = (k0[r] + j) * dt
             C = control_view(CS, r)
             env_j = env_row(env_at, r, j)
-            c = observe_run(r, env_j, C, same_model[r], xhat, Pc, scratch[r], c, C0, dt, ebwork, W)
-            loop.write_plant_row(
-                scratch[r], t + dt, x[r], held_y[r], env_j, plant_view(PS, r), work
-            )
-            whole = scratch[r]
+            row = scratch[r]
+            in_block = observe_run(r, env_j, C, same_model[r], xhat, Pc, row, c, dt, ebwork, W)
+            loop.write_plant_row(row, t + dt, x[r], held_y[r], env_j, plant_view(PS, r), work)
             kept = row_at(log_at[r] + j * row_bytes, n_keep)
             for i in range(n_keep):
-                kept[i] = whole[keep[i]]
+                kept[i] = row[keep[i]]
             pos[r] = j + 1
             if not plant.all_finite(x[r]):
                 ok[r] = j
                 pos[r] = length[r]
+            elif in_block and j + 1 < length[r]:
+                j1 = j + 1
+                sense_ahead(
+                    (k0[r] + j1) * dt,
+                    x[r],
+                    held_y[r],
+                    row_at(noise_at[r] + j1 * (n_y * 8), n_y),
+                    flags_at(fresh_at[r] + j1 * n_sensors, n_sensors),
+                    C,
+                    quality_view(QS, r),
+                    row,
+                    c,
+                    ebwork,
+                    W,
+                )
+                sensed[r] = True
+            if in_block:
+                c = end_column(xhat, Pc, c, C0, dt, ebwork, scratch)
         if c > 0:
-            predict_block(xhat, Pc, c, C0, dt, ebwork)
+            predict_block(xhat, Pc, c, C0, dt, ebwork, scratch)
     return h

@@ -162,10 +162,11 @@ class QualityState(NamedTuple):
 # --- the control system's work space (``ControlWork``): rows of ``vec`` ---
 W_ETA, W_DETA, W_REF, W_TAU6, W_TAU_TREE, W_I_NEXT, W_E, W_DE = 0, 1, 2, 3, 4, 5, 6, 7
 W_TAU3, W_F, W_N, W_ACH, W_ACH3, W_TAU_OBS = 8, 9, 10, 11, 12, 13
-W_F0, W_K0, W_K1 = 14, 17, 18  # the EKF's (15 and 16 are free)
+W_F0, W_K0, W_K1 = 14, 17, 18  # the EKF's
 W_NE, W_UV, W_ACCEPT, W_BTAU, W_ZERO = 19, 20, 21, 22, 23
 W_ETA4, W_DETA4, W_FI, W_E4, W_TAU_ROV, W_ROWS = 24, 25, 26, 27, 28, 29
-N_CVEC = 30
+W_ACC4, W_RVAR4, W_Z6 = 15, 16, 30  # a run's samples for the batch kernel's observer block
+N_CVEC = 31
 CW_WIDTH = 12
 """Width of the work rows: the longest vector of the step (the EKF's 9, the thrusters' M_MAX,
 the allocation's rows)."""
@@ -244,7 +245,7 @@ def tree_measurements_into(
     r = C.r_mount
     ne[0] = y[0] - (c * r[0] - s * r[1])
     ne[1] = y[1] - (s * r[0] + c * r[1])
-    psi = y[4] - C.psi_rel
+    psi = tree_heading(y, C)
     cr, sr = np.cos(C.psi_rel), np.sin(C.psi_rel)
     u_t = cr * y[5] - sr * y[6]
     v_t = sr * y[5] + cr * y[6]
@@ -252,6 +253,12 @@ def tree_measurements_into(
     uv[0] = u_t + rate * r[1]
     uv[1] = v_t - rate * r[0]
     return psi, rate
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def tree_heading(y: np.ndarray, C: ControlArrays) -> float:
+    """The tree's heading from the compass (eq. 3.5): the ROV's less the relative heading."""
+    return y[4] - C.psi_rel
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -300,6 +307,60 @@ def _observe_into(
     """Signal checks, then EKF correction (of ``xhat``, ``P`` in place) with each accepted
     fresh sample."""
     accepted = W.vec[W_ACCEPT, 0:5]
+    accept_samples_into(accepted, t, y, fresh, C, Q, log_row)
+    ne = W.vec[W_NE, 0:2]
+    uv = W.vec[W_UV, 0:2]
+    k0 = W.vec[W_K0, 0:9]
+    k1 = W.vec[W_K1, 0:9]
+    A = W.mat[MW_A]
+    psi_m, rate = tree_measurements_into(ne, uv, y, xhat[2], C)
+    if accepted[sensors.COMPASS] > 0.5:
+        nis, _ = ekf.correct_into(xhat, P, 1, psi_m, 0.0, 2, -1, C.r_psi, 0.0, 0, k0, k1, A)
+        log_row[L_NIS + 2] = nis
+    if accepted[sensors.POSITION] > 0.5:
+        psi_m, rate = tree_measurements_into(ne, uv, y, xhat[2], C)
+        nis0, nis1 = ekf.correct_into(
+            xhat, P, 2, ne[0], ne[1], 0, 1, C.r_pos, C.r_pos, -1, k0, k1, A
+        )
+        log_row[L_NIS] = nis0
+        log_row[L_NIS + 1] = nis1
+    if accepted[sensors.GYRO] > 0.5:
+        ekf.correct_into(xhat, P, 1, rate, 0.0, 5, -1, C.r_gyro, 0.0, -1, k0, k1, A)
+    if accepted[sensors.DVL] > 0.5:
+        ekf.correct_into(xhat, P, 2, uv[0], uv[1], 3, 4, C.r_dvl, C.r_dvl, -1, k0, k1, A)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def log_nis(
+    log_row: np.ndarray,
+    compass: bool,
+    nis_psi: float,
+    position: bool,
+    nis_north: float,
+    nis_east: float,
+) -> None:
+    """The normalised innovations of the corrections made (the compass's, the position
+    fix's) into the row's columns, as ``_observe_into`` writes them: for the batch kernel,
+    whose observer blocks correct apart from the row (``control.batch_ekf``)."""
+    if compass:
+        log_row[L_NIS + 2] = nis_psi
+    if position:
+        log_row[L_NIS] = nis_north
+        log_row[L_NIS + 1] = nis_east
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def accept_samples_into(
+    accepted: np.ndarray,
+    t: float,
+    y: np.ndarray,
+    fresh: np.ndarray,
+    C: ControlArrays,
+    Q: QualityState,
+    log_row: np.ndarray,
+) -> None:
+    """The signal checks of the step's fresh samples (``Q`` updated): 1.0 or 0.0 per sensor
+    into ``accepted`` (5,) and the row's ``L_ACCEPT`` columns."""
     for k in range(5):
         ok = False
         if fresh[k]:
@@ -322,26 +383,6 @@ def _observe_into(
                 sensors.Y_END,
             )
         accepted[k] = 1.0 if ok else 0.0
-    ne = W.vec[W_NE, 0:2]
-    uv = W.vec[W_UV, 0:2]
-    k0 = W.vec[W_K0, 0:9]
-    k1 = W.vec[W_K1, 0:9]
-    A = W.mat[MW_A]
-    psi_m, rate = tree_measurements_into(ne, uv, y, xhat[2], C)
-    if accepted[sensors.COMPASS] > 0.5:
-        nis, _ = ekf.correct_into(xhat, P, 1, psi_m, 0.0, 2, -1, C.r_psi, 0.0, 0, k0, k1, A)
-        log_row[L_NIS + 2] = nis
-    if accepted[sensors.POSITION] > 0.5:
-        psi_m, rate = tree_measurements_into(ne, uv, y, xhat[2], C)
-        nis0, nis1 = ekf.correct_into(
-            xhat, P, 2, ne[0], ne[1], 0, 1, C.r_pos, C.r_pos, -1, k0, k1, A
-        )
-        log_row[L_NIS] = nis0
-        log_row[L_NIS + 1] = nis1
-    if accepted[sensors.GYRO] > 0.5:
-        ekf.correct_into(xhat, P, 1, rate, 0.0, 5, -1, C.r_gyro, 0.0, -1, k0, k1, A)
-    if accepted[sensors.DVL] > 0.5:
-        ekf.correct_into(xhat, P, 2, uv[0], uv[1], 3, 4, C.r_dvl, C.r_dvl, -1, k0, k1, A)
     for k in range(5):
         log_row[L_ACCEPT + k] = accepted[k]
 
@@ -460,10 +501,31 @@ def control_step_into(
 ) -> None:
     """``control_step``: the wrench for the allocation into ``tau6`` (6,); the observer
     (``xhat``, ``Pc``) and the controller state ``cs`` updated in place. Allocates nothing."""
+    if C.feedback_ekf:
+        _observe_into(t, y, fresh, xhat, Pc, C, Q, log_row, W)
+    control_law_into(tau6, x, y, xhat, cs, target, C, dt, log_row, W)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def control_law_into(
+    tau6: np.ndarray,
+    x: np.ndarray,
+    y: np.ndarray,
+    xhat: np.ndarray,
+    cs: np.ndarray,
+    target: np.ndarray,
+    C: ControlArrays,
+    dt: float,
+    log_row: np.ndarray,
+    W: ControlWork,
+) -> None:
+    """``control_step_into`` after the observer's corrections (the batch kernel makes those
+    in its blocks): the reference, the controller of the mode and the row's control
+    columns, from the corrected estimate ``xhat`` (or, without an observer, the plant's
+    state ``x``)."""
     eta = W.vec[W_ETA, 0:3]
     deta = W.vec[W_DETA, 0:3]
     if C.feedback_ekf:
-        _observe_into(t, y, fresh, xhat, Pc, C, Q, log_row, W)
         eta[0], eta[1], eta[2] = xhat[0], xhat[1], xhat[2]
         c, s = np.cos(eta[2]), np.sin(eta[2])
         deta[0] = c * xhat[3] - s * xhat[4]
