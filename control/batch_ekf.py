@@ -1,5 +1,6 @@
-"""The observer's prediction (``control.ekf.predict_into``) of a block of runs at once, laid
-out so the compiler vectorises over the runs (the run index last), for the batch kernel.
+"""The observer's prediction (``control.ekf.predict_into``) and corrections (``correct_into``
+in ``control.loop._observe_into``'s order) of a block of runs at once, laid out so the
+compiler vectorises over the runs (the run index last), for the batch kernel.
 
 A run's prediction is a 9-state Euler step of the control plant model and the covariance
 update Phi P Phi^T + GQG with its 9x9 Jacobian. Run by run (``predict_into``, each run's P
@@ -18,9 +19,17 @@ products where ``ekf.phi_times_into`` leaves them out and kept where it keeps th
 signs of zeros follow), the heading's cosine and sine are libm's as there (a loop of their
 own, which does not vectorise). ``tests/test_batch_ekf.py`` checks the bits.
 
+The corrections (``correct_block_into``) follow the prediction with the samples of each
+run's next step (``load_samples``, made by ``control.batchkernel.sense_ahead``): a
+correction no column accepts is skipped, and a column that does not accept one keeps its
+numbers by a select (a scratch timing put the gyro's correction of every step at 120 ns a
+run by itself; in the block all the corrections add some 30-40 ns a run-step to the
+prediction, ``kernel_passes.py``).
+
 The control model (M, its inverse, the damping, the bias time constants, GQG) is one for the
 block: the caller puts only runs whose model is the one it passes (``control.batch``'s
-``same_model``); each run's wire spring (k_h, p_eq) and input wrench are its own.
+``same_model``); each run's wire spring (k_h, p_eq) and input wrench are its own, as are
+its samples' variances and its ROV's mounting vector.
 """
 
 from __future__ import annotations
