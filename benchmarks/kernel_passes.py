@@ -74,7 +74,7 @@ def _cycles(typingctx: Any) -> Any:
 cycles: Any = intrinsic(_cycles)
 
 PASSES = (
-    "log row zeroed (runs not sensed ahead)",
+    "step's start: prefetch, spring, views (and the row zeroed, runs not sensed ahead)",
     "sensors (runs not sensed ahead)",
     "control step (the control law; checks and corrections of runs not sensed ahead)",
     "allocation",
@@ -118,8 +118,6 @@ def timed_steps(
             prefetch_step(r, j, length, env_at, noise_at, fresh_at, spring_at, log_at, n_keep * 8)
             set_spring(CS, r, row_at(spring_at[r] + j * 24, 3))
             C = control_view(CS, r)
-            Q = quality_view(QS, r)
-            t = (k0[r] + j) * dt
             row = scratch[r]
             xr, hr = x[r], held_y[r]
             if sensed[r]:
@@ -127,6 +125,8 @@ def timed_steps(
                 c1 = c2 = cycles()
                 loop.control_law_into(tau6, xr, hr, xhat[r], cs[r], target[r], C, dt, row, W)
             else:
+                Q = quality_view(QS, r)
+                t = (k0[r] + j) * dt
                 for i in range(N_LOG):
                     row[i] = 0.0
                 c1 = cycles()

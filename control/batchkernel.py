@@ -387,7 +387,7 @@ def sense_ahead(
     z[batch_ekf.Z_U] = z[batch_ekf.Z_V] = 0.0
     if acc[batch_ekf.A_DVL] > 0.5:  # the DVL's velocity moved to the tree's origin
         uv = W.vec[loop.W_UV, 0:2]
-        loop.tree_measurements_into(W.vec[loop.W_NE, 0:2], uv, y, 0.0, C)
+        loop.tree_velocity_into(uv, y, C)
         z[batch_ekf.Z_U] = uv[0]
         z[batch_ekf.Z_V] = uv[1]
     r_var = W.vec[loop.W_RVAR4, 0:4]
@@ -549,14 +549,14 @@ def batch_steps(
             prefetch_step(r, j, length, env_at, noise_at, fresh_at, spring_at, log_at, row_bytes)
             set_spring(CS, r, row_at(spring_at[r] + j * 24, 3))
             C = control_view(CS, r)
-            Q = quality_view(QS, r)
-            t = (k0[r] + j) * dt
             row = scratch[r]
             xr, hr = x[r], held_y[r]
             if sensed[r]:  # sampled, checked and corrected at the end of its last step
                 sensed[r] = False
                 loop.control_law_into(tau6, xr, hr, xhat[r], cs[r], target[r], C, dt, row, W)
             else:
+                Q = quality_view(QS, r)
+                t = (k0[r] + j) * dt
                 for i in range(N_LOG):
                     row[i] = 0.0
                 noise_j = row_at(noise_at[r] + j * (n_y * 8), n_y)

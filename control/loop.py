@@ -245,14 +245,21 @@ def tree_measurements_into(
     r = C.r_mount
     ne[0] = y[0] - (c * r[0] - s * r[1])
     ne[1] = y[1] - (s * r[0] + c * r[1])
-    psi = tree_heading(y, C)
+    return tree_heading(y, C), tree_velocity_into(uv, y, C)
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def tree_velocity_into(uv: np.ndarray, y: np.ndarray, C: ControlArrays) -> float:
+    """The DVL's velocity moved to the tree's origin (eq. 3.6) into ``uv`` (2,), from the
+    ROV's relative heading and mounting vector and the gyro's yaw rate; returns that rate."""
+    r = C.r_mount
     cr, sr = np.cos(C.psi_rel), np.sin(C.psi_rel)
     u_t = cr * y[5] - sr * y[6]
     v_t = sr * y[5] + cr * y[6]
     rate = y[10]
     uv[0] = u_t + rate * r[1]
     uv[1] = v_t - rate * r[0]
-    return psi, rate
+    return rate
 
 
 @njit(inline="always", **JIT_NOALLOC)

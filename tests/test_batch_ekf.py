@@ -99,7 +99,8 @@ def test_a_block_corrects_each_run_bit_for_bit_as_alone(n: int) -> None:
     y[0, 4] = x0[0, 2] + C.psi_rel + 6.0  # an innovation past pi: the compass's wrap
     acc = rng.random((n, 4)) < 0.6
     acc[0] = True
-    acc[-1] = acc[-1] if n == 1 else False  # a column that takes no sample at all
+    if n > 1:
+        acc[-1] = False  # a column that takes no sample at all
     runs_C = [
         C._replace(
             r_mount=C.r_mount + rng.normal(size=C.r_mount.shape),
