@@ -932,6 +932,14 @@ def serve(
     ] = False,
     paused: Annotated[bool, typer.Option("--paused", help="start paused")] = False,
     speed: Annotated[float, typer.Option(help="simulated s per wall s, 0.25..50")] = 1.0,
+    behind_proxy: Annotated[
+        bool,
+        typer.Option(
+            "--behind-proxy",
+            help="a reverse proxy on this machine stands in front: believe its "
+            "X-Forwarded-For (off: the header is ignored, whoever sends it)",
+        ),
+    ] = False,
 ) -> None:
     """Serve the operator console: 3D view (viser), HTTP API and telemetry WebSocket."""
     from app.console import ConsoleSettings
@@ -951,6 +959,7 @@ def serve(
             allow_remote=allow_remote,
             paused=paused,
             speed=speed,
+            behind_proxy=behind_proxy,
         )
     except ValueError as err:
         raise typer.BadParameter(str(err)) from None

@@ -110,6 +110,7 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
     )
     app.state.console = console
     app.state.state_cache = StateJsonCache()
+    app.state.reports = scores.ReportCache()
     app.state.view = None
     app.state.allowed_hosts = allowed_hosts(settings.host, settings.allow_remote)
     app.state.telemetry_clients = 0
@@ -192,9 +193,24 @@ def instructor_line(settings: ConsoleSettings) -> str:
 def serve(settings: ConsoleSettings) -> None:
     """Run until interrupted (the ``rov-console serve`` command); prints where to go."""
     app = create_app(replace(settings, announce=True))
-    uvicorn.Server(
-        uvicorn.Config(app, host=settings.host, port=settings.port, log_level="warning")
-    ).run()
+    uvicorn.Server(uvicorn_config(app, settings)).run()
+
+
+def uvicorn_config(app: FastAPI, settings: ConsoleSettings) -> uvicorn.Config:
+    """How uvicorn serves the console. uvicorn believes X-Forwarded-For from 127.0.0.1 by
+    default, so any local client could name itself anyone (escaping the token lockout, faking
+    the operations log's 'who'); the headers are read only when the operator says a proxy
+    stands in front (``behind_proxy``)."""
+    return uvicorn.Config(
+        app,
+        host=settings.host,
+        port=settings.port,
+        log_level="warning",
+        lifespan="on",
+        proxy_headers=settings.behind_proxy,
+        # behind a proxy: the addresses uvicorn trusts (FORWARDED_ALLOW_IPS, else loopback)
+        forwarded_allow_ips=None if settings.behind_proxy else [],
+    )
 
 
 def free_port(host: str = "127.0.0.1") -> int:
@@ -238,11 +254,7 @@ def serve_in_thread(settings: ConsoleSettings, timeout_s: float = 300.0) -> Iter
     if settings.view and settings.viser_port == 0:
         settings = replace(settings, viser_port=free_port(settings.host))
     app = create_app(settings)
-    server = uvicorn.Server(
-        uvicorn.Config(
-            app, host=settings.host, port=settings.port, log_level="warning", lifespan="on"
-        )
-    )
+    server = uvicorn.Server(uvicorn_config(app, settings))
     thread = threading.Thread(target=server.run, name="console-http", daemon=True)
     thread.start()
     deadline = time.monotonic() + timeout_s

@@ -49,17 +49,19 @@ MAX_LEGS = 200
 """Legs in one mission at most (the sea trial of appendix C has 19)."""
 MAX_MISSION_S = 48 * 3600.0
 """Longest mission: the legs' timeouts added up [s] (two days; the sea trial takes 25 min)."""
-NAME_RE = re.compile(r"^[^\x00-\x1f\x7f-\x9f/\\\u200e\u200f\u202a-\u202e\u2066-\u2069]{1,80}$")
-"""Mission names: 1 to 80 printable characters, no slashes, control codes or direction
-overrides (names label recordings and are shown to other operators)."""
-LEG_NAME_RE = re.compile(r"^[^\x00-\x1f\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069]{0,80}$")
+NAME_CHARS = "letters, digits, spaces and - _ . , : ( ) +"
+"""The characters of a name, as its error message lists them."""
+NAME_RE = re.compile(r"^[\w .,:()+-]{1,80}$")
+"""Mission names: 1 to 80 of ``NAME_CHARS`` (letters and digits of any script). Names label
+recordings and are shown to every viewer, so nothing in them is markup, a path, a control
+code, a direction override or an invisible character."""
+LEG_NAME_RE = re.compile(r"^[\w .,:()+-]{0,80}$")
 
 
 def _check_name(value: str, pattern: re.Pattern[str], what: str) -> str:
-    if not pattern.match(value):
+    if not pattern.fullmatch(value):
         raise ValueError(
-            f"{what} must be 1 to 80 printable characters without slashes, control codes "
-            f"or direction overrides (got {len(value)} characters)"
+            f"{what} must be 1 to 80 characters: {NAME_CHARS} (got {len(value)} characters)"
         )
     return value
 
@@ -192,15 +194,15 @@ class Setup(_Model):
 
 
 class _Leg(_Model):
-    name: str = Field(default="", description="0 to 80 printable characters")
+    name: str = Field(default="", description=f"0 to 80 characters: {NAME_CHARS}")
     score: bool = Field(default=False, description="count this leg in the mission's RMS")
     timeout_s: float = Field(default=3600.0, gt=0.0, le=86400.0)
 
     @field_validator("name")
     @classmethod
     def _name(cls, value: str) -> str:
-        if not LEG_NAME_RE.match(value):
-            raise ValueError("leg names hold at most 80 printable characters")
+        if not LEG_NAME_RE.fullmatch(value):
+            raise ValueError(f"a leg's name holds 0 to 80 characters: {NAME_CHARS}")
         return value
 
 
@@ -428,7 +430,7 @@ full scale) and the stretch below the wire's end, so 25 m leaves at least the 20
 
 class Mission(_Model):
     format_version: Literal[1] = Field(description="mission file format version")
-    name: str = Field(description="1 to 80 printable characters, no slashes")
+    name: str = Field(description=f"1 to 80 characters: {NAME_CHARS}")
     description: str = Field(default="", max_length=2000)
     setup: Setup
     legs: list[Leg] = Field(min_length=1, max_length=MAX_LEGS)

@@ -258,3 +258,20 @@ def test_several_browsers_watch_the_same_session(page, server: RunningServer) ->
     finally:
         other.close()
     wait_for(lambda: server.app.state.view.clients == 1, 10.0, "the second client to leave")
+
+
+def test_markup_in_a_name_is_shown_as_text_in_every_viewers_page(
+    page, server: RunningServer
+) -> None:
+    """Defect (issue 47, 1): a name with markup ran script in every browser that opened the
+    view (the view's Markdown renders raw HTML). A name typed under Access reaches every
+    viewer through the operations log, whatever the mission-name rule: shown as text."""
+    from app.console import commands as cmd
+
+    hostile = "<img src=x onerror=\"document.title='XSS-RAN'\">"
+    server.console.loop.call_blocking(cmd.SetSpeed(1.0), timeout_s=15.0, who=hostile)
+    # the operations log (in a closed folder: in the page, not shown)
+    page.get_by_text("onerror=", exact=False).first.wait_for(state="attached", timeout=15_000)
+    time.sleep(0.5)
+    assert page.title() != "XSS-RAN", "the name ran as script"
+    assert page.locator("img[src='x']").count() == 0

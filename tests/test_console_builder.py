@@ -9,6 +9,7 @@ Screenshots go to docs/screenshots/.
 
 from __future__ import annotations
 
+import re
 import time
 from pathlib import Path
 
@@ -31,8 +32,9 @@ from tests.browser import (
 
 
 def builder_message(server: RunningServer) -> str:
-    """The builder's message line (the markdown just under "Start built mission")."""
-    return str(panel_of(server).builder_md.content)
+    """The builder's message line (the markdown just under "Start built mission"), as it
+    reads: names and messages are written escaped (``app.console.md_text``)."""
+    return re.sub(r"\\(.)", r"\1", str(panel_of(server).builder_md.content))
 
 
 def panel_of(server: RunningServer):

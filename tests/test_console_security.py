@@ -7,6 +7,7 @@ import asyncio
 import contextlib
 import time
 from pathlib import Path
+from typing import Any
 
 import msgspec
 import pytest
@@ -117,12 +118,14 @@ def test_wrong_tokens_lock_the_client_out_for_a_while(tmp_path: Path) -> None:
         wrong = {"Authorization": "Bearer guess-guess-guess-guess"}
         codes = [c.post("/api/run/pause", headers=wrong).status_code for _ in range(12)]
         assert codes[:10] == [401] * 10 and codes[10:] == [429, 429]
-        r = c.post("/api/run/pause", headers=running.auth)
-        assert r.status_code == 429, "locked out even with the right token"
+        r = c.post("/api/run/pause", headers=wrong)
         assert "too many wrong tokens" in r.json()["detail"]
         # the window is GUESS_WINDOW_S = 60 s from the first wrong token, a few seconds ago
         assert 50 <= int(r.headers["Retry-After"]) <= 60
         assert c.get("/api/state").status_code == 200, "watching needs no token"
+        # the guesser is locked out, the operator (the same loopback address) is not
+        assert c.post("/api/run/pause", headers=running.auth).status_code == 200
+        assert c.post("/api/run/resume", headers=running.auth).status_code == 200
 
 
 def test_an_unwritable_recordings_folder_is_a_named_error_not_a_500(tmp_path: Path) -> None:
@@ -252,3 +255,399 @@ def test_the_view_port_checks_host_and_origin(served) -> None:
 
     asyncio.run(foreign_page())
     assert view.refused_requests == before + 2
+
+
+# --------------------------------------------------------------------------- issue 47, 1-7
+
+
+def test_requests_without_a_token_never_lock_the_operator_out(tmp_path: Path) -> None:
+    """Defect (issue 47, 4): 10 bare POSTs from the operator's own address made the right
+    token answer 429 for 60 s; a request with no token is no guess."""
+    import httpx
+
+    settings = ConsoleSettings(
+        port=0, view=False, token="bare-request-token-01", recordings_dir=tmp_path
+    )
+    with serve_in_thread(settings) as running, httpx.Client(base_url=running.base_url) as c:
+        codes = {c.post("/api/run/pause").status_code for _ in range(15)}
+        empty = {"Authorization": "Bearer"}
+        codes |= {c.post("/api/run/pause", headers=empty).status_code for _ in range(3)}
+        assert codes == {401}
+        r = c.post("/api/run/pause", headers=running.auth)
+        assert r.status_code == 200, r.text
+        assert running.console.guesses.retry_after_s("http:127.0.0.1") == 0.0
+
+
+def test_the_instructor_token_is_accepted_while_its_address_is_locked_out(tmp_path: Path) -> None:
+    import httpx
+
+    settings = ConsoleSettings(
+        port=0,
+        view=False,
+        token="instructor-lock-token-1",
+        instructor_token="instructor-8",
+        recordings_dir=tmp_path,
+    )
+    with serve_in_thread(settings) as running, httpx.Client(base_url=running.base_url) as c:
+        wrong = {"Authorization": "Bearer not-the-instructor"}
+        codes = [c.get("/api/faults", headers=wrong).status_code for _ in range(11)]
+        assert codes[-1] == 429
+        assert c.get("/api/faults").status_code == 401, "no token: no guess, and no 429"
+        right = {"Authorization": "Bearer instructor-8"}
+        assert c.get("/api/faults", headers=right).status_code == 200
+
+
+def test_forwarded_headers_neither_escape_the_lockout_nor_name_the_sender(tmp_path: Path) -> None:
+    """Defect (issue 47, 3): uvicorn believed X-Forwarded-For from 127.0.0.1, so 60 wrong
+    tokens with rotating forwarded addresses all got 401, never 429, and the header named the
+    operations log's 'who'."""
+    import httpx
+
+    settings = ConsoleSettings(
+        port=0, view=False, token="forwarded-test-token-1", recordings_dir=tmp_path
+    )
+    with serve_in_thread(settings) as running, httpx.Client(base_url=running.base_url) as c:
+        wrong = {"Authorization": "Bearer guess-guess-guess-guess"}
+        codes = [
+            c.post(
+                "/api/run/pause", headers={**wrong, "X-Forwarded-For": f"10.9.{i // 250}.{i % 250}"}
+            ).status_code
+            for i in range(20)
+        ]
+        assert codes[:10] == [401] * 10 and set(codes[10:]) == {429}
+        forged = {**running.auth, "X-Forwarded-For": "6.6.6.6"}
+        assert c.post("/api/run/pause", headers=forged).status_code == 200
+        whos = [op.who for op in running.console.loop.snapshot.operations]
+        assert whos and all("6.6.6.6" not in w for w in whos), whos
+        assert whos[-1] == "API 127.0.0.1"
+
+
+def test_behind_a_proxy_the_forwarded_address_is_believed(tmp_path: Path) -> None:
+    """The operator who says a proxy stands in front (--behind-proxy) gets its header read."""
+    from app.server import create_app, uvicorn_config
+
+    settings = ConsoleSettings(view=False, behind_proxy=True, recordings_dir=tmp_path)
+    assert uvicorn_config(create_app(settings), settings).proxy_headers is True
+    plain = ConsoleSettings(view=False, recordings_dir=tmp_path)
+    assert uvicorn_config(create_app(plain), plain).proxy_headers is False
+
+
+def test_one_viewers_wrong_tokens_lock_only_that_viewer(served) -> None:
+    """Defect (issue 47, 4): in the 3D view one anonymous viewer's 10 wrong tokens locked
+    every other browser out; the lockout is per browser, and the right token always works."""
+    view = served.app.state.view
+
+    async def two_viewers() -> None:
+        uri = f"ws://127.0.0.1:{view.port}"
+        proto = [f"viser-v{viser.__version__}"]
+        async with websockets.connect(uri, subprotocols=proto) as first:
+            async with websockets.connect(uri, subprotocols=proto) as second:
+                guesser = await _viewer(view, first)
+                operator = await _viewer(view, second)
+                for _ in range(12):
+                    guesser.token_text.value = "wrong-wrong-wrong-wrong"
+                    guesser._on_unlock(None)
+                assert "too many wrong tokens" in guesser.message_md.content
+                operator.token_text.value = served.token
+                operator._on_unlock(None)
+                assert operator.unlocked, operator.message_md.content
+                guesser.token_text.value = served.token
+                guesser._on_unlock(None)
+                assert guesser.unlocked, "the right token is accepted during a lockout"
+
+    asyncio.run(two_viewers())
+
+
+def test_sockets_accept_only_the_consoles_own_pages(served) -> None:
+    """Defect (issue 47, 7): the sockets (the view's too) took any loopback Origin on any
+    port (``http://localhost:9999``); only the API's and the view's own pages may open them."""
+    view = served.app.state.view
+    api_port, view_port = served.settings.port, view.port
+    uri = served.base_url.replace("http", "ws") + "/api/telemetry"
+
+    async def scenario() -> None:
+        for foreign in ("http://localhost:9999", "http://127.0.0.1:1", "null"):
+            with pytest.raises(websockets.InvalidStatus):
+                async with websockets.connect(uri, origin=foreign):  # type: ignore[arg-type]
+                    pass
+            with pytest.raises(websockets.InvalidStatus) as err:
+                async with websockets.connect(
+                    f"ws://127.0.0.1:{view_port}",
+                    origin=foreign,  # type: ignore[arg-type]
+                    subprotocols=[f"viser-v{viser.__version__}"],
+                ):
+                    pass
+            assert err.value.response.status_code == 403
+        for own in (f"http://127.0.0.1:{api_port}", f"http://localhost:{view_port}"):
+            async with websockets.connect(uri, origin=own) as ws:  # type: ignore[arg-type]
+                assert "t_s" in await ws.recv()
+            async with websockets.connect(
+                f"ws://127.0.0.1:{view_port}",
+                origin=own,  # type: ignore[arg-type]
+                subprotocols=[f"viser-v{viser.__version__}"],
+            ):
+                pass
+
+    asyncio.run(scenario())
+
+
+def test_origin_rule_names_host_and_port() -> None:
+    from app.console import origin_allowed
+
+    hosts = ["127.0.0.1", "localhost"]
+    assert origin_allowed(None, hosts, {8000})
+    assert origin_allowed("http://localhost:8000", hosts, {8000, 8080})
+    assert origin_allowed("http://127.0.0.1:8080", hosts, {8000, 8080})
+    assert not origin_allowed("http://localhost:9999", hosts, {8000, 8080})
+    assert not origin_allowed("http://localhost", hosts, {8000})
+    assert not origin_allowed("http://evil.example:8000", hosts, {8000})
+    assert not origin_allowed("file://x", hosts, {8000})
+
+
+CAMERA = {
+    "type": "ViewerCameraMessage",
+    "wxyz": [1.0, 0.0, 0.0, 0.0],
+    "position": [0.0, 0.0, 0.0],
+    "fov": 1.0,
+    "near": 0.01,
+    "far": 1000.0,
+    "image_height": 600,
+    "image_width": 800,
+    "look_at": [1.0, 0.0, 0.0],
+    "up_direction": [0.0, 0.0, -1.0],
+}
+"""A browser's first camera: viser counts a client as connected (and the console builds its
+panel) once it has one."""
+
+
+async def _viewer(view, ws) -> Any:
+    """The panel the console built for the raw client ``ws``."""
+    before = set(view._panels)
+    await ws.send(msgspec.msgpack.encode(CAMERA))
+    deadline = time.monotonic() + 10.0
+    while not set(view._panels) - before and time.monotonic() < deadline:
+        await asyncio.sleep(0.05)
+    (new,) = set(view._panels) - before
+    return view._panels[new]
+
+
+def test_unfinished_uploads_from_the_view_are_capped_before_the_token(served) -> None:
+    """Defect (issue 47, 5): an anonymous viewer's never-finished upload parts (400 MB) raised
+    the server's memory from 259 to 708 MB. Now a file over a mission file's size, a locked
+    browser's upload and parts beyond the declared size are refused before any is kept."""
+    from web.uploads import MAX_UPLOAD_BYTES
+
+    view = served.app.state.view
+    refused = view.uploads.refused
+
+    async def scenario() -> None:
+        uri = f"ws://127.0.0.1:{view.port}"
+        async with websockets.connect(uri, subprotocols=[f"viser-v{viser.__version__}"]) as ws:
+            panel = await _viewer(view, ws)
+            button = panel.builder.upload_button._impl.uuid
+            states = panel.client.gui._current_file_upload_states
+
+            def start(transfer: str, size: int, parts: int) -> dict:
+                return {
+                    "type": "FileTransferStartUpload",
+                    "source_component_uuid": button,
+                    "transfer_uuid": transfer,
+                    "filename": "m.toml",
+                    "mime_type": "text/plain",
+                    "part_count": parts,
+                    "size_bytes": size,
+                }
+
+            def part(transfer: str, index: int, content: bytes) -> dict:
+                return {
+                    "type": "FileTransferPart",
+                    "source_component_uuid": button,
+                    "transfer_uuid": transfer,
+                    "part_index": index,
+                    "content": content,
+                }
+
+            # too large, declared: refused at its start, nothing buffered
+            await ws.send(msgspec.msgpack.encode(start("big", 400 * 1024 * 1024, 800)))
+            # a file of the right size from a browser without the token: refused too
+            await ws.send(msgspec.msgpack.encode(start("locked", 1000, 2)))
+            await ws.send(msgspec.msgpack.encode(part("locked", 0, b"x" * 500)))
+            await asyncio.sleep(0.5)
+            assert states == {}, "nothing kept for refused uploads"
+            assert "mission file has at most" in panel.builder.builder_md.content or (
+                "locked" in panel.builder.builder_md.content
+            )
+            # unlocked: one unfinished upload at a time; a part past the declared size drops it
+            panel.unlocked = True
+            for k in range(20):
+                await ws.send(msgspec.msgpack.encode(start(f"t{k}", MAX_UPLOAD_BYTES, 4)))
+                await ws.send(msgspec.msgpack.encode(part(f"t{k}", 0, b"x" * 1000)))
+            await ws.send(msgspec.msgpack.encode(part("t19", 1, b"y" * (MAX_UPLOAD_BYTES + 1))))
+            await asyncio.sleep(0.5)
+            assert list(states) == [], "the last one dropped for its oversize part"
+            assert view.uploads.in_flight_bytes == 0
+            await ws.send(msgspec.msgpack.encode(start("open", 2000, 2)))
+            await ws.send(msgspec.msgpack.encode(part("open", 0, b"x" * 1000)))
+            await asyncio.sleep(0.5)
+            assert list(states) == ["open"]
+            assert view.uploads.in_flight_bytes == 2000
+        deadline = time.monotonic() + 10.0
+        while view.uploads.in_flight_bytes and time.monotonic() < deadline:
+            await asyncio.sleep(0.05)
+        assert view.uploads.in_flight_bytes == 0, "a browser that left holds nothing"
+
+    asyncio.run(scenario())
+    assert view.uploads.refused >= refused + 3
+    assert served.console.loop.health() == "ok"
+
+
+def test_the_view_refuses_a_message_larger_than_an_upload_part(served) -> None:
+    """viser takes messages of up to 50 MB; the console's view at most VIEW_MESSAGE_MAX_BYTES."""
+    from web.uploads import VIEW_MESSAGE_MAX_BYTES
+
+    view = served.app.state.view
+
+    async def scenario() -> None:
+        uri = f"ws://127.0.0.1:{view.port}"
+        async with websockets.connect(
+            uri, subprotocols=[f"viser-v{viser.__version__}"], max_size=None
+        ) as ws:
+            await ws.send(b"\x00" * (VIEW_MESSAGE_MAX_BYTES + 1))
+            with pytest.raises(websockets.ConnectionClosed) as closed:
+                while True:
+                    await ws.recv()
+            assert closed.value.rcvd is not None and closed.value.rcvd.code == 1009
+
+    asyncio.run(scenario())
+    assert served.console.loop.health() == "ok"
+
+
+def _mission_with_params(params: str, name: str = "params-probe") -> dict:
+    return {
+        "format_version": 1,
+        "name": name,
+        "setup": {"params": params, "depth_m": 100.0},
+        "legs": [{"type": "hold", "duration_s": 1.0}],
+    }
+
+
+def test_a_mission_from_the_network_never_names_a_server_file(tmp_path: Path) -> None:
+    """Defect (issue 47, 2): a mission whose setup.params named a readable .json or .toml on
+    the server had it read whole and its content quoted in the 422. A mission sent to the
+    console names one of its parameter sets; the answer quotes neither content nor path."""
+    from fastapi.testclient import TestClient
+
+    from app.server import create_app
+
+    secret = tmp_path / "secret.json"
+    secret.write_text('{"tree": "TOP-SECRET-CONTENT"}')
+    settings = ConsoleSettings(view=False, token="params-path-token-001", recordings_dir=tmp_path)
+    auth = {"Authorization": "Bearer params-path-token-001"}
+    with TestClient(create_app(settings), base_url="http://127.0.0.1") as c:
+        for path in (str(secret), "../../sim/presets/full-scale.toml", "/etc/hostname"):
+            r = c.post(
+                "/api/missions/uploads", json={"mission": _mission_with_params(path)}, headers=auth
+            )
+            assert r.status_code == 422, r.text
+            detail = r.json()["detail"]
+            assert "setup.params" in detail and "full-scale, model-scale" in detail
+            assert "TOP-SECRET" not in detail and str(tmp_path) not in detail
+            assert path not in detail and "got a file path" in detail
+            v = c.post("/api/missions/validate", json={"mission": _mission_with_params(path)})
+            assert v.json()["valid"] is False and "setup.params" in v.json()["errors"][0]
+        unknown = c.post(
+            "/api/missions/uploads",
+            json={"mission": _mission_with_params("deep-sea")},
+            headers=auth,
+        )
+        assert unknown.status_code == 422 and "(got 'deep-sea')" in unknown.json()["detail"]
+        ok = c.post(
+            "/api/missions/uploads",
+            json={"mission": _mission_with_params("model-scale")},
+            headers=auth,
+        )
+        assert ok.status_code == 201, ok.text
+
+
+def test_the_command_line_may_still_name_a_local_parameter_file(tmp_path: Path) -> None:
+    """Only the network is refused: a mission file read by the command line keeps naming a
+    parameter file beside it (the library's own preset, by its path here)."""
+    from missions import schema
+    from sim import params as params_mod
+
+    preset = Path(params_mod.__file__).parent / "presets" / "full-scale.toml"
+    mission = schema.parse_mission(_mission_with_params(str(preset)))
+    assert params_mod.load(mission.setup.params).name
+
+
+XSS = "<iframe srcdoc=\"<img src=x onerror=parent.document.title='XSS-RAN'>\">"
+"""The issue's mission name (issue 47, 1)."""
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("name", XSS),
+        ("name", "<b>bold</b>"),
+        ("name", "a`b"),
+        ("name", "\ud800"),
+        ("name", "full-square\u200b400"),
+        ("legs.0.name", XSS),
+        ("legs.0.name", "[click](javascript:alert(1))"),
+    ],
+)
+def test_names_hold_only_letters_digits_and_plain_punctuation(field: str, value: str) -> None:
+    """Defect (issue 47, 1): the name rule let markup through, shown as HTML in every
+    viewer's page; the error names the field and the characters a name may hold."""
+    from missions import schema
+
+    data = _mission_with_params("full-scale")
+    if field == "name":
+        data["name"] = value
+    else:
+        data["legs"][0]["name"] = value
+    with pytest.raises(schema.MissionError) as err:
+        schema.parse_mission(data)
+    text = str(err.value)
+    where = "legs[1] (hold).name" if field != "name" else "  name:"
+    assert where in text and "letters, digits, spaces and - _ . , : ( ) +" in text
+    for fine in ("5.i rotation test: 180 deg", "Ålesund dock (2), try_3 + more", "4.iii"):
+        data["name"] = fine
+        data["legs"][0]["name"] = fine
+        assert schema.parse_mission(data).name == fine
+
+
+def test_what_the_view_writes_shows_names_and_messages_as_text() -> None:
+    """Defence in depth for issue 47, 1: viser renders the raw HTML in its Markdown, so every
+    name, who and message the view writes is escaped, whatever rule made it."""
+    from app.console import md_code, md_text, result_markdown
+    from app.console.operations import Operation
+    from web.instructor_panel import faults_markdown
+    from web.panels import _mission_text, _operations_text
+    from web.scores_panel import scores_markdown
+
+    assert "<" not in md_text(XSS) and "&lt;iframe" in md_text(XSS)
+    assert md_code("a`b") == "``a`b``" and md_code("x") == "`x`"
+    assert md_text("[a](javascript:x)") == "\\[a\\]\\(javascript:x\\)"
+    texts = [
+        result_markdown(XSS, "done", {"error": XSS}),
+        scores_markdown([], "http://127.0.0.1:8000", XSS),
+    ]
+    op = Operation(utc="2026-01-01T00:00:00", t_s=1.0, who=XSS, action=XSS, outcome="done")
+    snap = _snapshot_with(op)
+    texts += [_mission_text(snap), _operations_text(snap), faults_markdown(snap)]
+    for text in texts:
+        assert "<iframe" not in text and "<img" not in text, text
+
+
+def _snapshot_with(op):
+    """A snapshot whose mission and leg are named XSS and that logged ``op``."""
+    import dataclasses
+
+    from app.console import Console
+
+    console = Console.build(ConsoleSettings(view=False))
+    snap = console.loop.snapshot
+    mission = dataclasses.replace(snap.mission, name=XSS, leg_index=1, legs_total=1, leg_name=XSS)
+    ops = (op, dataclasses.replace(op, instructor=True))
+    return dataclasses.replace(snap, mission=mission, operations=ops)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 
+import httpx
 import pytest
 
 from app.console import ConsoleSettings
@@ -92,5 +93,10 @@ def test_the_scores_tab_shows_the_pilots_runs_with_a_debrief_link(page, server: 
     page.get_by_text("latest runs of Anna").wait_for(timeout=10_000)
     link = page.locator("a", has_text="report").first
     href = link.get_attribute("href") or ""
-    assert href == f"{server.base_url}/api/recordings/drill.mcap/report"
+    # this browser is unlocked (the instructor's tab): the link carries the debrief ticket,
+    # which the report asks for as it would a token (no such recording here: 404, not 401)
+    plain = f"{server.base_url}/api/recordings/drill.mcap/report"
+    assert href.startswith(f"{plain}?ticket=")
+    assert httpx.get(href, timeout=10.0).status_code == 404
+    assert httpx.get(plain, timeout=10.0).status_code == 401
     assert page.get_by_text("dock-drill").count() >= 2, "in the latest runs and the best"

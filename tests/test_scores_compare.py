@@ -5,6 +5,7 @@ and the API's scores, comparison and debrief, and the page's scores text."""
 from __future__ import annotations
 
 import json
+import os
 import sqlite3
 import time
 from contextlib import closing
@@ -140,16 +141,64 @@ def test_the_api_serves_scores_the_comparison_and_a_recordings_debrief(
         side = c.get("/api/scores/compare", params={"mission": "dock"}).json()
         assert set(side) == {"autopilot", "hand"} and side["hand"]["log_file"] == "x.mcap"
         name = c.post("/api/recordings/start", json={"label": "deb"}, headers=auth).json()["name"]
-        assert c.get(f"/api/recordings/{name}/report").status_code == 409, "not while written"
+        report = f"/api/recordings/{name}/report"
+        assert c.get(report, headers=auth).status_code == 409, "not while written"
         t0 = c.get("/api/state").json()["t_s"]
         while c.get("/api/state").json()["t_s"] < t0 + 5.0:
             time.sleep(0.1)
         assert c.post("/api/recordings/stop", headers=auth).is_success
-        page = c.get(f"/api/recordings/{name}/report")
+        page = c.get(report, headers=auth)
         assert page.status_code == 200, page.text
         assert page.headers["content-type"].startswith("text/html")
         assert "<h1>Debrief:" in page.text and "data:image/png;base64" in page.text
-        assert c.get("/api/recordings/nothing-here.mcap/report").status_code == 404
+        assert c.get("/api/recordings/nothing-here.mcap/report", headers=auth).status_code == 404
+
+
+def test_a_debrief_needs_a_token_is_written_once_and_one_at_a_time(
+    tmp_path: Path, log_rows: LogRows
+) -> None:
+    """Defect (issue 47, 6): the debrief needed no token and cost 11-17 s each time; six at
+    once took 43-52 s and 730 MB. Now: the console or instructor token (or the view's
+    ticket), each recording's page kept while its file is unchanged, one written at a time."""
+    settings = ConsoleSettings(
+        view=False,
+        token=TOKEN,
+        instructor_token="debrief-instructor",
+        speed=10.0,
+        recordings_dir=tmp_path,
+    )
+    auth = {"Authorization": f"Bearer {TOKEN}"}
+    app = create_app(settings)
+    with TestClient(app, base_url="http://127.0.0.1") as c:
+        name = c.post("/api/recordings/start", json={"label": "deb"}, headers=auth).json()["name"]
+        t0 = c.get("/api/state").json()["t_s"]
+        while c.get("/api/state").json()["t_s"] < t0 + 3.0:
+            time.sleep(0.1)
+        assert c.post("/api/recordings/stop", headers=auth).is_success
+        report = f"/api/recordings/{name}/report"
+        anonymous = c.get(report)
+        assert anonymous.status_code == 401 and "console token" in anonymous.json()["detail"]
+        assert c.get(report, headers={"Authorization": "Bearer wrong-wrong"}).status_code == 401
+        cache = app.state.reports
+        cache._writing.acquire()  # another report is being written
+        try:
+            busy = c.get(report, headers=auth)
+        finally:
+            cache._writing.release()
+        assert busy.status_code == 503 and "try again" in busy.json()["detail"]
+        assert int(busy.headers["Retry-After"]) > 0
+        first = c.get(report, headers=auth)
+        assert first.status_code == 200 and cache.written == 1
+        instructor = {"Authorization": "Bearer debrief-instructor"}
+        assert c.get(report, headers=instructor).text == first.text
+        ticket = app.state.console.debrief_ticket()
+        assert c.get(report, params={"ticket": ticket}).status_code == 200
+        assert c.get(report, params={"ticket": "not-the-ticket"}).status_code == 401
+        assert cache.written == 1, "served from the cache while the file is unchanged"
+        path = tmp_path / name
+        stat = path.stat()
+        os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns + 1_000_000_000))
+        assert c.get(report, headers=auth).status_code == 200 and cache.written == 2
 
 
 def test_the_pages_scores_text_lists_runs_best_and_debrief_links(

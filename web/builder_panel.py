@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from app.console import md_code, md_text
 from missions import schema
 from web import geometry as geo
 from web import mission_builder as mb
@@ -196,7 +197,7 @@ class BuilderPanel:
         if event.client is None:
             return
         self._load_setup()
-        self.builder_md.content = f"set-up from `{self.setup_pick.value}`"
+        self.builder_md.content = f"set-up from {md_code(self.setup_pick.value)}"
         self._draw_preview()
 
     def _on_setup_edit(self, event: Any) -> None:
@@ -276,11 +277,15 @@ class BuilderPanel:
         self._show_legs()
 
     def _show_legs(self) -> None:
-        lines = [f"{i + 1}. `{mb.describe_leg(leg)}`" for i, leg in enumerate(self.legs)]
+        lines = [f"{i + 1}. {md_code(mb.describe_leg(leg))}" for i, leg in enumerate(self.legs)]
         self.legs_md.content = "\n".join(lines) if lines else "*no legs yet*"
 
     def _error(self, text: str) -> None:
-        self.builder_md.content = f"**error**: {text}"
+        self.builder_md.content = f"**error**: {md_text(text)}"
+
+    def say(self, text: str) -> None:
+        """Show an error from outside the panel (the view's upload limits)."""
+        self._error(text)
 
     def _built_mission(self) -> schema.Mission | None:
         """The built mission, or None with the reason shown on one line."""
@@ -324,7 +329,7 @@ class BuilderPanel:
         text = schema.dump_mission(mission)
         name = mb.file_name(mission)
         self.client.send_file_download(name, text.encode(), save_immediately=True)
-        self.builder_md.content = f"downloaded `{name}` ({len(mission.legs)} legs)"
+        self.builder_md.content = f"downloaded {md_code(name)} ({len(mission.legs)} legs)"
 
     def _keep(self, mission: schema.Mission) -> bool:
         """Keep a mission in the console (as the HTTP upload does); False with the reason."""
@@ -343,7 +348,7 @@ class BuilderPanel:
         mission = self._built_mission()
         if mission is not None and self._keep(mission):
             self.builder_md.content = (
-                f"saved `{mission.name}` in the console: start it from 'Mission' above"
+                f"saved {md_code(mission.name)} in the console: start it from 'Mission' above"
             )
 
     def _on_upload(self, event: Any) -> None:
@@ -364,7 +369,7 @@ class BuilderPanel:
         self.legs = [leg.model_dump(mode="json", exclude_defaults=True) for leg in mission.legs]
         self._show_legs()
         self.builder_md.content = (
-            f"uploaded `{mission.name}` ({len(mission.legs)} legs): loaded into the builder"
+            f"uploaded {md_code(mission.name)} ({len(mission.legs)} legs): loaded into the builder"
         )
         self._draw_preview()
 

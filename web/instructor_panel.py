@@ -20,6 +20,7 @@ from app.console import (
     ConsoleError,
     InjectFault,
     Snapshot,
+    md_text,
 )
 
 if TYPE_CHECKING:
@@ -46,14 +47,17 @@ def faults_markdown(snap: Snapshot) -> str:
     if not snap.faults:
         lines.append("- none active or scheduled")
     for f in snap.faults:
-        lines.append(f"- **{f.state}**: {f.text}")
+        lines.append(f"- **{f.state}**: {md_text(f.text)}")
     if snap.fault_log:
         lines.append("\n**starts and ends**")
-        lines += [f"- t {t:.1f} s: {text}" for t, text in reversed(snap.fault_log[-8:])]
+        lines += [f"- t {t:.1f} s: {md_text(text)}" for t, text in reversed(snap.fault_log[-8:])]
     mine = [op for op in snap.operations if op.instructor][-5:]
     if mine:
         lines.append("\n**instructor's commands**")
-        lines += [f"- t {op.t_s:.1f} s {op.who}: {op.action} - {op.outcome}" for op in mine]
+        lines += [
+            f"- t {op.t_s:.1f} s {md_text(op.who)}: {md_text(op.action)} - {md_text(op.outcome)}"
+            for op in mine
+        ]
     return "\n".join(lines)
 
 
@@ -115,7 +119,9 @@ class InstructorPanel:
 
     # ------------------------------------------------------------------ callbacks
     def _on_unlock(self, event: Any) -> None:
-        verdict, wait = self.console.check_instructor(str(self.token_text.value).strip(), "view")
+        verdict, wait = self.console.check_instructor(
+            str(self.token_text.value).strip(), self.owner.guess_client
+        )
         self.token_text.value = ""  # type: ignore[misc]  # the token does not stay on the page
         if verdict == "ok":
             self.unlocked = True
@@ -164,13 +170,13 @@ class InstructorPanel:
                 self.last_error = str(err)
             except Exception as err:
                 self.last_error = f"{type(err).__name__}: {err}"
-        self._say(f"**not done**: {self.last_error}")
+        self._say(f"**not done**: {md_text(self.last_error)}")
         return None
 
     def _on_inject(self, event: Any) -> None:
         result = self._run(self.command)
         if isinstance(result, dict):
-            self._say(f"injected: {result['text']}")
+            self._say(f"injected: {md_text(result['text'])}")
 
     def _on_clear(self, event: Any) -> None:
         result = self._run(ClearFaults)

@@ -9,6 +9,7 @@ answer. ``update`` is called by the view's publisher thread with each new snapsh
 
 from __future__ import annotations
 
+import html
 import math
 import threading
 import time
@@ -28,6 +29,8 @@ from app.console import (
     counters_markdown,
     list_recordings,
     load_replay,
+    md_code,
+    md_text,
     prepare_run,
     result_markdown,
     station_keeping_mission,
@@ -410,7 +413,7 @@ class ClientPanel:
         self.last_error = ""
         if not self.unlocked:
             self.last_error = "locked: enter the console token under Access"
-            self._say(f"**{self.last_error}**")
+            self._say(f"**{md_text(self.last_error)}**")
             return None
         try:
             result = self.console.loop.call_blocking(make(), timeout_s=15.0, who=self.who)
@@ -419,7 +422,7 @@ class ClientPanel:
         except Exception as err:
             self.last_error = f"{type(err).__name__}: {err}"
         if self.last_error:
-            self._say(f"**error**: {self.last_error}")
+            self._say(f"**error**: {md_text(self.last_error)}")
             return None
         self._say("")
         return result
@@ -437,7 +440,7 @@ class ClientPanel:
             if done is None or feedback is None:
                 return
             if self.last_error:  # the typed values stay, to be corrected
-                feedback.content = f"**not applied**: {self.last_error}"
+                feedback.content = f"**not applied**: {md_text(self.last_error)}"
             else:
                 feedback.content = ""
                 self._edited.pop(done, None)
@@ -456,8 +459,8 @@ class ClientPanel:
         return callback
 
     def _on_unlock(self, event: Any) -> None:
-        # counted for the view as a whole: a new connection does not buy new guesses
-        ok, wait = self.console.check_token(str(self.token_text.value).strip(), "view")
+        # counted per browser: one viewer's wrong tokens lock that viewer out, not the others
+        ok, wait = self.console.check_token(str(self.token_text.value).strip(), self.guess_client)
         self.token_text.value = ""  # type: ignore[misc]  # the token does not stay on the page
         if ok:
             self.unlocked = True
@@ -476,6 +479,11 @@ class ClientPanel:
         self.lock_button.visible = False
         self.unlock_button.visible = True
         self._say("controls locked")
+
+    @property
+    def guess_client(self) -> str:
+        """Whom this browser's wrong tokens count against: itself."""
+        return f"view:{self.client.client_id}"
 
     @property
     def who(self) -> str:
@@ -516,11 +524,11 @@ class ClientPanel:
         if not self.unlocked:
             self._say("**locked**: enter the console token under Access")
             return
-        self._say(f"building {mission.name}...")
+        self._say(f"building {md_text(mission.name)}...")
         try:
             run = prepare_run(mission, run_legs)
         except ValueError as err:
-            self._say(f"**error**: {err}")
+            self._say(f"**error**: {md_text(err)}")
             return
         self._run(lambda: cmd.StartRun(run))
 
@@ -528,7 +536,7 @@ class ClientPanel:
         try:
             mission = self.console.find_mission(str(self.mission_pick.value))
         except (KeyError, ValueError) as err:
-            self._say(f"**error**: {err}")
+            self._say(f"**error**: {md_text(err)}")
             return
         self._start(mission)
 
@@ -548,7 +556,7 @@ class ClientPanel:
             result = self._run(cmd.StopRecording)
             self._refresh_recordings()
         if result:
-            self.record_md.content = f"`{result['name']}`"
+            self.record_md.content = md_code(result["name"])
 
     def _recording_names(self) -> tuple[str, ...]:
         names = tuple(r["name"] for r in list_recordings(self.console.settings.recordings_dir))
@@ -565,17 +573,17 @@ class ClientPanel:
         if not self.unlocked:
             self._say("**locked**: enter the console token under Access")
             return
-        self._say(f"opening {name}...")
+        self._say(f"opening {md_text(name)}...")
         try:
             data = load_replay(self.console.settings.recordings_dir, name)
             self._replay_count += 1
             replay = ViewerReplay(name, data, self.console.loop.snapshot, self._replay_count)
         except (ConsoleError, FileNotFoundError, ValueError) as err:
-            self._say(f"**error**: {err}")
+            self._say(f"**error**: {md_text(err)}")
             return
         self.replay = replay  # the publisher thread draws it from its next frame
         self._camera_pending = True
-        self._say(f"replay of `{name}` in this browser; the live run goes on")
+        self._say(f"replay of {md_code(name)} in this browser; the live run goes on")
 
     def _replay_action(self, act: Callable[[], None]) -> Callable[[Any], None]:
         """A replay button: acts on this browser's replay only (the live run and the other
@@ -612,7 +620,7 @@ class ClientPanel:
                 return
             replay.seek(value)
         except ConsoleError as err:
-            self._say(f"**error**: {err}")
+            self._say(f"**error**: {md_text(err)}")
         finally:
             self._replay_shown = value  # the bar follows the replay again
 
@@ -705,15 +713,15 @@ class ClientPanel:
         leg = f"leg {m.leg_index}/{m.legs_total} {m.leg_type}" if m.leg_index else ""
         state = "paused" if snap.paused else f"running x{snap.speed:g}"
         replaying = snap.source == "replay" and snap.replay is not None
-        source = f"REPLAY `{snap.replay.name}`" if replaying and snap.replay else "live"
+        source = f"REPLAY {md_code(snap.replay.name)}" if replaying and snap.replay else "live"
         text = (
             f"**{source}** t = {snap.t_s:8.1f} s, {state}  \n"
             + (f"live run goes on: t = {live.t_s:.1f} s  \n" if replaying else "")
             + f"tree N {tree[0]:.2f} m, E {tree[1]:.2f} m, heading "
             f"{math.degrees(tree[5]):.1f} deg, mode {snap.mode}  \n"
-            f"mission: {m.name or '-'} ({m.state}) {leg}"
-            + (f"  \n**{snap.error}**" if snap.error else "")
-            + (f"  \nrecording `{snap.recording}`" if snap.recording else "")
+            f"mission: {md_text(m.name or '-')} ({m.state}) {md_text(leg)}"
+            + (f"  \n**{md_text(snap.error)}**" if snap.error else "")
+            + (f"  \nrecording {md_code(snap.recording)}" if snap.recording else "")
         )
         if self.status_md.content != text:
             self.status_md.content = text
@@ -721,15 +729,15 @@ class ClientPanel:
         badges = "".join(
             f"<span style='display:inline-block;margin:1px;padding:1px 5px;border-radius:4px;"
             f"color:white;background:{'#c0392b' if a.active else '#27ae60'}' "
-            f"title='{a.message}'>{a.name}</span>"
+            f"title='{html.escape(a.message)}'>{html.escape(a.name)}</span>"
             for a in snap.alarms
         )
-        active = "; ".join(f"{a.name}: {a.message}" for a in snap.active_alarms)
-        html = f"<div>{badges}</div>" + (
+        active = html.escape("; ".join(f"{a.name}: {a.message}" for a in snap.active_alarms))
+        badges_html = f"<div>{badges}</div>" + (
             f"<div style='color:#c0392b'>{active}</div>" if active else ""
         )
-        if self.alarms_html.content != html:
-            self.alarms_html.content = html
+        if self.alarms_html.content != badges_html:
+            self.alarms_html.content = badges_html
         self._update_thrusters(snap)
         self._update_controls(live)
         self._update_replay(snap)
@@ -852,8 +860,11 @@ def _mission_text(snap: Snapshot) -> str:
     if m.result:
         return result_markdown(m.name, m.state, m.result)
     if m.leg_index:
-        return f"**{m.name}**: leg {m.leg_index}/{m.legs_total} `{m.leg_type}` {m.leg_name or ''}"
-    return f"{m.name or 'no mission'} ({m.state})"
+        return (
+            f"**{md_text(m.name)}**: leg {m.leg_index}/{m.legs_total} {md_code(m.leg_type)} "
+            f"{md_text(m.leg_name or '')}"
+        )
+    return f"{md_text(m.name or 'no mission')} ({m.state})"
 
 
 def _operations_text(snap: Snapshot) -> str:
@@ -863,7 +874,8 @@ def _operations_text(snap: Snapshot) -> str:
     if not operations:
         return "*nothing done yet*"
     lines = [
-        f"- {op.utc[11:19]} (t {op.t_s:.1f} s) **{op.who}**: {op.action} - {op.outcome}"
+        f"- {op.utc[11:19]} (t {op.t_s:.1f} s) **{md_text(op.who)}**: {md_text(op.action)} "
+        f"- {md_text(op.outcome)}"
         for op in reversed(operations[-10:])
     ]
     return "\n".join(lines)

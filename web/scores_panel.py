@@ -4,14 +4,17 @@
 the latest runs (who flew them: autopilot, hand or mixed) and the best run of each mission,
 each with a link to its debrief when it was recorded. "Debrief" offers the debrief report
 (``app.report``, served by the API at ``/api/recordings/<name>/report``) of a finished
-recording. Reading needs no token: nothing here changes the run.
+recording. Reading the scores needs no token: nothing here changes the run; a report takes
+seconds of work, so its links open it only for a browser unlocked with the console or
+instructor token (they carry the console's debrief ticket).
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
+from urllib.parse import quote
 
-from app.console import SCORES_DB, list_recordings
+from app.console import SCORES_DB, list_recordings, md_text
 from app.console import scores as store
 
 if TYPE_CHECKING:
@@ -20,8 +23,11 @@ if TYPE_CHECKING:
 HISTORY_ROWS = 10
 
 
-def report_url(api_base: str, name: str) -> str:
-    return f"{api_base}/api/recordings/{name}/report"
+def report_url(api_base: str, name: str, ticket: str | None = None) -> str:
+    """The debrief's address; with the console's debrief ticket (``Console.debrief_ticket``)
+    for a browser that is unlocked: the report needs a token, and a link carries no header."""
+    url = f"{api_base}/api/recordings/{quote(name)}/report"
+    return url + (f"?ticket={quote(ticket)}" if ticket else "")
 
 
 def _cell(v: float | None, fmt: str) -> str:
@@ -35,10 +41,13 @@ def _verdict(s: store.Score) -> str:
     return text
 
 
-def scores_markdown(rows: list[store.Score], api_base: str, name: str) -> str:
-    """A trainee's latest runs and best run of each mission, as Markdown tables."""
+def scores_markdown(
+    rows: list[store.Score], api_base: str, name: str, ticket: str | None = None
+) -> str:
+    """A trainee's latest runs and best run of each mission, as Markdown tables (the debrief
+    links carry ``ticket`` when given)."""
     if not rows:
-        return f"no scores for **{name}** yet (a mission you start is scored when it ends)"
+        return f"no scores for **{md_text(name)}** yet (a mission you start is scored when it ends)"
 
     def table(title: str, scores: list[store.Score]) -> list[str]:
         lines = [
@@ -48,15 +57,15 @@ def scores_markdown(rows: list[store.Score], api_base: str, name: str) -> str:
             "|---|---|---|---|---|---|---|",
         ]
         for s in scores:
-            link = f"[report]({report_url(api_base, s.log_file)})" if s.log_file else "-"
+            link = f"[report]({report_url(api_base, s.log_file, ticket)})" if s.log_file else "-"
             lines.append(
-                f"| {s.utc[5:16].replace('T', ' ')} | {s.mission} | {_verdict(s)} | "
+                f"| {s.utc[5:16].replace('T', ' ')} | {md_text(s.mission)} | {_verdict(s)} | "
                 f"{_cell(s.miss_m, '.3f')} | {s.rms_north_m:.3f}/{s.rms_east_m:.3f} | "
                 f"{s.flown_by} | {link} |"
             )
         return lines
 
-    lines = table(f"latest runs of {name}", rows[:HISTORY_ROWS])
+    lines = table(f"latest runs of {md_text(name)}", rows[:HISTORY_ROWS])
     lines += ["", *table("best run of each mission", store.best(rows))]
     return "\n".join(lines)
 
@@ -92,9 +101,11 @@ class ScoresPanel:
         else:
             try:
                 rows = store.history(self.console.settings.recordings_dir / SCORES_DB, trainee=name)
-                text = scores_markdown(rows, self.api_base, store.trainee_name(name))
+                text = scores_markdown(
+                    rows, self.api_base, store.trainee_name(name), self._ticket()
+                )
             except ValueError as err:
-                text = f"**cannot read the scores**: {err}"
+                text = f"**cannot read the scores**: {md_text(err)}"
         self.scores_md.content = text
         return text
 
@@ -117,5 +128,15 @@ class ScoresPanel:
         if name == self.console.loop.snapshot.recording:
             self.debrief_md.content = f"**{name}** is being recorded: stop the recording first"
             return
-        url = report_url(self.api_base, name)
-        self.debrief_md.content = f"[open the debrief of {name}]({url}) (opens the report page)"
+        ticket = self._ticket()
+        url = report_url(self.api_base, name, ticket)
+        self.debrief_md.content = f"[open the debrief of {md_text(name)}]({url}) " + (
+            "(opens the report page)"
+            if ticket
+            else "(the report needs the console token: unlock under Access first)"
+        )
+
+    def _ticket(self) -> str | None:
+        """The debrief ticket for a browser unlocked with the console or instructor token."""
+        unlocked = self.owner.unlocked or self.owner.instructor.unlocked
+        return self.console.debrief_ticket() if unlocked else None

@@ -22,6 +22,7 @@ from app.console import allowed_hosts, origin_allowed
 from web import geometry as geo
 from web.panels import ClientPanel
 from web.scene import SceneView
+from web.uploads import VIEW_MESSAGE_MAX_BYTES, UploadGuard
 
 if TYPE_CHECKING:
     from app.console import Console, Snapshot
@@ -38,7 +39,11 @@ class ConsoleView:
         self.refused_requests = 0
         """Requests to the view's port refused for their Host or Origin header."""
         self.server = _guarded_viser_server(
-            host, port, allowed_hosts(host, console.settings.allow_remote), self._count_refused
+            host,
+            port,
+            allowed_hosts(host, console.settings.allow_remote),
+            lambda: {console.settings.port, self.port},
+            self._count_refused,
         )
         self.share_requests_refused = 0
         _refuse_share_links(self.server, self._count_share_request)
@@ -49,6 +54,7 @@ class ConsoleView:
             brand_color=(20, 90, 160),
         )
         self.scene = SceneView(self.server)
+        self.uploads = UploadGuard()
         self._panels: dict[int, ClientPanel] = {}
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -95,12 +101,14 @@ class ConsoleView:
 
     def _connect(self, client: viser.ClientHandle) -> None:
         panel = ClientPanel(client, self.console, self.scene)
+        self.uploads.guard(client.gui, lambda: panel.unlocked, panel.builder.say)
         with self._lock:
             self._panels[client.client_id] = panel
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
             self._panels.pop(client.client_id, None)
+        self.uploads.forget_client(client.client_id)
 
     def shown_snapshot(self, client_id: int | None, live: Snapshot) -> Snapshot:
         """What browser ``client_id`` shows: its own replay when it has one open, else the live
@@ -179,12 +187,18 @@ _SERVE_LOCK = threading.Lock()
 
 
 def _guarded_viser_server(
-    host: str, port: int, hosts: list[str], on_refused: Callable[[], None]
+    host: str,
+    port: int,
+    hosts: list[str],
+    page_ports: Callable[[], set[int]],
+    on_refused: Callable[[], None],
 ) -> viser.ViserServer:
     """A viser server whose port answers only requests that name this server in their Host
-    header and, from a browser, come from one of its pages (Origin): the same checks as the
-    HTTP API (DNS rebinding; another web page the operator has open). viser has no option for
-    it, so its websockets server is started with a request check in front of viser's own."""
+    header and, from a browser, come from one of the console's pages (Origin: one of our names
+    and one of ``page_ports``, the view's own and the API's): the same checks as the HTTP API
+    (DNS rebinding; another web page the operator has open). viser has no option for it, so
+    its websockets server is started with a request check in front of viser's own, and with a
+    smaller largest message (``VIEW_MESSAGE_MAX_BYTES``, viser's is 50 MB)."""
     import websockets.asyncio.server as ws_server
 
     original = ws_server.serve
@@ -197,12 +211,13 @@ def _guarded_viser_server(
             if "*" not in hosts and name not in hosts and f"[{name}]" not in hosts:
                 on_refused()
                 return connection.respond(400, "Invalid host header\n")
-            if not origin_allowed(request.headers.get("Origin"), hosts):
+            if not origin_allowed(request.headers.get("Origin"), hosts, page_ports()):
                 on_refused()
                 return connection.respond(403, "Origin not allowed\n")
             return inner(connection, request) if inner is not None else None
 
         kwargs["process_request"] = check
+        kwargs["max_size"] = VIEW_MESSAGE_MAX_BYTES
         return original(handler, *args, **kwargs)
 
     with _SERVE_LOCK:  # the server binds inside the constructor: patched only meanwhile

@@ -58,6 +58,25 @@ def require_token(
 TokenDep = Annotated[None, Depends(require_token)]
 
 
+def require_reviewer(
+    request: Request,
+    console: ConsoleDep,
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
+    ticket: str | None = None,
+) -> None:
+    """Debriefs are for the people who run the session: the console token, the instructor's
+    token, or the ticket the 3D view puts in the links it gives unlocked browsers. Watchers
+    (no token) read scores but do not start the report's seconds of work."""
+    if console.is_debrief_ticket(ticket):
+        return
+    if credentials is not None and console.is_instructor_token(credentials.credentials):
+        return
+    require_token(request, console, credentials)  # the console token; wrong ones count
+
+
+ReviewerDep = Annotated[None, Depends(require_reviewer)]
+
+
 COMMAND_TIMEOUT_S = 10.0
 """How long an API request waits for the loop to apply its command [s]."""
 

@@ -8,7 +8,8 @@
 - wrong tokens are counted per client (``app.console.tokens.GuessLimit``): after too many,
   that client is refused with 429 until its window has passed.
 - a browser's WebSocket carries an Origin (``app.console.origin_allowed``): only this
-  server's own pages (or clients that send none, like scripts) may open the telemetry stream.
+  server's own pages, on the API's port or the 3D view's (or clients that send none, like
+  scripts), may open the telemetry, plots and pilot sockets (``websocket_origin_allowed``).
 """
 
 from __future__ import annotations
@@ -16,6 +17,9 @@ from __future__ import annotations
 import json
 from collections.abc import Awaitable, Callable, MutableMapping
 from typing import Any
+
+from starlette.datastructures import State
+from starlette.websockets import WebSocket
 
 from app.console import allowed_hosts, origin_allowed
 from app.console.operations import ACTOR
@@ -30,6 +34,21 @@ Message = MutableMapping[str, Any]
 Receive = Callable[[], Awaitable[Message]]
 Send = Callable[[Message], Awaitable[None]]
 App = Callable[[Scope, Receive, Send], Awaitable[None]]
+
+
+def page_ports(state: State) -> set[int]:
+    """The ports the console serves its pages on: the API's, and the 3D view's when it runs."""
+    ports = {state.console.settings.port}
+    if state.view is not None:
+        ports.add(state.view.port)
+    return ports
+
+
+def websocket_origin_allowed(websocket: WebSocket) -> bool:
+    """The socket was opened by one of the console's own pages, or by a client that sends no
+    Origin (a script)."""
+    state = websocket.app.state
+    return origin_allowed(websocket.headers.get("origin"), state.allowed_hosts, page_ports(state))
 
 
 class BodyTooLarge(Exception):
@@ -100,4 +119,6 @@ __all__ = [
     "BodyLimit",
     "allowed_hosts",
     "origin_allowed",
+    "page_ports",
+    "websocket_origin_allowed",
 ]

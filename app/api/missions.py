@@ -20,6 +20,7 @@ from app.api.schemas import (
 )
 from app.console import prepare_run
 from app.console.commands import AbortMission, StartRun
+from app.console.instance import check_sent_mission
 from missions import schema
 
 router = APIRouter(prefix="/api/missions", tags=["missions"])
@@ -36,12 +37,16 @@ def _summary(m: schema.Mission, source: str) -> MissionSummaryOut:
 
 
 def parse_text(body: MissionTextIn) -> schema.Mission:
-    """The mission in a request; MissionError names the field (and the line of a TOML)."""
+    """The mission in a request; MissionError names the field (and the line of a TOML), or
+    refuses a parameter set named by a server path (``check_sent_mission``)."""
     if (body.toml is None) == (body.mission is None):
         raise schema.MissionError("give exactly one of 'toml' (text) or 'mission' (object)")
     if body.toml is not None:
-        return schema.parse_text(body.toml, "toml")
-    return schema.parse_mission(body.mission or {}, "<upload>")
+        mission = schema.parse_text(body.toml, "toml")
+    else:
+        mission = schema.parse_mission(body.mission or {}, "<upload>")
+    check_sent_mission(mission)
+    return mission
 
 
 @router.get("", response_model=MissionListOut)

@@ -30,7 +30,7 @@ from typing import Any
 from fastapi import APIRouter, Request, WebSocket, WebSocketDisconnect
 from fastapi.responses import HTMLResponse
 
-from app.api.guards import origin_allowed
+from app.api.guards import websocket_origin_allowed
 from app.console import Console, ConsoleError
 from app.console.pilot import (
     DEMAND_TIMEOUT_S,
@@ -132,7 +132,7 @@ async def pilot_socket(websocket: WebSocket) -> None:
     """Fly by hand (see the module's protocol)."""
     state = websocket.app.state
     console: Console = state.console
-    if not origin_allowed(websocket.headers.get("origin"), state.allowed_hosts):
+    if not websocket_origin_allowed(websocket):
         await websocket.close(code=1008, reason="origin not allowed")
         return
     await websocket.accept()

@@ -35,7 +35,7 @@ import numpy as np
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from fastapi.responses import HTMLResponse
 
-from app.api.guards import origin_allowed
+from app.api.guards import websocket_origin_allowed
 from app.console import Snapshot
 
 router = APIRouter(tags=["plots"])
@@ -125,8 +125,7 @@ def _viewer(text: str | None) -> int | None:
 @router.websocket("/api/plots")
 async def plots_socket(websocket: WebSocket) -> None:
     """The plots' rows (see the module's protocol)."""
-    state = websocket.app.state
-    if not origin_allowed(websocket.headers.get("origin"), state.allowed_hosts):
+    if not websocket_origin_allowed(websocket):
         await websocket.close(code=1008, reason="origin not allowed")
         return
     await websocket.accept()

@@ -8,7 +8,7 @@ import contextlib
 from fastapi import APIRouter, Query, WebSocket, WebSocketDisconnect
 
 from app.api.deps import SnapshotDep
-from app.api.guards import MAX_TELEMETRY_CLIENTS, origin_allowed
+from app.api.guards import MAX_TELEMETRY_CLIENTS, websocket_origin_allowed
 from app.api.schemas import StateOut
 from app.console import Console
 
@@ -48,7 +48,7 @@ async def telemetry(
     console: Console = websocket.app.state.console
     cache: StateJsonCache = websocket.app.state.state_cache
     state = websocket.app.state
-    if not origin_allowed(websocket.headers.get("origin"), state.allowed_hosts):
+    if not websocket_origin_allowed(websocket):
         await websocket.close(code=1008, reason="origin not allowed")  # policy violation
         return
     if state.telemetry_clients >= MAX_TELEMETRY_CLIENTS:

@@ -45,7 +45,7 @@ from app.console.snapshot import (
     SceneInfo,
     Snapshot,
 )
-from app.console.texts import counters_markdown, result_markdown
+from app.console.texts import counters_markdown, md_code, md_text, result_markdown
 from app.console.tokens import INSTRUCTOR_TOKEN_ENV
 from app.console.viewer_replay import ViewerReplay
 from control.config import ALLOCATIONS, MODES, Gains
@@ -93,6 +93,8 @@ __all__ = [
     "is_loopback",
     "list_recordings",
     "load_replay",
+    "md_code",
+    "md_text",
     "origin_allowed",
     "prepare_run",
     "quaternion_wxyz_from_rpy_radians",

@@ -8,8 +8,10 @@ created at import time.
 
 from __future__ import annotations
 
+import re
 import secrets
 import threading
+import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
@@ -18,7 +20,10 @@ from app.console.session import PreparedRun, Session, prepare_run, station_keepi
 from app.console.settings import ConsoleSettings
 from app.console.tokens import GuessLimit
 from missions import schema
+from sim import params as params_mod
 
+DEBRIEF_TICKET_S = 600.0
+"""How long a debrief ticket (``Console.debrief_ticket``) opens debriefs [s]."""
 MAX_UPLOADS = 50
 """Uploaded missions kept in memory (the oldest goes first)."""
 
@@ -34,6 +39,8 @@ class Console:
     _uploads_lock: threading.Lock = field(default_factory=threading.Lock)
     guesses: GuessLimit = field(default_factory=GuessLimit)
     """Wrong tokens per client (HTTP address or 3D-view client)."""
+    _ticket: tuple[str, float] = ("", 0.0)
+    """The debrief ticket and when it expires (monotonic clock)."""
 
     @staticmethod
     def build(settings: ConsoleSettings) -> Console:
@@ -50,15 +57,38 @@ class Console:
         )
 
     def check_token(self, candidate: str | None, client: str) -> tuple[bool, float]:
-        """(is it the token, seconds the client must wait before trying again). A wrong token
-        counts against the client; a locked-out client is refused even with the right one."""
+        """(is it the token, seconds the client must wait before trying again). A wrong guess
+        costs the guesser, never the operator: no token at all is no guess (it counts for
+        nothing), and the right token is accepted even while ``client`` is locked out (on
+        loopback every local client shares one address, so locking the address locked the
+        operator out too). Only a wrong token counts against the client; once locked out, its
+        wrong tokens are refused with the wait."""
+        if not candidate:
+            return False, 0.0
+        if self.is_token(candidate):
+            return True, 0.0
         wait = self.guesses.retry_after_s(client)
         if wait > 0.0:
             return False, wait
-        if self.is_token(candidate):
-            return True, 0.0
         self.guesses.failed(client)
         return False, 0.0
+
+    def debrief_ticket(self) -> str:
+        """A ticket that opens debrief reports for ``DEBRIEF_TICKET_S``: the 3D view puts it
+        in the report links it gives unlocked browsers (a link cannot carry a header)."""
+        ticket, expires = self._ticket
+        if time.monotonic() > expires - DEBRIEF_TICKET_S / 2:  # fresh for half its life
+            ticket = secrets.token_urlsafe(18)
+            self._ticket = (ticket, time.monotonic() + DEBRIEF_TICKET_S)
+        return ticket
+
+    def is_debrief_ticket(self, candidate: str | None) -> bool:
+        ticket, expires = self._ticket
+        return (
+            bool(candidate and ticket)
+            and time.monotonic() < expires
+            and secrets.compare_digest(str(candidate).encode(), ticket.encode())
+        )
 
     # ----------------------------------------------------------- the instructor
     @property
@@ -66,21 +96,29 @@ class Console:
         """The instructor's features (faults) are on: an instructor token was set."""
         return self.settings.instructor_token is not None
 
+    def is_instructor_token(self, candidate: str | None) -> bool:
+        wanted = self.settings.instructor_token
+        return bool(candidate and wanted) and secrets.compare_digest(
+            str(candidate).encode(), str(wanted).encode()
+        )
+
     def check_instructor(self, candidate: str | None, client: str) -> tuple[str, float]:
         """('ok' | 'off' | 'missing' | 'console token' | 'wrong', seconds the client must wait).
-        Wrong tokens count against the client as for the console token (one guess limit)."""
+        As for the console token: no token and the console token are no guesses, the right
+        token is accepted during a lockout, and wrong ones count against the client (one
+        guess limit for both tokens)."""
         wanted = self.settings.instructor_token
         if wanted is None:
             return "off", 0.0
-        wait = self.guesses.retry_after_s(client)
-        if wait > 0.0:
-            return "wrong", wait
-        if candidate is None or candidate == "":
+        if not candidate:
             return "missing", 0.0
-        if secrets.compare_digest(candidate.encode(), wanted.encode()):
+        if self.is_instructor_token(candidate):
             return "ok", 0.0
         if self.is_token(candidate):
             return "console token", 0.0
+        wait = self.guesses.retry_after_s(client)
+        if wait > 0.0:
+            return "wrong", wait
         self.guesses.failed(client)
         return "wrong", 0.0
 
@@ -100,6 +138,9 @@ class Console:
         raise KeyError(name)
 
     def add_upload(self, mission: schema.Mission) -> str:
+        """Keep a mission sent over the network (HTTP or the 3D view); MissionError when it
+        names a server file (``check_sent_mission``), ValueError when its name is taken."""
+        check_sent_mission(mission)
         if mission.name in schema.library_names():
             raise ValueError(
                 f"name: {mission.name!r} is a library mission; give the upload another name"
@@ -110,6 +151,25 @@ class Console:
             while len(self.uploads) > MAX_UPLOADS:
                 self.uploads.popitem(last=False)
         return mission.name
+
+
+PRESET_NAME_RE = re.compile(r"^[A-Za-z0-9_-]{1,40}$")
+
+
+def check_sent_mission(mission: schema.Mission) -> None:
+    """A mission that came over the network names one of the console's parameter sets; it
+    never names a file on the server (which would be read, and its content quoted in the
+    error). Only the command line, reading a local mission file, may point at a parameter
+    file. MissionError names the field and the sets; it quotes no path."""
+    params = mission.setup.params
+    presets = params_mod.available_presets()
+    if params in presets:
+        return
+    got = f" (got {params!r})" if PRESET_NAME_RE.match(params) else " (got a file path)"
+    raise schema.MissionError(
+        f"setup.params: a mission sent to the console must name one of its parameter sets: "
+        f"{', '.join(presets)}{got}; parameter files are read only by the command line"
+    )
 
 
 def initial_run(settings: ConsoleSettings) -> PreparedRun:

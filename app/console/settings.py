@@ -5,6 +5,7 @@ from __future__ import annotations
 import ipaddress
 import math
 import socket
+from collections.abc import Collection
 from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import urlsplit
@@ -46,6 +47,10 @@ class ConsoleSettings:
     """Start speed (simulated s per wall-clock s)."""
     announce: bool = False
     """Print the addresses and the token once serving (the serve command)."""
+    behind_proxy: bool = False
+    """A reverse proxy on this machine stands in front of the console: its X-Forwarded-For
+    and X-Forwarded-Proto headers are believed (the client address the token lockout counts
+    and the operations log names). Off: those headers are ignored, whoever sends them."""
 
     def __post_init__(self) -> None:
         if isinstance(self.recordings_dir, str):
@@ -113,12 +118,22 @@ def allowed_hosts(host: str, allow_remote: bool) -> list[str]:
     return sorted(names)
 
 
-def origin_allowed(origin: str | None, hosts: list[str]) -> bool:
-    """A WebSocket's Origin (None for non-browser clients) must be one of our host names."""
+def origin_allowed(origin: str | None, hosts: list[str], ports: Collection[int]) -> bool:
+    """A WebSocket's Origin (None for non-browser clients) must be one of the console's own
+    pages: one of our host names and one of the ``ports`` it serves pages on (the API's and
+    the 3D view's), so another web server on this machine (``http://localhost:9999``) does
+    not pass."""
     if origin is None or "*" in hosts:
         return True
     try:
-        name = urlsplit(origin).hostname or ""
+        parts = urlsplit(origin)
+        name = parts.hostname or ""
+        port = parts.port or DEFAULT_PORTS.get(parts.scheme)
     except ValueError:
         return False
-    return name in hosts or f"[{name}]" in hosts or is_loopback(name)
+    named = name in hosts or f"[{name}]" in hosts or is_loopback(name)
+    return named and parts.scheme in DEFAULT_PORTS and port in ports
+
+
+DEFAULT_PORTS = {"http": 80, "https": 443}
+"""The port an Origin without one means, by its scheme (the only schemes a page has here)."""

@@ -4,30 +4,57 @@ snapshot's parts, so the 3D view only places them and the tests read them withou
 
 from __future__ import annotations
 
+import html
+import re
+
 from missions.scoring import LEG_TABLE_COLUMNS, QUALITY_CHECKS, landing_lines, leg_table_rows
 from sim.sensors import SENSOR_NAMES
+
+_MARKDOWN_PUNCTUATION = re.compile(r"([\\`*_{}\[\]()#+\-.!|~])")
+
+
+def md_text(value: object) -> str:
+    """``value`` as text that Markdown shows as itself: the 3D view renders the raw HTML in
+    its Markdown, so a name like ``<img onerror=...>`` would run in every viewer's browser.
+    HTML's ``& < >`` become entities, Markdown's punctuation is backslash-escaped (no links,
+    images, emphasis or table cells made by a name)."""
+    return _MARKDOWN_PUNCTUATION.sub(r"\\\1", html.escape(str(value), quote=False))
+
+
+def md_code(value: object) -> str:
+    """``value`` as an inline code span (shown verbatim, raw HTML inert): fenced by one more
+    backtick than the longest run of them inside, so no value closes its span early."""
+    text = str(value).replace("\n", " ")
+    runs = re.findall(r"`+", text)
+    fence = "`" * (max((len(r) for r in runs), default=0) + 1)
+    pad = " " if text.startswith("`") or text.endswith("`") else ""
+    return f"{fence}{pad}{text}{pad}{fence}"
 
 
 def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(cell.replace("|", "/") for cell in row) + " |" for row in rows]
+    lines += ["| " + " | ".join(md_text(cell) for cell in row) + " |" for row in rows]
     return "\n".join(lines)
 
 
 def result_markdown(name: str | None, state: str, result: dict) -> str:
-    """The finished mission: verdict, landings, per-leg table, warnings and the error."""
+    """The finished mission: verdict, landings, per-leg table, warnings and the error (every
+    name and message as text: ``md_text``)."""
+    title = f"**{md_text(name)}** {md_text(state)}"
     if "legs" not in result:  # the run itself failed before scoring
-        return f"**{name}** {state}: {result.get('error', 'no result')}"
+        return f"{title}: {md_text(result.get('error', 'no result'))}"
     verdict = "FAILED" if result.get("failed") else "completed"
-    parts = [f"**{name}** {state}: {verdict}"]
-    parts += [f"- {line}" for line in landing_lines(result)]
+    parts = [f"{title}: {verdict}"]
+    parts += [f"- {md_text(line)}" for line in landing_lines(result)]
     parts.append(_table(LEG_TABLE_COLUMNS, leg_table_rows(result)))
-    parts += [f"- warning: {w}" for w in result.get("warnings", [])]
+    parts += [f"- warning: {md_text(w)}" for w in result.get("warnings", [])]
     for leg in result["legs"]:
         if leg.get("error"):
-            parts.append(f"- leg {leg['index']} ({leg['type']}) failed: {leg['error']}")
+            parts.append(
+                f"- leg {leg['index']} ({md_text(leg['type'])}) failed: {md_text(leg['error'])}"
+            )
     if result.get("error"):
-        parts.append(f"**error**: {result['error']}")
+        parts.append(f"**error**: {md_text(result['error'])}")
     return "\n\n".join(parts)
 
 
