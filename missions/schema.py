@@ -8,6 +8,7 @@ interface), radians inside.
 
 from __future__ import annotations
 
+import functools
 import re
 import tomllib
 import typing
@@ -17,6 +18,7 @@ from typing import Annotated, Literal
 
 import tomli_w
 from pydantic import (
+    AfterValidator,
     AliasChoices,
     BaseModel,
     ConfigDict,
@@ -28,7 +30,8 @@ from pydantic import (
 
 from control.config import Allocation, Feedback, Mode, Reference
 from control.faults import Fault
-from sim import dynamic_wire
+from sim import dynamic_wire, site
+from sim import params as params_mod
 from sim.environment import DEFAULT_WAVE_LOAD
 from sim.params import KdVector, KiVector, KpVector
 
@@ -39,6 +42,50 @@ FORMAT_VERSION = 1
 LIBRARY_DIR = Path(__file__).with_name("library")
 
 Finite = Annotated[float, Field(allow_inf_nan=False)]
+
+
+def within(lo: float, hi: float, unit: str) -> Callable[[float], float]:
+    """A check whose error names the whole range ('must be in [-1000, 1000] m'), not one
+    side of it as pydantic's ge/le do."""
+
+    def check(value: float) -> float:
+        if not lo <= value <= hi:
+            raise ValueError(f"must be in [{lo:g}, {hi:g}] {unit}")
+        return value
+
+    return check
+
+
+def _bounds(lo: float, hi: float) -> typing.Any:
+    """A finite number whose JSON schema carries both ends of ``within``'s range."""
+    return Field(allow_inf_nan=False, json_schema_extra={"minimum": lo, "maximum": hi})
+
+
+SITE_RANGE_M = 1000.0
+"""Horizontal positions on the site (crane tip, docking frame, waypoints) within +-this of
+the origin [m]: the console's vessel and move legs reach as far (a tree hangs under its crane
+tip; a frame a kilometre off it is already out of the ROV's reach)."""
+SURVEY_ERROR_MAX_M = 50.0
+"""Largest charted-to-real offset of a docking frame [m] (campaigns vary it by +-20 m)."""
+MOUNT_RANGE_M = 20.0
+"""Each component of a configured mount vector within +-this [m] (the full-scale ROV sits
+2 m behind the tree's centre)."""
+SiteM = Annotated[
+    float,
+    _bounds(-SITE_RANGE_M, SITE_RANGE_M),
+    AfterValidator(within(-SITE_RANGE_M, SITE_RANGE_M, "m")),
+]
+SurveyM = Annotated[
+    float,
+    _bounds(-SURVEY_ERROR_MAX_M, SURVEY_ERROR_MAX_M),
+    AfterValidator(within(-SURVEY_ERROR_MAX_M, SURVEY_ERROR_MAX_M, "m")),
+]
+MountM = Annotated[
+    float,
+    _bounds(-MOUNT_RANGE_M, MOUNT_RANGE_M),
+    AfterValidator(within(-MOUNT_RANGE_M, MOUNT_RANGE_M, "m")),
+]
+_NE = Field(min_length=2, max_length=2)
 
 
 class MissionError(ValueError):
@@ -62,6 +109,11 @@ def _check_name(value: str, pattern: re.Pattern[str], what: str) -> str:
     if not pattern.fullmatch(value):
         raise ValueError(
             f"{what} must be 1 to 80 characters: {NAME_CHARS} (got {len(value)} characters)"
+        )
+    if value != " ".join(value.split()):
+        raise ValueError(
+            f"{what} must not start or end with a space or hold two in a row (names that "
+            "differ only in spaces look alike in every list)"
         )
     return value
 
@@ -140,24 +192,27 @@ class PlantVariation(_Model):
 class DockingFrameSetup(_Model):
     """Where the docking frame stands; its posts come from the parameter set."""
 
-    center_ne_m: Annotated[list[Finite], Field(min_length=2, max_length=2)] = Field(
-        description="north, east of the frame's centre [m]"
+    center_ne_m: Annotated[list[SiteM], _NE] = Field(
+        description=f"north, east of the frame's centre, each in +-{SITE_RANGE_M:g} [m]"
     )
     heading_deg: float = Field(ge=-360.0, le=360.0, description="heading the tree must land at")
     landing_depth_m: float = Field(
         gt=5.0, le=4000.0, description="depth of the landing surface (seabed) [m]"
     )
-    survey_error_ne_m: Annotated[list[Finite], Field(min_length=2, max_length=2)] = Field(
+    survey_error_ne_m: Annotated[list[SurveyM], _NE] = Field(
         default=[0.0, 0.0],
         description="where the frame really is, relative to the charted "
-        "center_ne_m the operator aligns to [m]",
+        f"center_ne_m the operator aligns to, each in +-{SURVEY_ERROR_MAX_M:g} [m]",
     )
 
 
 class Setup(_Model):
     params: str = Field(description="parameter set name or file")
     depth_m: float = Field(gt=5.0, le=4000.0, description="tree depth [m]")
-    crane_tip_n: Annotated[list[Finite], Field(min_length=2, max_length=2)] = [1.0, 1.0]
+    crane_tip_n: Annotated[list[SiteM], _NE] = Field(
+        default=[1.0, 1.0],
+        description=f"north, east of the crane tip, each in +-{SITE_RANGE_M:g} [m]",
+    )
     heading_deg: float = Field(default=0.0, ge=-360.0, le=360.0, description="initial heading")
     current: CurrentSetup = CurrentSetup(speed_mps=0.0, direction_deg=0.0)
     waves: WaveSetup | None = None
@@ -180,9 +235,10 @@ class Setup(_Model):
         description="ROV heave force while on the tree [N]",
         validation_alias=AliasChoices("heave_force_newton", "heave_force_n"),
     )
-    r_mount_config_m: Annotated[list[Finite], Field(min_length=3, max_length=3)] | None = Field(
+    r_mount_config_m: Annotated[list[MountM], Field(min_length=3, max_length=3)] | None = Field(
         default=None,
-        description="mount vector the controller is configured with (default: the parameter set's)",
+        description="mount vector the controller is configured with, each component in "
+        f"+-{MOUNT_RANGE_M:g} m (default: the parameter set's)",
     )
     plant: PlantVariation = PlantVariation()
     docking_frame: DockingFrameSetup | None = None
@@ -265,8 +321,10 @@ class SquareLeg(_Reaching):
 
 class WaypointsLeg(_Reaching):
     type: Literal["waypoints"]
-    points_ne_m: list[Annotated[list[Finite], Field(min_length=2, max_length=2)]] = Field(
-        min_length=1, max_length=200
+    points_ne_m: list[Annotated[list[SiteM], _NE]] = Field(
+        min_length=1,
+        max_length=200,
+        description=f"[north, east] points, each coordinate in +-{SITE_RANGE_M:g} [m]",
     )
     relative: bool = True
     settle_s: float = Field(default=10.0, ge=0.0, le=3600.0)
@@ -404,7 +462,7 @@ class FaultSpec(_Model):
     its value means), e.g. the sea trial's broken DVL cable or the winch that slipped."""
 
     kind: str = Field(description="one of control.faults.FAULT_KINDS")
-    start_s: Finite = Field(ge=0.0, description="simulation time it starts [s]")
+    start_s: Finite = Field(ge=0.0, le=MAX_MISSION_S, description="simulation time it starts [s]")
     duration_s: Finite = Field(gt=0.0, le=MAX_MISSION_S, description="how long it lasts [s]")
     value: Finite = Field(default=0.0, description="size, in the kind's unit")
     direction_deg: Finite = Field(default=0.0, ge=-360.0, le=360.0)
@@ -419,6 +477,26 @@ class FaultSpec(_Model):
         return Fault(
             self.kind, self.start_s, self.duration_s, self.value, self.direction_deg, self.thruster
         )
+
+
+WIRE_LENGTH_RANGE_M = (1.0, 5000.0)
+"""Unstretched wire the winch may pay out [m] (control.simulation.WIRE_LENGTH_RANGE_M)."""
+
+
+@functools.lru_cache(maxsize=8)
+def _preset(name: str) -> params_mod.ParameterSet:
+    return params_mod.load(name)
+
+
+def start_payout_m(setup: Setup) -> float:
+    """Unstretched wire that hangs the tree at ``setup.depth_m`` [m]: the parameter set's
+    equilibrium (``sim.site.wire_length_for_depth``: depth less the attachment height and
+    the stretch) when it names one of the library's sets, else the depth itself. A path is
+    never read here: a mission from the network is validated before its set is checked."""
+    if setup.params not in params_mod.available_presets():
+        return setup.depth_m
+    ps = _preset(setup.params)
+    return site.wire_length_for_depth(ps, setup.depth_m, 0.0, setup.current.speed_mps)
 
 
 MAX_FAULTS = 50
@@ -454,26 +532,32 @@ class Mission(_Model):
 
     def _check_wire_payout(self) -> None:
         """Refuse a winch plan that hauls in more wire than there is (or pays out more than
-        the winch holds), from the payout the set-up hangs the tree on: about its depth."""
-        payout = self.setup.depth_m
-        lo, hi = (1.0, 5000.0)
+        the winch holds), from the payout the set-up hangs the tree on (``start_payout_m``):
+        the error gives the change the leg may ask for."""
+        lo, hi = WIRE_LENGTH_RANGE_M
         if self.setup.wire == "moordyn":
             lo, hi = dynamic_wire.COUPLED_LENGTH_RANGE_M
-            if not MOORDYN_DEPTH_MIN_M <= payout <= hi:
+            depth = self.setup.depth_m
+            if not MOORDYN_DEPTH_MIN_M <= depth <= hi:
                 raise ValueError(
                     f"setup.depth_m: the moordyn wire needs a tree depth in "
                     f"[{MOORDYN_DEPTH_MIN_M:g}, {hi:g}] m (at least {lo:g} m of wire), "
-                    f"got {payout:g}"
+                    f"got {depth:g}"
                 )
+        if not any(leg.type == "wire" for leg in self.legs):
+            return
+        payout = start_payout_m(self.setup)
         for i, leg in enumerate(self.legs):
             if leg.type == "wire":
-                payout += leg.change_m
-                if payout < lo or payout > hi:
+                if not lo <= payout + leg.change_m <= hi:
                     raise ValueError(
-                        f"legs[{i + 1}] (wire).change_m: the winch would end at about "
-                        f"{payout:.0f} m of wire; it must stay in [{lo:g}, {hi:g}] m"
-                        + (" with the moordyn wire" if self.setup.wire == "moordyn" else "")
+                        f"legs[{i + 1}] (wire).change_m: with about {payout:.1f} m of wire out "
+                        f"there, change_m must be in [{lo - payout:.1f}, {hi - payout:.1f}] m "
+                        f"(the wire stays in [{lo:g}, {hi:g}] m"
+                        + (" with the moordyn wire)" if self.setup.wire == "moordyn" else ")")
+                        + f", got {leg.change_m:g}"
                     )
+                payout += leg.change_m
             elif leg.type in ("dock", "lift") and self.setup.docking_frame is not None:
                 payout = self.setup.docking_frame.landing_depth_m
 

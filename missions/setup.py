@@ -16,6 +16,19 @@ from sim.docking import DockingFrame
 from sim.vessel import VesselMotion
 
 
+def load_params(name_or_path: str) -> params_mod.ParameterSet:
+    """A parameter set by name or file; a file that is not text (a binary, a file in another
+    encoding) is a ParameterError naming the file, not a bare UTF-8 decoding error."""
+    try:
+        return params_mod.load(name_or_path)
+    except UnicodeDecodeError as err:
+        raise params_mod.ParameterError(
+            f"cannot read the parameter file {name_or_path}: it is not UTF-8 text (byte "
+            f"{err.start} is 0x{err.object[err.start]:02x}); a parameter set is a TOML or "
+            "JSON file"
+        ) from None
+
+
 def build_simulation(
     mission: schema.Mission,
     seed: int | None = None,
@@ -27,7 +40,7 @@ def build_simulation(
     """The Simulation a mission's set-up describes (options override the file; ``params``
     replaces the parameter set the file names, e.g. a campaign's with scaled sensor noise)."""
     s = mission.setup
-    ps = params_mod.load(s.params) if params is None else params
+    ps = load_params(s.params) if params is None else params
     plant_ps = None
     if s.plant.mass_scale != 1.0 or s.plant.weight_scale != 1.0:
         plant_ps = vary_tree(ps, s.plant.mass_scale, s.plant.weight_scale)

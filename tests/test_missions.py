@@ -346,3 +346,89 @@ def test_step_leg_that_reaches_its_target_passes():
     m["legs"][1].update(north_m=0.5, east_m=0.0, heading_deg=0.0, duration_s=200.0)
     r = runner.run_mission(schema.parse_mission(m))
     assert not r.failed, r.legs[1].error
+
+
+# ---------------------------------------------------------------- issue 47: ranges (14, 16)
+def _mission(setup: dict | None = None, legs: list | None = None) -> dict:
+    return {
+        "format_version": 1,
+        "name": "ranges",
+        "setup": {"params": "full-scale", "depth_m": 100.0, **(setup or {})},
+        "legs": legs or [{"type": "hold", "duration_s": 1.0}],
+    }
+
+
+FRAME = {"center_ne_m": [4.0, 2.5], "heading_deg": 0.0, "landing_depth_m": 200.0}
+
+
+@pytest.mark.parametrize(
+    ("setup", "legs", "message"),
+    [
+        ({"crane_tip_n": [1e308, 0.0]}, None, "setup.crane_tip_n[1]: must be in [-1000, 1000] m"),
+        (
+            {"docking_frame": {**FRAME, "center_ne_m": [0.0, 1e308]}},
+            None,
+            "setup.docking_frame.center_ne_m[2]: must be in [-1000, 1000] m",
+        ),
+        (
+            {"docking_frame": {**FRAME, "survey_error_ne_m": [-1e308, 0.0]}},
+            None,
+            "setup.docking_frame.survey_error_ne_m[1]: must be in [-50, 50] m",
+        ),
+        ({"r_mount_config_m": [-2.0, 0.0, 1e308]}, None, "setup.r_mount_config_m[3]: must be "),
+        (
+            None,
+            [{"type": "waypoints", "points_ne_m": [[0.0, 0.0], [1e308, 0.0]]}],
+            "legs[1] (waypoints).points_ne_m[2][1]: must be in [-1000, 1000] m",
+        ),
+    ],
+)
+def test_positions_and_vectors_are_refused_outside_their_physical_range_naming_it(
+    setup, legs, message
+):
+    """Issue 47 item 14: these took 1e308 (a crane tip at 1e308 put the tree 1e308 m north and
+    the mission 'completed'); the error names the field and both ends of its range."""
+    with pytest.raises(schema.MissionError) as err:
+        schema.parse_mission(_mission(setup, legs))
+    assert message in str(err.value)
+    assert "1e+308)" in str(err.value)  # what was given
+
+
+def test_the_range_of_each_position_is_in_the_json_schema():
+    frame = schema.DockingFrameSetup.model_json_schema()["properties"]["center_ne_m"]
+    assert frame["items"]["minimum"] == -1000.0 and frame["items"]["maximum"] == 1000.0
+
+
+def test_hauling_in_more_wire_than_hangs_out_is_refused_with_the_change_allowed():
+    """Issue 47 item 16: 99 m hauled in at 100 m depth passed (the check started from the
+    depth) and failed at run time ('wire length ... got -1.66'): the tree hangs on about
+    97.3 m of wire (attachment height 2.58 m and the stretch), so at most 96.3 m come in."""
+    with pytest.raises(schema.MissionError) as err:
+        schema.parse_mission(_mission(legs=[{"type": "wire", "change_m": -99.0}]))
+    text = str(err.value)
+    assert "legs[1] (wire).change_m: with about 97.3 m of wire out there" in text
+    assert "change_m must be in [-96.3, 4902.7] m" in text and "got -99" in text
+    ok = schema.parse_mission(_mission(legs=[{"type": "wire", "change_m": -96.0}]))
+    assert ok.legs[0].change_m == -96.0  # type: ignore[union-attr]
+
+
+def test_a_binary_parameter_file_is_a_clear_error(tmp_path):
+    """Issue 47 item 17: a binary parameter file gave a bare 'utf-8' codec error."""
+    from missions.setup import load_params
+    from sim.params import ParameterError
+
+    binary = tmp_path / "params.toml"
+    binary.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00")
+    with pytest.raises(ParameterError) as err:
+        load_params(str(binary))
+    assert "it is not UTF-8 text (byte 0 is 0x89); a parameter set is a TOML or JSON" in str(
+        err.value
+    )
+
+
+@pytest.mark.parametrize("name", ["full-square-400 ", " full-square-400", "full  square"])
+def test_names_with_spaces_at_an_end_or_doubled_are_refused(name):
+    """Issue 47 item 17: 'full-square-400 ' looked like the library's mission in every list."""
+    with pytest.raises(schema.MissionError) as err:
+        schema.parse_mission({**_mission(), "name": name})
+    assert "name must not start or end with a space or hold two in a row" in str(err.value)
