@@ -9,9 +9,10 @@ from collections.abc import Iterator
 import pytest
 from fastapi.testclient import TestClient
 
+from app.api.pilot import newest_stick_wins
 from app.console import ConsoleSettings
 from app.console.operations import trainee_of
-from app.console.pilot import DEMAND_TIMEOUT_S
+from app.console.pilot import DEMAND_TIMEOUT_S, PilotDemand, PilotHolds, PilotTakeOver
 from app.server import create_app
 
 TOKEN = "pilot-test-token-0123456789"
@@ -113,6 +114,58 @@ def test_fly_by_socket_and_the_stick_is_zeroed_when_the_page_falls_silent(
     assert not any(a.startswith("pilot demand") for _, a in mine)  # the stick is not logged
     time.sleep(0.3)
     assert client.app.state.pilot_name is None  # type: ignore[attr-defined]
+
+
+def test_the_newest_stick_wins_holds_and_take_overs_are_kept() -> None:
+    stick = [PilotDemand(v, 0.0, 0.0, 0.0) for v in (0.1, 0.2, 0.3)]
+    holds, take = PilotHolds(True, False), PilotTakeOver(True)
+    assert newest_stick_wins([stick[0], holds, stick[1], take, stick[2]]) == [
+        holds,
+        take,
+        stick[2],
+    ]
+    assert newest_stick_wins([holds, take]) == [holds, take]
+    assert newest_stick_wins([]) == []
+
+
+def test_a_zero_stick_after_a_burst_is_applied_next_and_no_stale_stick_after_it(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Issue 47 item 10: sticks at 400 Hz for 5 s, then let go. Each stick waited for its own
+    tick, so the zero came 20 s later with full thrust meanwhile. Now the sticks that
+    arrived since the last tick give way to the newest: the zero is applied straight after
+    the burst has been read and no stick of the burst is applied after it."""
+    loop = client.app.state.console.loop  # type: ignore[attr-defined]
+    submitted: list[object] = []
+    submit = loop.submit
+
+    def spy(command, who=None):
+        submitted.append(command)
+        return submit(command, who)
+
+    monkeypatch.setattr(loop, "submit", spy)
+    burst = 2000
+    with client.websocket_connect(URL) as ws:
+        ws.send_json({"type": "hello", "token": TOKEN, "name": "Anna"})
+        assert ws.receive_json()["type"] == "welcome"
+        ws.send_json({"type": "mode", "pilot": True})
+        until(ws, lambda m: m.get("status", {}).get("mode") == "manual", "manual mode")
+        full = {"type": "demand", "surge": 1.0, "sway": 0.0, "heave": 0.0, "yaw": 0.0}
+        for _ in range(burst):
+            ws.send_json(full)
+        ws.send_json({**full, "surge": 0.0})
+        until(
+            ws,
+            lambda m: m.get("status", {}).get("demand", {}).get("surge") == 0.0,
+            "the zero stick",
+            limit=5 * burst,
+        )
+        sticks = [c for c in submitted if isinstance(c, PilotDemand)]
+        assert sticks[-1].surge == 0.0
+        assert len(sticks) < burst / 10, f"{len(sticks)} of {burst + 1} sticks were queued"
+        assert sim_of(client).pilot_demand[0] == 0.0
+        ws.send_json({"type": "mode", "pilot": False})
+        until(ws, lambda m: m.get("status", {}).get("mode") == "tree", "back on the autopilot")
 
 
 def test_take_over_is_refused_while_a_mission_runs_its_legs(client: TestClient) -> None:

@@ -165,9 +165,21 @@ async def pilot_socket(websocket: WebSocket) -> None:
             await websocket.close()
 
 
+def newest_stick_wins(commands: list[object]) -> list[object]:
+    """The commands to apply of those that arrived since the last tick, in their order,
+    with every stick but the newest dropped: a stick replaces the one before, so a page
+    that sends faster than the loop ticks (a gamepad at 400 Hz) never builds a queue of
+    stale sticks, and letting go applies on the next tick. Holds and take-overs are kept."""
+    last = max((i for i, c in enumerate(commands) if isinstance(c, PilotDemand)), default=-1)
+    return [c for i, c in enumerate(commands) if i == last or not isinstance(c, PilotDemand)]
+
+
 async def _fly(websocket: WebSocket, console: Console, who: str, last: dict[str, Any]) -> str:
-    """Apply the page's messages until it goes; returns why it went."""
+    """Apply the page's messages until it goes; returns why it went. A reader takes every
+    message as it comes; each round applies what arrived meanwhile (``newest_stick_wins``)."""
     status = dict(last)
+    inbox: list[str] = []
+    arrived = asyncio.Event()
 
     async def report() -> None:
         with contextlib.suppress(WebSocketDisconnect, RuntimeError, OSError, TimeoutError):
@@ -176,12 +188,18 @@ async def _fly(websocket: WebSocket, console: Console, who: str, last: dict[str,
                 snap_status = _snapshot_status(console, status)
                 await _send(websocket, {"type": "status", "status": snap_status})
 
+    async def read() -> None:
+        while True:
+            inbox.append(await websocket.receive_text())
+            arrived.set()
+
     reporter = asyncio.create_task(report())
+    reader = asyncio.create_task(read())
     silent = False
     try:
         while not reporter.done():
             try:
-                text = await asyncio.wait_for(websocket.receive_text(), DEMAND_TIMEOUT_S)
+                await asyncio.wait_for(_next(arrived, reader), DEMAND_TIMEOUT_S)
             except TimeoutError:
                 if not silent:  # once per silence: zero the stick (logged)
                     silent = True
@@ -192,15 +210,46 @@ async def _fly(websocket: WebSocket, console: Console, who: str, last: dict[str,
                     )
                 continue
             silent = False
-            try:
-                command = _parse(text)
-                status.update(await _command(console, command, who))
-            except (ValueError, ConsoleError) as err:
-                await _send(websocket, {"type": "error", "message": str(err)})
-                continue
-            await _send(websocket, {"type": "status", "status": status})
+            texts, inbox[:] = list(inbox), []
+            arrived.clear()
+            await _apply(websocket, console, who, texts, status)
         return "status could not be sent"
     except WebSocketDisconnect:
         return "page closed"
     finally:
         reporter.cancel()
+        reader.cancel()
+
+
+async def _next(arrived: asyncio.Event, reader: asyncio.Task[None]) -> None:
+    """Until a message has arrived; the reader's end (the page closed) is raised here."""
+    waiter = asyncio.ensure_future(arrived.wait())
+    try:
+        await asyncio.wait({waiter, reader}, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        waiter.cancel()
+    if reader.done() and not arrived.is_set():
+        reader.result()  # WebSocketDisconnect (or the error that ended it)
+        raise WebSocketDisconnect
+
+
+async def _apply(
+    websocket: WebSocket, console: Console, who: str, texts: list[str], status: dict[str, Any]
+) -> None:
+    """Parse the messages that arrived (an error answered for each bad one) and apply them,
+    the newest stick only; then send the status once."""
+    commands: list[object] = []
+    for text in texts:
+        try:
+            commands.append(_parse(text))
+        except ValueError as err:
+            await _send(websocket, {"type": "error", "message": str(err)})
+    applied = False
+    for command in newest_stick_wins(commands):
+        try:
+            status.update(await _command(console, command, who))
+            applied = True
+        except (ValueError, ConsoleError) as err:
+            await _send(websocket, {"type": "error", "message": str(err)})
+    if applied:
+        await _send(websocket, {"type": "status", "status": status})
