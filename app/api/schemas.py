@@ -47,8 +47,9 @@ class ErrorOut(BaseModel):
 
 # ------------------------------------------------------------------ health, state
 class HealthOut(BaseModel):
-    status: Literal["ok", "stopped", "stalled"] = Field(
-        description="ok: the loop ticks; stopped: its task ended; stalled: no tick for 2 s"
+    status: Literal["ok", "stopped", "stalled", "broken"] = Field(
+        description="ok: the loop ticks; stopped: its task ended; stalled: no tick for 2 s; "
+        "broken: it ticks but its state cannot be served (state_error says why)"
     )
     t_s: float = Field(description="simulation time [s]")
     loop_running: bool
@@ -57,6 +58,9 @@ class HealthOut(BaseModel):
         default=None, description="why the run is stopped (divergence, a failed step), if it is"
     )
     faults: int = Field(default=0, description="errors the loop caught and survived")
+    state_error: str | None = Field(
+        default=None, description="why /api/state and telemetry cannot send the state, if so"
+    )
 
 
 class EtaOut(BaseModel):
@@ -263,7 +267,12 @@ class CommandOut(BaseModel):
 def _gain_list(limit: float) -> Any:
     return Annotated[
         list[Annotated[float, Field(ge=0.0, le=limit, allow_inf_nan=False)]],
-        Field(min_length=3, max_length=3, description="[surge, sway, yaw]"),
+        Field(
+            min_length=3,
+            max_length=3,
+            description="[surge, sway, yaw], each in [0, 4 x the running parameter set's "
+            "gain] (the ranges per axis are in prefixItems)",
+        ),
     ]
 
 

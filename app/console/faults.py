@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 from app.console.errors import ConsoleError
 from control.faults import DURATION_MAX_S, FAULT_KINDS, THRUSTER_KINDS, Fault
+from missions.schema import MAX_FAULTS
 
 if TYPE_CHECKING:
     from app.console.loop import PacedLoop
@@ -23,6 +24,12 @@ if TYPE_CHECKING:
 
 FAULT_LOG_KEEP = 20
 """Fault starts and ends a snapshot carries (the newest)."""
+MAX_LIVE_FAULTS = MAX_FAULTS
+"""Faults active or scheduled at once, at most: as many as a mission file may carry. Each
+one costs every step a look (1 342 scheduled ahead took the loop's step p99 to 226 ms)."""
+MAX_RUN_FAULTS = 500
+"""Faults one run keeps, past ones included (the simulation checks them all each chunk);
+clearing the faults or a new run starts the count again."""
 
 
 @dataclass(frozen=True)
@@ -110,6 +117,7 @@ class InjectFault:
                 f"start_s must be in [{now:.2f}, {now + DURATION_MAX_S:.0f}] s "
                 f"(now or later, in simulation time), got {start:g}"
             )
+        check_room_for_a_fault(sim)
         fault = self.fault(start)
         sim.inject_fault(fault)
         session.note(
@@ -133,6 +141,22 @@ class InjectFault:
         }
 
 
+def check_room_for_a_fault(sim: Simulation) -> None:
+    """ConsoleError (409) with the limit when another fault would pass ``MAX_LIVE_FAULTS``
+    active or scheduled, or ``MAX_RUN_FAULTS`` in this run."""
+    live = len(fault_views(sim))
+    if live >= MAX_LIVE_FAULTS:
+        raise ConsoleError(
+            f"{live} faults are active or scheduled, the most at once is {MAX_LIVE_FAULTS}: "
+            "wait for some to end or clear them (DELETE /api/faults)"
+        )
+    if len(sim.faults) >= MAX_RUN_FAULTS:
+        raise ConsoleError(
+            f"this run has had {len(sim.faults)} faults, the most one run keeps is "
+            f"{MAX_RUN_FAULTS}: clear them (DELETE /api/faults) or start a new run"
+        )
+
+
 @dataclass(frozen=True)
 class ClearFaults:
     """End every injected fault now and drop the scheduled ones."""
@@ -143,7 +167,7 @@ class ClearFaults:
         session = console.session
         session.require_live("clear faults")
         n = len(fault_views(session.sim))
-        if n == 0:
+        if n == 0 and not session.sim.faults:
             raise ConsoleError("no fault is active or scheduled")
         session.sim.clear_faults()
         session.note("instructor", f"faults cleared ({n})", {"cleared": n})
