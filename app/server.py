@@ -19,8 +19,10 @@ from typing import Any
 
 import uvicorn
 from fastapi import FastAPI, Request
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
+from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from app.api import (
@@ -38,10 +40,12 @@ from app.api import (
     scores,
     state,
 )
-from app.api.guards import MAX_BODY_BYTES, BodyLimit, allowed_hosts
+from app.api.guards import MAX_BODY_BYTES, BodyLimit, MethodGuard, allowed_hosts
 from app.api.schemas import ErrorOut
 from app.api.state import StateJsonCache
 from app.console import Console, ConsoleSettings
+from app.console.commands import gain_band
+from app.console.texts import without_server_paths
 
 GIL_SWITCH_INTERVAL_S = 0.001
 """How long a Python thread may hold the GIL before another runnable one gets it (5 ms by
@@ -108,6 +112,7 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
         "Watching needs no token; actions that change the run need "
         "'Authorization: Bearer <token>'.",
     )
+    _openapi_with_gain_band(app, console)
     app.state.console = console
     app.state.state_cache = StateJsonCache()
     app.state.reports = scores.ReportCache()
@@ -118,27 +123,63 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
     for router in ROUTERS:
         app.include_router(router, responses=ERROR_RESPONSES)
     app.add_exception_handler(RequestValidationError, _validation_error)
+    app.add_exception_handler(StarletteHTTPException, _http_error)
     app.add_exception_handler(RecursionError, _too_deep)
+    app.add_middleware(MethodGuard, routes=[r for router in ROUTERS for r in router.routes])
     app.add_middleware(TrustedHostMiddleware, allowed_hosts=app.state.allowed_hosts)
     app.add_middleware(BodyLimit, limit=MAX_BODY_BYTES)
     return app
+
+
+def _openapi_with_gain_band(app: FastAPI, console: Console) -> None:
+    """/openapi.json states the gains PUT /api/gains accepts now: each in [0, gain_band] of
+    the running parameter set's gain (``app.console.commands.check_gain_band``), one range
+    per axis (``prefixItems``), not the wider static limit every parameter file may use.
+    The schema is built afresh on each request: the parameter set changes with a reset or a
+    mission."""
+    build = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        app.openapi_schema = None
+        schema = build()
+        gains = console.loop.session.sim.ps.gains
+        properties = schema["components"]["schemas"]["GainsIn"]["properties"]
+        for term in ("kp", "ki", "kd"):
+            bands = [gain_band(float(g)) for g in getattr(gains, term)]
+            axes = [{"type": "number", "minimum": 0.0, "maximum": b} for b in bands]
+            properties[term]["prefixItems"] = axes
+            properties[term]["items"] = {"type": "number", "minimum": 0.0, "maximum": max(bands)}
+        return schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
 
 
 ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     code: {"model": ErrorOut, "description": text}
     for code, text in (
         (400, "malformed request (bad Host header, nesting too deep)"),
+        (405, "the path does not take this method (the Allow header lists those it takes)"),
         (401, "this action needs the console token (faults: the instructor token)"),
         (403, "instructor features off, or the console token sent for an instructor action"),
         (404, "no such mission or recording"),
         (409, "cannot be done now (a mission is running, a replay is open ...)"),
         (413, "request body too large"),
+        (415, "the body is not JSON"),
         (422, "a field is out of range or of the wrong type; the message names it"),
         (429, "too many wrong tokens from this client"),
         (503, "the simulation loop did not answer"),
     )
 }
 """The error answers every route may give: ``{"detail": "<what is wrong>"}``."""
+
+
+async def _http_error(request: Request, exc: Exception) -> Response:
+    """FastAPI's answer to an HTTPException, its message without the server's paths (a
+    recording's or the scores database's folder): ``without_server_paths``."""
+    assert isinstance(exc, StarletteHTTPException)
+    if isinstance(exc.detail, str):
+        exc.detail = without_server_paths(exc.detail)
+    return await http_exception_handler(request, exc)
 
 
 async def _too_deep(request: Request, exc: Exception) -> JSONResponse:

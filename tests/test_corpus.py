@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -91,6 +92,20 @@ def body_bytes(spec: str) -> bytes | None:
     return spec.encode()
 
 
+def request_body(spec: str) -> tuple[bytes | Iterator[bytes] | None, dict[str, str]]:
+    """(content, headers) of a case: JSON, but @text:TEXT goes as text/plain and
+    @chunked:N as N bytes of JSON string in 8 kB chunks with no declared length."""
+    kind, _, arg = spec.partition(":")
+    if kind == "@text":
+        return arg.encode(), {"content-type": "text/plain"}
+    json_type = {"content-type": "application/json"}
+    if kind == "@chunked":
+        whole = json.dumps({"toml": "x" * int(arg)}).encode()
+        return (whole[i : i + 8192] for i in range(0, len(whole), 8192)), json_type
+    content = body_bytes(spec)
+    return content, json_type if content is not None else {}
+
+
 CASES = read_corpus()
 
 
@@ -124,8 +139,7 @@ def test_every_bad_request_gets_its_status_and_words_and_the_loop_goes_on(served
     with httpx.Client(base_url=served.base_url, timeout=60.0) as client:
         t0 = client.get("/api/health").json()["t_s"]
         for case in CASES:
-            content = body_bytes(case.body)
-            extra = {"content-type": "application/json"} if content is not None else {}
+            content, extra = request_body(case.body)
             r = client.request(
                 case.method, case.path, content=content, headers={**headers[case.auth], **extra}
             )

@@ -21,6 +21,7 @@ from app.api.schemas import (
 from app.console import prepare_run
 from app.console.commands import AbortMission, StartRun
 from app.console.instance import check_sent_mission
+from app.console.texts import quoted
 from missions import schema
 
 router = APIRouter(prefix="/api/missions", tags=["missions"])
@@ -76,7 +77,7 @@ def get_mission(name: str, console: ConsoleDep) -> MissionOut:
     try:
         m = console.find_mission(name)
     except KeyError:
-        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no mission named {name!r}") from None
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no mission named {quoted(name)}") from None
     return MissionOut(name=m.name, mission=m.model_dump(mode="json"), toml=schema.dump_mission(m))
 
 
@@ -110,7 +111,7 @@ async def start(body: StartMissionIn, console: ConsoleDep, _: TokenDep) -> Comma
         mission = console.find_mission(body.name)
     except KeyError:
         raise HTTPException(
-            status.HTTP_404_NOT_FOUND, f"name: no mission named {body.name!r}"
+            status.HTTP_404_NOT_FOUND, f"name: no mission named {quoted(body.name)}"
         ) from None
     try:
         run = await asyncio.to_thread(prepare_run, mission, body.run_legs)

@@ -141,9 +141,11 @@ class Console:
         """Keep a mission sent over the network (HTTP or the 3D view); MissionError when it
         names a server file (``check_sent_mission``), ValueError when its name is taken."""
         check_sent_mission(mission)
-        if mission.name in schema.library_names():
+        taken = {n.casefold(): n for n in schema.library_names()}.get(mission.name.casefold())
+        if taken is not None:
             raise ValueError(
-                f"name: {mission.name!r} is a library mission; give the upload another name"
+                f"name: {mission.name!r} is the library mission {taken!r} (names are "
+                "compared without regard to case); give the upload another name"
             )
         with self._uploads_lock:
             self.uploads.pop(mission.name, None)

@@ -6,11 +6,42 @@ from __future__ import annotations
 
 import html
 import re
+from pathlib import Path
 
 from missions.scoring import LEG_TABLE_COLUMNS, QUALITY_CHECKS, landing_lines, leg_table_rows
 from sim.sensors import SENSOR_NAMES
 
 _MARKDOWN_PUNCTUATION = re.compile(r"([\\`*_{}\[\]()#+\-.!|~])")
+
+
+QUOTE_MAX_CHARS = 60
+"""Characters of a client's text an error message quotes back at most."""
+
+
+def quoted(text: str, limit: int = QUOTE_MAX_CHARS) -> str:
+    """``text`` quoted (repr: control characters and lone surrogates escaped) for an error
+    message, cut at ``limit`` characters with the whole length said: an answer never echoes
+    a long input back ('xxxx...' (4000 characters))."""
+    if len(text) <= limit:
+        return repr(text)
+    return f"{text[:limit]!r}... ({len(text)} characters)"
+
+
+_ABSOLUTE_PATH = re.compile(r"(?<![\w.:/~-])/[^\s'\"(),;:]+")
+
+
+def without_server_paths(text: str) -> str:
+    """``text`` with each absolute path on this server cut to its file's name
+    ('/srv/console/recordings/x.mcap' -> 'x.mcap'): an error tells a client which file, not
+    where the server keeps it. A path whose folder does not exist here ('/api/faults', a
+    route) is left as it is."""
+
+    def name_only(match: re.Match[str]) -> str:
+        path = Path(match.group(0))
+        parent = path.parent
+        return path.name if parent != Path("/") and parent.is_dir() else match.group(0)
+
+    return _ABSOLUTE_PATH.sub(name_only, text)
 
 
 def md_text(value: object) -> str:
