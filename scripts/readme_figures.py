@@ -1,23 +1,24 @@
-"""Regenerate every figure the README quotes, so none of them is typed by hand.
+"""Regenerate every figure the README and the docs quote, so none of them is typed by hand.
 
-Each figure block of README.md sits between two markers,
+Each figure block sits between two markers, in README.md or a page of docs/,
 
     <!-- figures:NAME -->
     ... generated text ...
     <!-- /figures:NAME -->
 
 and belongs to one entry of ``BLOCKS``: a function that runs what the block quotes (missions,
-studies, a recording) and returns its results as a JSON-ready dict, and a renderer that turns
-those results into the block's text (wording included where the numbers decide it, e.g.
-"halved" or "down an order of magnitude"). The results of the last run are kept in
-``docs/figures/readme_figures.json``; the tests check that every block of the README is what
-the renderer makes of them.
+studies, a recording, a benchmark) and returns its results as a JSON-ready dict, and a
+renderer that turns those results into the block's text (wording included where the numbers
+decide it, e.g. "halved" or "down an order of magnitude"). Each block stands in exactly one
+file. The results of the last run are kept in ``docs/figures/readme_figures.json``; the tests
+check that every block is what the renderer makes of them.
 
-Run (a few minutes; ``--only`` for some blocks, ``--render`` to rewrite the README from the
-stored results without running anything):
+Run (minutes; ``--only`` for some blocks, ``--render`` to rewrite the files from the stored
+results without running anything):
 
     .venv/bin/python scripts/readme_figures.py
     .venv/bin/python scripts/readme_figures.py --only laws --only limits
+    .venv/bin/python scripts/readme_figures.py --render
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ if str(ROOT) not in sys.path:  # run as a file: import this checkout's packages
     sys.path.insert(0, str(ROOT))
 
 README = ROOT / "README.md"
+DOCS = ROOT / "docs"
 RESULTS = ROOT / "docs" / "figures" / "readme_figures.json"
 
 MARKER = re.compile(r"^\s*<!-- (/?)figures:([a-z0-9.-]+) -->\s*$")
@@ -87,7 +89,7 @@ def _spans(text: str) -> dict[str, tuple[int, int]]:
 
 
 def blocks_in(text: str) -> dict[str, str]:
-    """The figure blocks of a README: name -> the lines between its markers."""
+    """The figure blocks of a text: name -> the lines between its markers."""
     lines = text.split("\n")
     return {name: "\n".join(lines[a:b]) for name, (a, b) in _spans(text).items()}
 
@@ -96,7 +98,7 @@ def replace_block(text: str, name: str, body: str) -> str:
     """``text`` with the block ``name`` holding ``body``; ValueError if there is no such block."""
     spans = _spans(text)
     if name not in spans:
-        raise ValueError(f"README has no figures:{name} block")
+        raise ValueError(f"no figures:{name} block")
     a, b = spans[name]
     lines = text.split("\n")
     return "\n".join(lines[:a] + body.rstrip("\n").split("\n") + lines[b:])
@@ -114,7 +116,7 @@ def sig(value: float, digits: int = 2) -> str:
 
 
 def para(text: str, indent: str = "", first: str | None = None) -> str:
-    """``text`` wrapped as the README's prose (96 columns), ``first`` starting the first line
+    """``text`` wrapped as the docs' prose (96 columns), ``first`` starting the first line
     (default ``indent``)."""
     return textwrap.fill(
         " ".join(text.split()),
@@ -271,7 +273,7 @@ def compute_failures() -> Results:
         r = runner.run_mission(schema.load_mission(name))
         misses = [m for leg in r.legs if (m := MISS.search(leg.error))]
         if not misses:
-            raise RuntimeError(f"{name} no longer misses a target: update the README by hand")
+            raise RuntimeError(f"{name} no longer misses a target: update docs/planner.md")
         out[name] = {
             "failed": r.failed,
             "miss_m": float(misses[0].group(1)),
@@ -412,20 +414,6 @@ def render_table_4_2(res: Results) -> str:
 
 # ------------------------------------------------------------------------------ speed
 
-SPEED_BEFORE = {
-    "plant_us_per_step": 23.2,
-    "plant_real_time_factor": 432.0,
-    "loop_us_per_step": 36.5,
-    "loop_real_time_factor": 274.0,
-    "jitter_median_ms": 1.01,
-    "jitter_p99_ms": 5.55,
-    "jitter_max_ms": 31.6,
-}
-"""Before the second speed pass (commit 071763d, the same benchmarks, load average 2-4) and,
-for the loop's tick lateness, before the loop had its own thread (the parent of e3ea011,
-``console_benchmark.py --telemetry-only``, load average 4.9). Kept as measured then: the old
-code is not run again here."""
-
 
 def _benchmark_json(*args: str) -> Results:
     out = subprocess.run(
@@ -462,44 +450,27 @@ def machine_text(recorded: Results | None) -> str:
 
 
 def render_speed(res: Results) -> str:
-    b, plant, loop = SPEED_BEFORE, res["plant"], res["loop"]
-
-    def load(r: Results) -> str:
-        return ", ".join(f"{v:.1f}" for v in r["load_average"])
-
+    """The headline: the plant and the closed loop against real time, and how late the
+    console's 100 Hz ticks wake with five telemetry clients."""
+    plant, loop = res["plant"], res["loop"]
     where = machine_text(plant.get("machine"))
     rows = [
-        *(
-            [f"Measured on {where} (the before column: on the machine of its day).", ""]
-            if where
-            else []
-        ),
-        "| per 10 ms step | before | now | load average (1, 5, 15 min) |",
-        "|---|---|---|---|",
-        f"| full-scale plant alone (`plant_benchmark`) | {b['plant_us_per_step']:.1f} us, "
-        f"{b['plant_real_time_factor']:,.0f}x | {plant['us_per_step']:.1f} us, "
-        f"{plant['steps_per_s']:,.0f} steps/s, {plant['real_time_factor']:,.0f}x | "
-        f"{load(plant)} |",
+        *([f"Measured on {where}:", ""] if where else []),
+        "| what | figure | load average |",
+        "|---|---|---|",
+        f"| full-scale plant alone (`plant_benchmark`) | {plant['us_per_step']:.1f} us a "
+        f"10 ms step, {plant['real_time_factor']:,.0f}x real time | "
+        f"{plant['load_average'][0]:.1f} |",
         f"| closed loop, model scale, EKF, priority allocation, feedforward "
-        f"(`control_benchmark`) | {b['loop_us_per_step']:.1f} us, "
-        f"{b['loop_real_time_factor']:,.0f}x | {loop['us_per_step']:.1f} us, "
-        f"{loop['steps_per_s']:,.0f} steps/s, {loop['real_time_factor']:,.0f}x | {load(loop)} |",
-        "",
-        "| per call, measured alone (best of 5) | us |",
-        "|---|---|",
-        *(f"| {name} | {us:.2f} |" for name, us in sorted(loop["per_call_us"].items())),
-        "",
-        "| console loop, five telemetry clients | tick lateness median | p99 | max "
-        "| overruns | simulated s per wall s | load average |",
-        "|---|---|---|---|---|---|---|",
-        f"| 1x, before (loop on the server's event loop) | {b['jitter_median_ms']:.2f} ms "
-        f"| {b['jitter_p99_ms']:.2f} ms | {b['jitter_max_ms']:.1f} ms | 0 | 1.0 | 4.9 |",
+        f"(`control_benchmark`) | {loop['us_per_step']:.1f} us a 10 ms step, "
+        f"{loop['real_time_factor']:,.0f}x real time | {loop['load_average'][0]:.1f} |",
     ]
     for label, c in res["console"].items():
         rows.append(
-            f"| {label} | {c['jitter_median_ms']:.2f} ms | {c['jitter_p99_ms']:.2f} ms "
-            f"| {c['jitter_max_ms']:.1f} ms | {c['overruns']} "
-            f"| {c['simulated_s_per_wall_s']:.1f} | {c['load_average'][0]:.1f} |"
+            f"| console at {label}, five telemetry clients (`console_benchmark`) "
+            f"| ticks late by {c['jitter_median_ms']:.2f} ms median, "
+            f"{c['jitter_p99_ms']:.2f} ms p99, {c['overruns']} overruns "
+            f"| {c['load_average'][0]:.1f} |"
         )
     return "\n".join(rows)
 
@@ -566,53 +537,6 @@ def render_campaign(res: Results) -> str:
                 )
             )
         )
-    batch = res.get("batch")
-    if batch:
-        ways = (
-            ("alone_one_core", "one after the other, alone, one core"),
-            ("batch_one_core", "one batch, one core"),
-            ("batch_two_processes", "two processes, a batch of half the runs each"),
-        )
-        repeat = int(batch.get("repeat", 1))
-        if "rates" not in batch["batch_one_core"]:  # figures from before --repeat
-            rows += [
-                "",
-                para(
-                    "The batch stepper (`.venv/bin/python benchmarks/batch_benchmark.py --runs "
-                    f"{batch['runs']}`: {batch['runs']} of these docking runs, "
-                    f"{batch['batch_one_core']['simulated_s']:,.0f} simulated s; load average "
-                    f"{batch['load_before'][0]:.1f} before), every run giving the rows it "
-                    "gives alone:"
-                ),
-                "",
-                "| how | wall s | simulated s per wall s |",
-                "|---|---|---|",
-                *(
-                    f"| {label} | {batch[key]['wall_s']:.2f} | {batch[key]['rate']:,.0f} |"
-                    for key, label in ways
-                ),
-            ]
-        else:
-            rows += [
-                "",
-                para(
-                    "The batch stepper (`.venv/bin/python benchmarks/batch_benchmark.py --runs "
-                    f"{batch['runs']} --repeat {repeat}`: {batch['runs']} of these docking runs, "
-                    f"{batch['batch_one_core']['simulated_s']:,.0f} simulated s; load average "
-                    f"{batch['load_before'][0]:.1f} before), every run giving the rows it gives "
-                    f"alone. Each way is timed {repeat} times, interleaved, and the best is "
-                    "shown (this shared machine's speed drifts by 20 % or more from minute to "
-                    "minute; every time is in the last column):"
-                ),
-                "",
-                "| how | wall s | simulated s per wall s | each time |",
-                "|---|---|---|---|",
-                *(
-                    f"| {label} | {batch[key]['wall_s']:.2f} | {batch[key]['rate']:,.0f} "
-                    f"| {', '.join(f'{r:,}' for r in batch[key]['rates'])} |"
-                    for key, label in ways
-                ),
-            ]
     return "\n".join(rows)
 
 
@@ -656,20 +580,55 @@ BLOCKS: dict[str, tuple[Callable[[], Results], Callable[[Results], str]]] = {
 }
 
 
-def render_readme(text: str, results: dict[str, Results]) -> str:
-    """``text`` with every block that has results rendered from them."""
-    for name, res in results.items():
-        text = replace_block(text, name, BLOCKS[name][1](res))
+def render_blocks(text: str, results: dict[str, Results]) -> str:
+    """``text`` with each of its blocks that has results rendered from them."""
+    for name in blocks_in(text):
+        if name in results:
+            text = replace_block(text, name, BLOCKS[name][1](results[name]))
     return text
+
+
+def figure_files() -> list[Path]:
+    """The files that may hold figure blocks: README.md and every page of docs/."""
+    return [README, *sorted(DOCS.glob("*.md"))]
+
+
+def homes(texts: dict[Path, str]) -> dict[str, Path]:
+    """Block name -> the one file that holds it; ValueError for a block in two files or a
+    block ``BLOCKS`` does not know, naming the files."""
+    out: dict[str, Path] = {}
+    for path, text in texts.items():
+        for name in blocks_in(text):
+            where = path.relative_to(ROOT)
+            if name not in BLOCKS:
+                raise ValueError(f"{where}: figures:{name} is not a block the script knows")
+            if name in out:
+                raise ValueError(
+                    f"figures:{name} stands in {out[name].relative_to(ROOT)} and in {where}"
+                )
+            out[name] = path
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", action="append", choices=sorted(BLOCKS), default=[])
     parser.add_argument(
-        "--render", action="store_true", help="rewrite README.md from the stored results only"
+        "--render",
+        action="store_true",
+        help="rewrite the blocks from the stored results only (runs nothing)",
     )
     args = parser.parse_args(argv)
+    texts = {path: path.read_text() for path in figure_files()}
+    try:
+        where = homes(texts)
+    except ValueError as err:
+        print(err, file=sys.stderr)
+        return 1
+    missing = sorted(set(BLOCKS) - set(where))
+    if missing:
+        print(f"no file has a block for {', '.join(missing)}", file=sys.stderr)
+        return 1
     stored: dict[str, Results] = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
     if not args.render:
         for name in args.only or list(BLOCKS):
@@ -677,13 +636,11 @@ def main(argv: list[str] | None = None) -> int:
             stored[name] = BLOCKS[name][0]()
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
         RESULTS.write_text(json.dumps(stored, indent=1, sort_keys=True) + "\n")
-    text = README.read_text()
-    missing = sorted(set(BLOCKS) - set(blocks_in(text)))
-    if missing:
-        print(f"README.md has no block for {', '.join(missing)}", file=sys.stderr)
-        return 1
-    README.write_text(render_readme(text, stored))
-    print(f"wrote {README.relative_to(ROOT)}" + ("" if args.render else f" and {RESULTS.name}"))
+    for path in sorted(set(where.values())):
+        path.write_text(render_blocks(texts[path], stored))
+        print(f"wrote {path.relative_to(ROOT)}")
+    if not args.render:
+        print(f"wrote {RESULTS.relative_to(ROOT)}")
     return 0
 
 

@@ -1,6 +1,7 @@
-"""The README's figure blocks: well-formed markers, and each block exactly what
-scripts/readme_figures.py renders from its stored results (so a number typed by hand fails).
-The studies themselves are not rerun here (minutes); the script does that."""
+"""The figure blocks of README.md and docs/*.md: well-formed markers, each block in one file,
+and each block exactly what scripts/readme_figures.py renders from its stored results (so a
+number typed by hand fails). The studies themselves are not rerun here (minutes); the script
+does that."""
 
 import importlib.util
 import json
@@ -24,15 +25,30 @@ def _script():
 rf = _script()
 
 
-def test_every_block_of_the_readme_is_what_the_script_renders_from_its_results():
-    text = (ROOT / "README.md").read_text()
-    blocks = rf.blocks_in(text)
-    assert set(blocks) == set(rf.BLOCKS)
+def test_every_block_in_the_readme_and_docs_is_what_the_script_renders_from_its_results():
+    texts = {path: path.read_text() for path in rf.figure_files()}
+    assert ROOT / "README.md" in texts
+    where = rf.homes(texts)
+    assert set(where) == set(rf.BLOCKS)
     stored = json.loads(rf.RESULTS.read_text())
-    assert set(stored) == set(rf.BLOCKS)
-    for name, (_, render) in rf.BLOCKS.items():
-        assert blocks[name] == render(stored[name]), f"figures:{name} was edited by hand"
-    assert rf.render_readme(text, stored) == text
+    assert set(rf.BLOCKS) <= set(stored)
+    for name, path in where.items():
+        block = rf.blocks_in(texts[path])[name]
+        assert block == rf.BLOCKS[name][1](stored[name]), (
+            f"figures:{name} in {path.relative_to(ROOT)} was edited by hand"
+        )
+    for path, text in texts.items():
+        assert rf.render_blocks(text, stored) == text, path
+
+
+def test_a_block_stands_in_one_file_and_is_known(tmp_path):
+    a, b = ROOT / "README.md", ROOT / "docs" / "x.md"
+    block = "<!-- figures:laws -->\nx\n<!-- /figures:laws -->\n"
+    assert rf.homes({a: block, b: "no blocks\n"}) == {"laws": a}
+    with pytest.raises(ValueError, match="figures:laws stands in README.md and in docs/x.md"):
+        rf.homes({a: block, b: block})
+    with pytest.raises(ValueError, match="docs/x.md: figures:nope is not a block"):
+        rf.homes({b: "<!-- figures:nope -->\n<!-- /figures:nope -->\n"})
 
 
 LAWS = {
@@ -106,20 +122,15 @@ def test_wording_follows_the_ratio():
     assert rf.sig(0.0062) == "0.0062" and rf.sig(7.349) == "7.3" and rf.sig(3170.4) == "3170"
 
 
-def test_batch_figures_timed_several_times_show_the_best_and_every_time():
-    way = {"simulated_s": 30590.0, "wall_s": 5.0, "rate": 6118.0, "rates": [6118, 5200, 4100]}
-    batch = {"runs": 64, "repeat": 3, "load_before": [0.5, 0.5, 0.5]}
-    batch |= dict.fromkeys(("alone_one_core", "batch_one_core", "batch_two_processes"), way)
+def test_campaign_block_has_no_batch_table_even_when_the_results_hold_one():
+    """The batch stepper is gone; results stored while it existed still render."""
     campaign = {"workers": 1, "runs": 200, "simulated_s": 1.0, "failed": 0, "wall_s": 1.0}
     campaign["simulated_s_per_wall_s"] = 1.0
     text = rf.render_campaign(
-        {"campaigns": [campaign], "load_average_before": [0.5], "batch": batch}
+        {"campaigns": [campaign], "load_average_before": [0.5], "batch": {"runs": 64}}
     )
-    assert "--runs 64 --repeat 3" in text
-    assert (
-        "| two processes, a batch of half the runs each | 5.00 | 6,118 | 6,118, 5,200, 4,100 |"
-        in text
-    )
+    assert "batch" not in text.lower()
+    assert "| 1 | 1.0 | 1 |" in text
 
 
 MACHINE = {"cpu": "AMD EPYC", "llvm_cpu": "znver3", "simd": "AVX2", "cores": 2}
@@ -154,11 +165,13 @@ def _speed_results(machine: dict | None) -> dict:
 
 def test_speed_block_names_the_machine_its_figures_were_measured_on():
     text = rf.render_speed(_speed_results(MACHINE))
-    assert text.startswith("Measured on AMD EPYC (znver3, AVX2, 2 cores) ")
-    assert "| 4.1 us, 243,000 steps/s, 2,430x |" in text
-    # figures stored before the benchmarks recorded their machine keep their old wording
+    assert text.startswith("Measured on AMD EPYC (znver3, AVX2, 2 cores):")
+    assert "| 4.1 us a 10 ms step, 2,430x real time | 1.0 |" in text
+    assert "| console at 1x, five telemetry clients (`console_benchmark`) " in text
+    assert "| ticks late by 0.10 ms median, 0.50 ms p99, 0 overruns | 0.8 |" in text
+    # figures stored before the benchmarks recorded their machine do not name one
     old = rf.render_speed(_speed_results(None))
-    assert old.startswith("| per 10 ms step |")
+    assert old.startswith("| what | figure |")
     assert "Measured on" not in old
 
 
