@@ -10,6 +10,7 @@ Run: .venv/bin/python scripts/compare_laws.py
 
 from __future__ import annotations
 
+import argparse
 import math
 from pathlib import Path
 
@@ -103,7 +104,10 @@ def square_figure(results: dict[str, runner.MissionResult]) -> Path:
     return path
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    argparse.ArgumentParser(
+        description=" ".join(__doc__.split("\n\n")[0].split()), epilog=f"Figures go to {OUT}."
+    ).parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
     rot = run_both("full-rotation-400")
     print_table("full-rotation-400", rot)

@@ -1,8 +1,8 @@
-"""Every script the README tells a reader to run as ``.venv/bin/python <path>.py`` starts as
-written there: run from the repository root by its path (not as a module), with ``--help``,
-it imports what it needs and prints its usage. (``benchmarks/plant_benchmark.py`` once failed
-at its first import this way, while ``scripts/readme_figures.py`` ran it with ``-m`` and
-never saw it.)"""
+"""Every script the README or a page of docs/ tells a reader to run as
+``.venv/bin/python <path>.py`` starts as written there: run from the repository root by its
+path (not as a module), with ``--help``, it imports what it needs and prints its usage.
+(``benchmarks/plant_benchmark.py`` once failed at its first import this way, while
+``scripts/readme_figures.py`` ran it with ``-m`` and never saw it.)"""
 
 from __future__ import annotations
 
@@ -17,16 +17,26 @@ ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = re.compile(r"\.venv/bin/python ((?:benchmarks|scripts)/[A-Za-z0-9_]+\.py)")
 
 
+DIARY = ROOT / "docs" / "speed.md"
+"""The old log of speed passes: it names scripts of its day, and gives way to performance.md."""
+
+
+def guide_pages() -> list[Path]:
+    """README.md and the pages of docs/ a reader follows."""
+    return [ROOT / "README.md", *(p for p in sorted((ROOT / "docs").glob("*.md")) if p != DIARY)]
+
+
 def readme_scripts() -> list[str]:
-    """The script paths the README names after ``.venv/bin/python``, each once, in order."""
-    text = (ROOT / "README.md").read_text()
+    """The script paths the README and docs name after ``.venv/bin/python``, each once, in
+    order."""
+    text = "\n".join(page.read_text() for page in guide_pages())
     return list(dict.fromkeys(SCRIPT.findall(text)))
 
 
-def test_the_readme_names_the_benchmarks() -> None:
+def test_the_readme_and_docs_name_the_benchmarks() -> None:
     found = readme_scripts()
-    assert "benchmarks/plant_benchmark.py" in found
-    assert "benchmarks/batch_benchmark.py" in found
+    assert "benchmarks/landing_montecarlo.py" in found
+    assert "scripts/compare_laws.py" in found
     assert all((ROOT / path).is_file() for path in found), found
 
 
