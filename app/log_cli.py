@@ -1,7 +1,8 @@
-"""``rov-console log``: look into session logs (MCAP) and export them.
+"""``rov-console log``: look into session logs (MCAP), export them, recover killed ones.
 
 Exit codes of ``check``: 0 complete, 1 cut off but readable (everything up to the cut is
-there), 2 unreadable (not an MCAP file, no header, cannot be opened).
+there), 2 unreadable (not an MCAP file, no header, cannot be opened). ``recover``: 0 written,
+2 unreadable or not written.
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ log_app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     rich_markup_mode=None,
-    help="Session logs (MCAP): check what a file holds, export it as CSV.",
+    help="Session logs (MCAP): check what a file holds, export it as CSV, recover a killed "
+    "recording.",
 )
 
 FileArg = Annotated[Path, typer.Argument(help="session log (.mcap)", show_default=False)]
@@ -108,3 +110,35 @@ def export(
         raise typer.Exit(EXIT_UNREADABLE) from None
     for path in written:
         typer.echo(str(path))
+
+
+@log_app.command()
+def recover(
+    file: FileArg,
+    out: Annotated[
+        Path | None,
+        typer.Argument(help="the complete file to write (default: NAME-recovered.mcap)"),
+    ] = None,
+    force: Annotated[bool, typer.Option("--force", help="replace an existing OUT")] = False,
+) -> None:
+    """Rewrite a killed or cut-off recording as a complete MCAP file (summary and footer)
+    that every MCAP reader opens: everything up to the last whole record. FILE is not
+    changed."""
+    from app.recording.recover import recover_session
+
+    try:
+        done = recover_session(file, out, overwrite=force)
+    except (ValueError, FileExistsError) as err:
+        typer.echo(f"error: {err}", err=True)
+        raise typer.Exit(EXIT_UNREADABLE) from None
+    except OSError as err:
+        typer.echo(f"error: {err.filename or out}: {err.strerror or err}", err=True)
+        raise typer.Exit(EXIT_UNREADABLE) from None
+    if done.source_complete:
+        typer.echo(f"{file} was complete already; copied {done.messages} messages")
+    else:
+        typer.echo(
+            f"{file}: {done.problem}; kept {done.messages} messages, "
+            f"left out {done.dropped_bytes} bytes after the last whole record"
+        )
+    typer.echo(str(done.output))

@@ -5,11 +5,16 @@ speed, keeps telemetry WebSocket clients connected, and every second sends a mix
 requests: state reads, valid commands, and bad requests from the corpus
 (tests/corpus/bad_requests.txt). Each report interval it prints the process's resident memory,
 the loop's tick jitter (median, p99), overruns, the loop's caught faults, and simulated seconds
-per wall second. Bounded in time and count; loopback only.
+per wall second. Bounded in time and count; loopback only. With ``--record`` the console
+records the session (MCAP) from the start, as an operator pressing Record would. At the end it
+prints the whole run's figures: ticks run against ticks due, overruns, lateness median and
+p99, memory at the first and last report, simulated seconds per wall second, and the CPU
+used by the loop's thread, the recorder's thread and the whole process (per cent of a core).
 
 Not a unit test. Run from the repository root:
 
     .venv/bin/python benchmarks/soak_benchmark.py [--minutes 5] [--speed 50] [--clients 3]
+        [--record]
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
+import os
 import resource
 import sys
 import tempfile
@@ -25,11 +31,13 @@ import time
 from pathlib import Path
 
 import httpx
+import numpy as np
 import websockets
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from app.console import ConsoleSettings
+from app.console.loop import PacedLoop
 from app.server import serve_in_thread
 from tests.test_corpus import CASES, body_bytes
 
@@ -45,6 +53,22 @@ def rss_mb() -> float:
     except OSError:
         pass
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def thread_cpu_s() -> dict[str, float]:
+    """CPU time [s] (user + system) of this process's Python threads by name, summed over
+    threads of one name (Linux /proc; empty elsewhere)."""
+    out: dict[str, float] = {}
+    tick = os.sysconf("SC_CLK_TCK")
+    for thread in threading.enumerate():
+        try:
+            stat = Path(f"/proc/self/task/{thread.native_id}/stat").read_text()
+        except OSError:
+            continue
+        fields = stat[stat.rindex(")") + 2 :].split()
+        used = (int(fields[11]) + int(fields[12])) / tick
+        out[thread.name] = out.get(thread.name, 0.0) + used
+    return out
 
 
 def telemetry_clients(url: str, n: int, stop: threading.Event, counts: list[int]) -> None:
@@ -83,6 +107,7 @@ def main() -> None:
     ap.add_argument("--report-s", type=float, default=30.0)
     ap.add_argument("--mission", default="sea-trial-appendix-c")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--record", action="store_true", help="record the session (MCAP)")
     args = ap.parse_args()
     settings = ConsoleSettings(
         port=0,
@@ -105,8 +130,15 @@ def main() -> None:
         start = time.monotonic()
         end = start + 60.0 * args.minutes
         next_report = start + args.report_s
-        t_sim0, k = loop.snapshot.t_s, 0
         with httpx.Client(base_url=running.base_url, timeout=30.0) as client:
+            if args.record:
+                answer = client.post(
+                    "/api/recordings/start", json={"label": "soak"}, headers=running.auth
+                )
+                answer.raise_for_status()
+            ticks0, t_sim_start, wall0 = loop.ticks, loop.snapshot.t_s, time.monotonic()
+            cpu0, process0 = thread_cpu_s(), time.process_time()
+            t_sim0, k = t_sim_start, 0
             while time.monotonic() < end:
                 request_mix(client, running.auth, k)
                 k += 1
@@ -130,14 +162,38 @@ def main() -> None:
                     if not args.json:
                         print("  ".join(f"{key} {v}" for key, v in row.items()), flush=True)
                     next_report += args.report_s
+            wall = time.monotonic() - wall0
+            whole = whole_run(loop, ticks0, wall, loop.snapshot.t_s - t_sim_start)
+            cpu = thread_cpu_s()
+            for name in ("console-loop", "mcap-writer", "mcap-flush"):
+                if name in cpu:
+                    used = cpu[name] - cpu0.get(name, 0.0)
+                    whole[f"cpu_{name.replace('-', '_')}_pct"] = round(100 * used / wall, 1)
+            whole["cpu_process_pct"] = round(100 * (time.process_time() - process0) / wall, 1)
+            if args.record:
+                client.post("/api/recordings/stop", headers=running.auth)
         stop.set()
+    if rows:
+        whole |= {"rss_first_mb": rows[0]["rss_mb"], "rss_last_mb": rows[-1]["rss_mb"]}
     if args.json:
-        print(json.dumps(rows, indent=2))
-    elif len(rows) >= 2:
-        print(
-            f"memory growth from the first to the last report: "
-            f"{rows[-1]['rss_mb'] - rows[0]['rss_mb']:+.1f} MB"
-        )
+        print(json.dumps({"reports": rows, "whole": whole}, indent=2))
+    else:
+        print("whole run: " + "  ".join(f"{key} {v}" for key, v in whole.items()))
+
+
+def whole_run(loop: PacedLoop, ticks0: int, wall_s: float, sim_s: float) -> dict:
+    """The run's figures since ``ticks0``: ticks run against due (one per plant step of wall
+    time), overruns, wake-up lateness median and p99 [ms], simulated per wall second."""
+    ran = loop.ticks - ticks0
+    late_ms = loop.lateness_s()[-ran:] * 1e3 if ran else np.zeros(1)
+    return {
+        "ticks_run": ran,
+        "ticks_due": round(wall_s / loop.period_s),
+        "overruns": loop.snapshot.stats.overruns,
+        "lateness_median_ms": round(float(np.median(late_ms)), 3),
+        "lateness_p99_ms": round(float(np.percentile(late_ms, 99)), 3),
+        "sim_per_wall": round(sim_s / wall_s, 1),
+    }
 
 
 if __name__ == "__main__":

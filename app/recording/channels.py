@@ -104,10 +104,14 @@ class PlotChannel:
 
     def values(self, row: FloatArray) -> list[float]:
         """The fields' numbers in one log row (control.columns' layout), units converted."""
+        return self.values_of_rows(row[np.newaxis, :])[0].tolist()
+
+    def values_of_rows(self, rows: FloatArray) -> FloatArray:
+        """(k, fields) the fields' numbers in k log rows, units converted."""
         at, minus, has_minus, scale = self._picks
-        v = row[at]
-        v[has_minus] -= row[minus[has_minus]]
-        return (v * scale).tolist()
+        v = rows[:, at]
+        v[:, has_minus] -= rows[:, minus[has_minus]]
+        return v * scale
 
 
 _POSE = ("north_m", "east_m", "down_m", "roll_deg", "pitch_deg", "yaw_deg")

@@ -93,6 +93,8 @@ class FileScan:
     channels: dict[int, Channel] = field(default_factory=dict)
     metadata: dict[str, dict[str, str]] = field(default_factory=dict)
     messages: dict[str, list[Message]] = field(default_factory=dict)
+    in_order: list[Message] = field(default_factory=list)
+    """Every message, in the order of the file."""
     statistics: Statistics | None = None
 
     def channels_in_order(self) -> list[Channel]:
@@ -140,11 +142,12 @@ def _take(scan: FileScan, record: object) -> None:
         if channel is None:
             raise ValueError(f"message on unknown channel {record.channel_id}")
         scan.messages.setdefault(channel.topic, []).append(record)
+        scan.in_order.append(record)
     elif isinstance(record, Statistics):
         scan.statistics = record
 
 
-def _scan_file(path: Path) -> FileScan:
+def scan_file(path: Path) -> FileScan:
     """Read every intact record; stop at the first cut-off or damaged one."""
     try:
         buf = path.read_bytes()
@@ -296,7 +299,7 @@ def time_origin_ns(setup: dict) -> int:
 
 def read_scan(path: str | Path) -> tuple[FileScan, SessionData]:
     """The raw scan of a file and what it holds (for check_session and export_csv)."""
-    scan = _scan_file(Path(path))
+    scan = scan_file(Path(path))
     _check_statistics(scan)
     setup = _decode_setup(scan)
     sources = _row_sources(path, setup, scan)

@@ -9,23 +9,40 @@ Decimation
     metadata says which topic and field holds each of the others, and the reader puts the whole
     row back together); the rows of the (slower) scene rate feed ``/scene``.
 
+The writer thread
+    ``write_log`` and ``event`` only check their input, decimate, and put the kept rows (or the
+    event) on a bounded queue; a thread of the recorder encodes the messages (the numeric ones
+    from templates, ``encoding.RowEncoder``), compresses and writes them. The caller (the
+    console's paced loop) is never held by encoding, compression or the disk, unless the
+    writer falls ``MAX_QUEUED`` batches behind: then ``write_log`` waits for room, so memory
+    stays bounded. A failure in the thread (e.g. a full disk) is raised by the next call, as
+    ``RecordingError`` naming the cause.
+
 Crash safety
-    Messages are grouped in zstd-compressed chunks. A chunk is closed and handed to the
-    operating system (``Writer.flush``) whenever ``flush_interval_s`` of wall time (``clock``)
-    or ``flush_interval_sim_s`` of simulated time has passed since the last flush, whichever
-    comes first: inside ``write_log`` / ``event`` between rows, and from a background thread
-    when the caller is idle (paused simulation). A killed process (SIGKILL) therefore loses at
-    most the chunk in progress: never more than ``flush_interval_sim_s`` of simulated time
-    (this bound holds however loaded the machine is, since it is counted in the rows written),
-    and on an unloaded machine about ``flush_interval_s`` of wall time. The file is not
-    fsync'ed; the operating system keeps what was handed to it when a process dies, not when
-    the machine loses power.
+    Messages are grouped in zstd-compressed chunks, each closed between two batches (so a row
+    never spans two chunks) once it holds ``CHUNK_BYTES``. The writer thread also closes the
+    chunk in progress, hands it to the operating system and fsyncs the file once
+    ``flush_interval_s`` of wall time (``clock``) has passed since it last did and it has
+    something new (it looks after each batch and at least every 0.1 s), and at ``flush`` and
+    ``close``. What a SIGKILL loses is therefore what the caller handed over in the last
+    ``flush_interval_s`` + 0.1 s of wall time (0.6 s by default), plus what was still queued
+    (nothing while the writer keeps up; at most ``MAX_QUEUED`` batches when it falls behind).
+    This is a bound in wall time: in simulated time it is the run's speed times as much, about
+    12 s at 20x and 30 s at 50x (a caller that gathers rows before handing them over, as the
+    console does, loses what it gathered too). The killed file has no summary and no footer:
+    the product's reader (``load_session``) reads it up to the last whole record, and
+    ``rov-console log recover`` (``recover.recover_session``) rewrites it as a complete MCAP
+    that stock readers open (``mcap``'s ``make_reader`` is tested). The fsync makes a synced
+    chunk survive the machine losing power too.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
+import queue
+import sys
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -55,16 +72,14 @@ from app.recording.channels import (
     plot_channels,
     session_columns,
 )
+from app.recording.encoding import T_S, RowEncoder
 from app.recording.messages import (
     event_message,
     json_bytes,
     log_message,
-    plot_message,
     scene_geometry,
     scene_message,
-    session_row_message,
     tf_message,
-    wire_message,
 )
 from control.columns import COLUMN_NAMES, LAYOUT, M_MAX, N_LOG, LogRows
 from sim.docking import DockingFrame
@@ -74,6 +89,12 @@ FloatArray = NDArray[np.float64]
 
 GRID_EPS = 1e-9
 """Slack when putting a row time on the decimation grid (times are sums of 0.01 s steps)."""
+MAX_QUEUED = 64
+"""Batches (one ``write_log`` or ``event`` call each) waiting for the writer thread at most;
+``write_log`` waits for room beyond (the console hands over 0.5 s of simulation a batch)."""
+CHUNK_BYTES = 1 << 20
+"""A chunk is closed once it holds this many bytes of messages (uncompressed), at the end of a
+batch, so that a row's messages are always in one chunk (a cut file holds whole rows)."""
 
 
 class RecordingError(RuntimeError):
@@ -186,6 +207,40 @@ def _check_rates(**rates: float) -> None:
             raise ValueError(f"{name} must be a positive number, got {v}")
 
 
+@dataclass(frozen=True)
+class _Rows:
+    """The kept rows of one ``write_log`` call, with the drawing state they go with."""
+
+    rows: FloatArray
+    numeric: NDArray[np.bool_]
+    """Rows of the numeric rate (the plot channels, ``/session/log``, ``/tf``, ``/wire``)."""
+    scene: NDArray[np.bool_]
+    """Rows of the scene rate (``/scene``)."""
+    crane_tip_n: FloatArray | None
+    wire_length_m: float
+    docking: DockingFrame | None
+
+
+@dataclass(frozen=True)
+class _Event:
+    """An event's two messages, encoded by the caller (which checks they can be)."""
+
+    t_ns: int
+    event: bytes
+    log: bytes
+
+
+@dataclass(frozen=True)
+class _Flush:
+    """Close the chunk, write and fsync now; ``done`` is set once that is done."""
+
+    done: threading.Event
+
+
+_CLOSE = object()
+"""Put on the queue last: the writer thread writes the summary and footer and ends."""
+
+
 class SessionRecorder:
     """Writes one session to an MCAP file (see the module docstring)."""
 
@@ -197,7 +252,6 @@ class SessionRecorder:
         params: ParameterSet,
         n_thrusters: int,
         flush_interval_s: float = 0.5,
-        flush_interval_sim_s: float = 1.0,
         numeric_rate_hz: float = 20.0,
         scene_rate_hz: float = 5.0,
         clock: Callable[[], float] = time.monotonic,
@@ -207,7 +261,7 @@ class SessionRecorder:
     ) -> None:
         """Create ``path`` (refuses an existing file unless ``overwrite``), write the header,
         schemas, channels and the ``setup`` metadata record (``metadata``, e.g. from
-        ``session_metadata``), and start the flush thread. ``docking``: the docking frame to
+        ``session_metadata``), and start the writer thread. ``docking``: the docking frame to
         draw from the start (``write_log`` can change it)."""
         if not 1 <= n_thrusters <= M_MAX:
             raise ValueError(f"n_thrusters must be in [1, {M_MAX}], got {n_thrusters}")
@@ -215,7 +269,6 @@ class SessionRecorder:
             "numeric_rate_hz": numeric_rate_hz,
             "scene_rate_hz": scene_rate_hz,
             "flush_interval_s": flush_interval_s,
-            "flush_interval_sim_s": flush_interval_sim_s,
         }
         _check_rates(**rates)
         self._origin_ns = (
@@ -223,16 +276,21 @@ class SessionRecorder:
         )
         setup = _setup_record(metadata, params, n_thrusters, rates, self._origin_ns)
         self._plots = plot_channels(n_thrusters)
-        self._session_columns = session_columns(n_thrusters)
-        self._session_at = np.array(
-            [COLUMN_NAMES.index(c) for c in self._session_columns], dtype=np.intp
+        session_at = np.array(
+            [COLUMN_NAMES.index(c) for c in session_columns(n_thrusters)], dtype=np.intp
         )
+        self._encoder = RowEncoder(self._plots, session_at)
         self._carried = carried_columns(n_thrusters)
+        self._session_columns = session_columns(n_thrusters)
         self._geo = scene_geometry(params)
         self.path = Path(path)
         self._file: BinaryIO = open(self.path, "wb" if overwrite else "xb")
         try:
-            self._writer = Writer(self._file, compression=CompressionType.ZSTD)
+            # chunks are closed by the writer thread (CHUNK_BYTES, flush_interval_s), never
+            # by mcap in the middle of a row
+            self._writer = Writer(
+                self._file, chunk_size=sys.maxsize, compression=CompressionType.ZSTD
+            )
             self._writer.start(profile="", library=f"rov-console {software_version()}")
             self._start_file(setup, numeric_rate_hz, scene_rate_hz)
         except BaseException:  # e.g. the disk is full: leave no empty or headless file
@@ -245,17 +303,16 @@ class SessionRecorder:
         self._last_t_s = -math.inf
         self._clock = clock
         self._flush_interval_s = flush_interval_s
-        self._flush_interval_sim_s = flush_interval_sim_s
-        self._written_t_s = -math.inf
-        """Simulation time of the last row or event written."""
-        self._flushed_t_s = -math.inf
-        """Simulation time written when the last chunk was closed."""
         self._lock = threading.Lock()
-        self._dirty = False
+        """Held by callers (the decimators, the last row time, closing)."""
         self._closed = False
-        self._last_flush = clock()
-        self._stop = threading.Event()
-        self._flusher: threading.Thread | None = self._start_flusher()
+        self._error: Exception | None = None
+        """What went wrong in the writer thread (it then writes nothing more)."""
+        self._queue: queue.Queue[object] = queue.Queue(MAX_QUEUED)
+        self._chunk_bytes = 0
+        """Bytes of messages in the chunk in progress (the writer thread's)."""
+        self._thread = threading.Thread(target=self._write_loop, name="mcap-writer", daemon=True)
+        self._thread.start()
 
     def _start_file(
         self, setup: dict[str, str], numeric_rate_hz: float, scene_rate_hz: float
@@ -267,12 +324,6 @@ class SessionRecorder:
         self._sequence = dict.fromkeys(self._channels, 0)
         self._writer.add_metadata(SETUP_RECORD, setup)
         self._writer.flush()
-
-    def _start_flusher(self) -> threading.Thread | None:
-        """The thread that flushes while the caller is idle."""
-        thread = threading.Thread(target=self._flush_loop, name="mcap-flush", daemon=True)
-        thread.start()
-        return thread
 
     # ------------------------------------------------------------------ set-up
     def _register_channels(self) -> dict[str, int]:
@@ -301,20 +352,10 @@ class SessionRecorder:
         add(LOG_TOPIC, schemas.log_schema())
         return channels
 
-    # ------------------------------------------------------------------ writing
-    def _add(self, topic: str, t_ns: int, message: dict) -> None:
-        cid = self._channels[topic]
-        self._sequence[topic] += 1
-        self._writer.add_message(
-            cid,
-            log_time=t_ns,
-            publish_time=t_ns,
-            data=json_bytes(message),
-            sequence=self._sequence[topic],
-        )
-        self._dirty = True
-
+    # ------------------------------------------------------------------ the caller's side
     def _check_open(self) -> None:
+        if self._error is not None:
+            raise RecordingError(f"{self.path}: writing failed: {self._error}")
         if self._closed:
             raise RecordingError(f"{self.path}: the recorder is closed")
 
@@ -327,7 +368,8 @@ class SessionRecorder:
     ) -> None:
         """Record log rows (``LogRows`` or an (n, N_LOG) array in ``control.columns`` layout),
         later than every row recorded so far and in time order (else ValueError: a restarted
-        simulation needs a new recorder).
+        simulation needs a new recorder). The rows kept go to the writer thread; this waits
+        only when ``MAX_QUEUED`` batches are already waiting.
 
         ``crane_tip_n`` (NED, m), ``wire_length_m`` and ``docking``: None keeps the last value
         given; the wire is drawn and ``/wire`` written once a crane tip is known."""
@@ -341,7 +383,7 @@ class SessionRecorder:
                     f"t = {self._last_t_s} s; got t = {t[0]} .. {t[-1]} s"
                 )
             if crane_tip_n is not None:
-                self._crane_tip_n = _crane_tip(crane_tip_n)
+                self._crane_tip_n = _crane_tip(crane_tip_n).copy()
             if wire_length_m is not None:
                 self._wire_length_m = float(wire_length_m)
             if docking is not None:
@@ -349,29 +391,17 @@ class SessionRecorder:
             self._last_t_s = float(t[-1]) if len(t) else self._last_t_s
             numeric = self._numeric.select(t)
             scene = self._scene.select(t)
-            for k in np.flatnonzero(numeric | scene):
-                self._write_row(rows[k], bool(numeric[k]), bool(scene[k]))
-                self._maybe_flush()
-
-    def _write_row(self, row: FloatArray, numeric: bool, scene: bool) -> None:
-        t_s = float(LAYOUT.take(row, "t_s"))
-        self._note_time(t_s)
-        t_ns = self._origin_ns + round(t_s * 1e9)
-        if numeric:
-            self._add(SESSION_TOPIC, t_ns, session_row_message(row, self._session_at))
-            self._add(TF_TOPIC, t_ns, tf_message(t_ns, row))
-            for ch in self._plots:
-                self._add(ch.topic, t_ns, plot_message(ch, row))
-            if self._crane_tip_n is not None:
-                self._add(
-                    WIRE_TOPIC, t_ns, wire_message(row, self._crane_tip_n, self._wire_length_m)
+            keep = numeric | scene
+            if np.any(keep):
+                batch = _Rows(
+                    rows[keep],
+                    numeric[keep],
+                    scene[keep],
+                    self._crane_tip_n,
+                    self._wire_length_m,
+                    self._docking,
                 )
-        if scene:
-            self._add(
-                SCENE_TOPIC,
-                t_ns,
-                scene_message(t_ns, row, self._geo, self._crane_tip_n, self._docking),
-            )
+                self._queue.put(batch)
 
     def event(self, t_s: float, kind: str, text: str, data: dict | None = None) -> None:
         """Record an event at simulation time ``t_s`` on ``/events`` (and ``/log`` for
@@ -380,71 +410,140 @@ class SessionRecorder:
             raise ValueError(f"event time must be a finite number of seconds >= 0, got {t_s}")
         if not kind:
             raise ValueError("event kind must not be empty")
-        message = event_message(t_s, kind, text, data)
         try:
-            json_bytes(message)
+            event = json_bytes(event_message(t_s, kind, text, data))
         except (TypeError, ValueError) as err:
             raise ValueError(f"event data cannot be written as JSON: {err}") from None
         t_ns = self._origin_ns + round(t_s * 1e9)
         with self._lock:
             self._check_open()
-            self._note_time(t_s)
-            self._add(EVENTS_TOPIC, t_ns, message)
-            self._add(LOG_TOPIC, t_ns, log_message(t_ns, kind, text))
-            self._maybe_flush()
-
-    # ------------------------------------------------------------------ flushing and closing
-    def _note_time(self, t_s: float) -> None:
-        if self._flushed_t_s == -math.inf:
-            self._flushed_t_s = t_s  # the first chunk counts from the first message
-        self._written_t_s = max(self._written_t_s, t_s)
-
-    def _maybe_flush(self) -> None:
-        """Flush (lock held) when flush_interval_s of wall time or flush_interval_sim_s of
-        simulated time has passed since the last flush."""
-        if not self._dirty:
-            return
-        wall_due = self._clock() - self._last_flush >= self._flush_interval_s
-        sim_due = self._written_t_s - self._flushed_t_s >= self._flush_interval_sim_s
-        if wall_due or sim_due:
-            self._flush_locked()
-
-    def _flush_locked(self) -> None:
-        self._writer.flush()
-        self._dirty = False
-        self._last_flush = self._clock()
-        self._flushed_t_s = self._written_t_s
+            self._queue.put(_Event(t_ns, event, json_bytes(log_message(t_ns, kind, text))))
 
     def flush(self) -> None:
-        """Close the chunk in progress and hand everything to the operating system now."""
+        """Close the chunk in progress, write everything handed over so far and fsync, now
+        (returns once it is on disk)."""
+        done = threading.Event()
         with self._lock:
             self._check_open()
-            self._flush_locked()
-
-    def _flush_loop(self) -> None:
-        poll = min(self._flush_interval_s / 4.0, 0.1)
-        while not self._stop.wait(poll):
-            with self._lock:
-                if self._closed:
-                    return
-                self._maybe_flush()
+            self._queue.put(_Flush(done))
+        done.wait()
+        with self._lock:
+            self._check_open()
 
     def close(self) -> None:
-        """Write the summary and footer and close the file. Idempotent."""
+        """Write what is queued, the summary and footer, and close the file. Idempotent;
+        raises ``RecordingError`` when the writer thread failed."""
         with self._lock:
             if self._closed:
                 return
             self._closed = True
-            try:
-                self._writer.finish()
-            finally:
-                self._file.close()
-        self._stop.set()
-        if self._flusher is not None and self._flusher is not threading.current_thread():
-            self._flusher.join()
+            self._queue.put(_CLOSE)
+        self._thread.join()
+        if self._error is not None:
+            raise RecordingError(f"{self.path}: writing failed: {self._error}")
 
     def __enter__(self) -> SessionRecorder:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+    # ------------------------------------------------------------------ the writer thread
+    def _write_loop(self) -> None:
+        """Write what comes off the queue; close the chunk, write and fsync every
+        flush_interval_s of wall time while there is something new; finish at _CLOSE."""
+        poll = min(self._flush_interval_s / 4.0, 0.1)
+        last_sync, dirty = self._clock(), False
+        try:
+            while (item := self._next(poll)) is not _CLOSE:
+                if self._error is None:  # after a failure the queue is only drained
+                    try:
+                        dirty = self._write_item(item) or dirty
+                        if self._chunk_bytes >= CHUNK_BYTES:
+                            self._close_chunk()
+                        due = self._clock() - last_sync >= self._flush_interval_s
+                        if isinstance(item, _Flush) or (dirty and due):
+                            self._sync()
+                            last_sync, dirty = self._clock(), False
+                    except Exception as err:
+                        self._error = err
+                if isinstance(item, _Flush):
+                    item.done.set()
+        finally:
+            self._finish()
+
+    def _next(self, timeout_s: float) -> object:
+        try:
+            return self._queue.get(timeout=timeout_s)
+        except queue.Empty:
+            return None
+
+    def _write_item(self, item: object) -> bool:
+        """Write one queued item; True when it held messages."""
+        if isinstance(item, _Rows):
+            self._write_rows(item)
+            return True
+        if isinstance(item, _Event):
+            self._add(EVENTS_TOPIC, item.t_ns, item.event)
+            self._add(LOG_TOPIC, item.t_ns, item.log)
+            return True
+        return False
+
+    def _write_rows(self, batch: _Rows) -> None:
+        """Every message of a batch's kept rows, row by row in channel order."""
+        rows = batch.rows
+        times_ns = [self._origin_ns + round(t_s * 1e9) for t_s in rows[:, T_S].tolist()]
+        numeric_rows = rows[batch.numeric]
+        session = self._encoder.session_messages(numeric_rows)
+        plots = self._encoder.plot_messages(numeric_rows)
+        wire = (
+            None
+            if batch.crane_tip_n is None
+            else self._encoder.wire_messages(numeric_rows, batch.crane_tip_n, batch.wire_length_m)
+        )
+        j = 0
+        for k, t_ns in enumerate(times_ns):
+            if batch.numeric[k]:
+                self._add(SESSION_TOPIC, t_ns, session[j])
+                self._add(TF_TOPIC, t_ns, json_bytes(tf_message(t_ns, rows[k])))
+                for ch, messages in zip(self._plots, plots, strict=True):
+                    self._add(ch.topic, t_ns, messages[j])
+                if wire is not None:
+                    self._add(WIRE_TOPIC, t_ns, wire[j])
+                j += 1
+            if batch.scene[k]:
+                scene = scene_message(t_ns, rows[k], self._geo, batch.crane_tip_n, batch.docking)
+                self._add(SCENE_TOPIC, t_ns, json_bytes(scene))
+
+    def _add(self, topic: str, t_ns: int, data: bytes) -> None:
+        self._chunk_bytes += len(data)
+        self._sequence[topic] += 1
+        self._writer.add_message(
+            self._channels[topic],
+            log_time=t_ns,
+            publish_time=t_ns,
+            data=data,
+            sequence=self._sequence[topic],
+        )
+
+    def _close_chunk(self) -> None:
+        """Close the chunk in progress and hand it to the operating system."""
+        self._writer.flush()
+        self._chunk_bytes = 0
+
+    def _sync(self) -> None:
+        """Close the chunk in progress, hand it to the operating system, fsync."""
+        self._close_chunk()
+        os.fsync(self._file.fileno())
+
+    def _finish(self) -> None:
+        """The summary and footer (unless writing failed), fsync'ed; the file closed."""
+        try:
+            if self._error is None:
+                self._writer.finish()
+                self._file.flush()
+                os.fsync(self._file.fileno())
+        except Exception as err:
+            self._error = err
+        finally:
+            self._file.close()
