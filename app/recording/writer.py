@@ -38,6 +38,7 @@ Crash safety
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -401,7 +402,7 @@ class SessionRecorder:
                     self._wire_length_m,
                     self._docking,
                 )
-                self._queue.put(batch)
+                self._put(batch)
 
     def event(self, t_s: float, kind: str, text: str, data: dict | None = None) -> None:
         """Record an event at simulation time ``t_s`` on ``/events`` (and ``/log`` for
@@ -417,7 +418,7 @@ class SessionRecorder:
         t_ns = self._origin_ns + round(t_s * 1e9)
         with self._lock:
             self._check_open()
-            self._queue.put(_Event(t_ns, event, json_bytes(log_message(t_ns, kind, text))))
+            self._put(_Event(t_ns, event, json_bytes(log_message(t_ns, kind, text))))
 
     def flush(self) -> None:
         """Close the chunk in progress, write everything handed over so far and fsync, now
@@ -425,10 +426,21 @@ class SessionRecorder:
         done = threading.Event()
         with self._lock:
             self._check_open()
-            self._queue.put(_Flush(done))
-        done.wait()
+            self._put(_Flush(done))
+        while not done.wait(0.1) and self._thread.is_alive():
+            pass
         with self._lock:
             self._check_open()
+
+    def _put(self, item: object) -> None:
+        """Queue ``item``, waiting while the queue is full (never for a writer that ended)."""
+        while True:
+            try:
+                self._queue.put(item, timeout=0.1)
+                return
+            except queue.Full:
+                if not self._thread.is_alive():
+                    raise RecordingError(f"{self.path}: the writer thread has ended") from None
 
     def close(self) -> None:
         """Write what is queued, the summary and footer, and close the file. Idempotent;
@@ -437,7 +449,8 @@ class SessionRecorder:
             if self._closed:
                 return
             self._closed = True
-            self._queue.put(_CLOSE)
+            with contextlib.suppress(RecordingError):  # a writer that ended needs no _CLOSE
+                self._put(_CLOSE)
         self._thread.join()
         if self._error is not None:
             raise RecordingError(f"{self.path}: writing failed: {self._error}")
