@@ -486,7 +486,6 @@ def compute_campaign() -> Results:
     res = _benchmark_json(
         "benchmarks/campaign_benchmark.py", "--runs", "200", "--workers", "1,2", "--plain", "2"
     )
-    res["batch"] = _benchmark_json("benchmarks/batch_benchmark.py", "--runs", "64", "--repeat", "3")
     return res
 
 

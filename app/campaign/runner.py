@@ -1,14 +1,13 @@
 """Run a campaign on Dask distributed: an embedded LocalCluster (one single-threaded worker
 process per core) or an existing cluster at a scheduler address.
 
-Each task is a block of runs stepped together in one batch (``missions.campaign.run_block``,
-``control.batch``: the same figures as each run alone); its rows are written as it comes
-back. Tasks of a worker that dies are rescheduled by Dask on the others; a block that is lost
-is submitted again run by run (one task each, so that a run that kills its worker takes no
-other with it), and a run whose task keeps killing workers (Dask's ``KilledWorker``) is
-submitted again up to ``LOST_RETRIES`` times, then counted as a run with an error. The client
-keeps one row per run whatever happens (a late duplicate is dropped), and ``--resume`` submits
-only the runs without a row.
+Each task is a block of runs, run one after another (``missions.campaign.run_block``); its rows
+are written as it comes back. Tasks of a worker that dies are rescheduled by Dask on the
+others; a block that is lost is submitted again run by run (one task each, so that a run that
+kills its worker takes no other with it), and a run whose task keeps killing workers (Dask's
+``KilledWorker``) is submitted again up to ``LOST_RETRIES`` times, then counted as a run with
+an error. The client keeps one row per run whatever happens (a late duplicate is dropped), and
+``--resume`` submits only the runs without a row.
 """
 
 from __future__ import annotations
