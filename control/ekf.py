@@ -402,8 +402,7 @@ def _correct_one_into(
     """``correct_into`` for one measured row (the gyro's yaw rate every step, the compass):
     the same operations in the same order without the second row's terms, which for m = 1
     are products with an exact zero gain (x + 0 y = x for finite y: the same bits, checked
-    against the two-row form in ``tests/test_ekf_correct.py``). About half the arithmetic:
-    70 against 128 ns a call (docs/speed.md, tenth pass).
+    against the two-row form in ``tests/test_ekf_correct.py``). About half the arithmetic.
     Returns the normalised innovation squared."""
     e0 = z0 - x[row0]
     if angle:

@@ -112,12 +112,9 @@ by 1 % at most), and the tree moves centimetres against waves hundreds of metres
 
 LONG_CHUNK_S = 5.0
 """The longest chunk while nothing but the quasi-static wire's entries needs a refresh
-(``Simulation._still``: winch and crane at rest, no sea, no faults) [s]. A chunk costs some
-40 us of Python and numpy calls besides its steps (its inputs, the kernel's call, the rows'
-bookkeeping), 0.4 us a step in chunks of a second; five seconds make that 0.08 us, and
-longer ones gain little more (measured: the plant alone 1.97 us a step in chunks of 5 s,
-1.94 in chunks of 10 s, 2.12 in chunks of 1 s) while their rows outgrow the processor's
-second-level cache (500 rows of 115 columns are 460 kB)."""
+(``Simulation._still``: winch and crane at rest, no sea, no faults) [s]. Each chunk costs some
+Python besides its steps; longer chunks share it over more steps, and much longer ones gain
+little while their rows outgrow the processor's cache (docs/performance.md)."""
 
 
 class SimulationDiverged(RuntimeError):

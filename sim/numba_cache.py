@@ -85,19 +85,19 @@ def _module_file(root: Path, dotted: str) -> Path | None:
 @functools.cache
 def core_imports(path: Path, root: Path = ROOT) -> frozenset[Path]:
     """The core's modules that ``path`` imports itself (``import sim.x``, ``from sim import
-    x``, ``from sim.x import y``), as files under ``root``."""
-    found: set[Path] = set()
+    x``, ``from sim.x import y``), as files under ``root``: for ``from package import name``
+    the module ``name`` if it is one, else the package."""
+    found: set[Path | None] = set()
     for node in ast.walk(ast.parse(path.read_bytes(), filename=str(path))):
-        names: list[str] = []
         if isinstance(node, ast.Import):
-            names = [alias.name for alias in node.names]
+            found.update(_module_file(root, alias.name) for alias in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            names = [node.module] + [f"{node.module}.{alias.name}" for alias in node.names]
-        for name in names:
-            file = _module_file(root, name)
-            if file is not None and file != path:
-                found.add(file)
-    return frozenset(found)
+            for alias in node.names:
+                # ``from sim import plant`` depends on sim/plant.py, not on sim/__init__.py;
+                # ``from sim.gnc import mv3_into`` on sim/gnc.py
+                sub = _module_file(root, f"{node.module}.{alias.name}")
+                found.add(sub if sub is not None else _module_file(root, node.module))
+    return frozenset(f for f in found if f is not None and f != path)
 
 
 def dependencies(path: Path, root: Path = ROOT) -> list[Path]:

@@ -896,9 +896,8 @@ def tree_wrench_into(
 CONTACT_MARGIN_M = 0.01
 """[m] A tree more than its reach plus this above the landing surface cannot touch it (see
 ``contact_reach``). The depths compared (some 400 m) carry rounding errors of about 1e-13 m,
-eleven orders below this margin; a margin of 1 m had the batch's contact computed for 26 % of a
-docking run's steps instead of 18 % (the tree hangs a few decimetres above the posts while it
-is aligned over them), 2-3 % of a batch's time."""
+eleven orders below this margin; a larger margin only makes the contact's arithmetic run on
+more steps where it finds nothing."""
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -933,8 +932,8 @@ def tree_wrench_trig_into(
     The contact wrench is computed only for a tree within ``contact_reach`` of the landing
     surface: farther up it is exactly zero (every term of ``contact_wrench_trig_into`` is
     skipped), and ``tau`` gets the same ``+ 0.0`` it got from the zero wrench. In a docking
-    run the tree hangs far above the frame for most of its steps; the contact's corners and
-    posts were a fifth of the plant's step there (measured, docs/speed.md)."""
+    run the tree hangs far above the frame for most of its steps, where the contact's corners
+    and posts would cost a fifth of the plant's step for nothing."""
     vec = work.vec
     _fluid_wrench_into(
         tau,

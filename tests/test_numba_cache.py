@@ -111,3 +111,11 @@ def test_the_core_is_cached_beside_the_packages_and_a_docstring_edit_reloads_it(
     assert run() == (False, True), "a comment moved the lines: loaded all the same"
     _edit(gnc, "import numpy as np\n", "import numpy as np\n\nUNUSED_CONSTANT = 1.0\n")
     assert run() == (True, False), "the module's code changed: compiled again"
+
+
+def test_the_cache_machinery_itself_is_no_kernels_dependency() -> None:
+    """``from sim import plant`` depends on sim/plant.py, not on sim/__init__.py (which
+    imports this module): an edit of the cache's own code must not recompile the core."""
+    for kernels in ("sim/plant.py", "control/loop.py", "control/ekf.py"):
+        deps = {p.relative_to(ROOT).as_posix() for p in numba_cache.dependencies(ROOT / kernels)}
+        assert "sim/numba_cache.py" not in deps and "sim/__init__.py" not in deps, kernels
