@@ -45,6 +45,9 @@ def _root(
     ] = False,
 ) -> None:
     """Simulator, control system and console for ROV-assisted tree-on-wire installation."""
+    from app.compiling import report_compiles
+
+    report_compiles()  # a first run after a change compiles for tens of seconds: say so
 
 
 def parse_polar(text: str, what: str, unit: str) -> tuple[float, float]:

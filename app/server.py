@@ -232,9 +232,18 @@ def instructor_line(settings: ConsoleSettings) -> str:
 
 
 def serve(settings: ConsoleSettings) -> None:
-    """Run until interrupted (the ``rov-console serve`` command); prints where to go."""
+    """Run until interrupted (the ``rov-console serve`` command); prints where to go. Once
+    the console is built (its first chunk's kernels compiled or loaded), the kernels of the
+    commands it has not used yet are compiled into the cache by a process of low priority
+    beside it (``app.precompile``: nothing to do when the cache has them)."""
+    from app import precompile
+
     app = create_app(replace(settings, announce=True))
-    uvicorn.Server(uvicorn_config(app, settings)).run()
+    warm = precompile.start_in_background()
+    try:
+        uvicorn.Server(uvicorn_config(app, settings)).run()
+    finally:
+        warm.terminate()
 
 
 def uvicorn_config(app: FastAPI, settings: ConsoleSettings) -> uvicorn.Config:

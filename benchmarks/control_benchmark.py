@@ -49,7 +49,7 @@ _NO_NRT = {"cache": True, "error_model": "numpy", "_nrt": False}
 @njit(**_NO_NRT)
 def _plant_steps(x, n, env, P, dt, work, reps):
     for _ in range(reps):
-        plant.rk4_step_inline(x, x, n, env, P, dt, work)
+        plant.rk4_step_into(x, x, n, env, P, dt, work)
 
 
 @njit(cache=True)

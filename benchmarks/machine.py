@@ -1,8 +1,6 @@
 """Which machine a benchmark ran on: the processor, the instruction set numba compiles the
-kernels for, and the cores. Speed figures mean little without it: the batch kernel's
-structure-of-arrays plant step runs the runs eight to a vector register with AVX-512 and four
-with AVX2, and the same batch of 64 docking runs measured 2.6 us per run-step on an AMD Zen 5
-(AVX-512) machine and 6.8 us on an AMD Zen 3 (AVX2) one (docs/speed.md, eleventh pass)."""
+kernels for, and the cores. Speed figures mean little without it: the same code runs at
+different speeds on processors of different generations and vector widths."""
 
 from __future__ import annotations
 

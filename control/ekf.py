@@ -26,7 +26,7 @@ N_X = 9
 NORTH, EAST, PSI, SURGE, SWAY, YAW_RATE, B_N, B_E, B_PSI = range(9)
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def coriolis3(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
     """C(nu) nu of a 3-DOF (surge, sway, yaw) mass matrix, the skew-symmetric form of m2c."""
     ax = M[0, 0] * nu[0] + M[0, 1] * nu[1] + M[0, 2] * nu[2]
@@ -56,7 +56,7 @@ def model_rhs(
     return xdot
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def _model_rhs_into(
     xdot: np.ndarray,
     x: np.ndarray,
@@ -76,7 +76,7 @@ def _model_rhs_into(
     )
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def _model_rhs_cs_into(
     xdot: np.ndarray,
     x: np.ndarray,
@@ -144,7 +144,7 @@ def predict(
     return x_new, P_new
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def jacobian_phi_into(
     phi: np.ndarray,
     x: np.ndarray,
@@ -218,7 +218,7 @@ def jacobian_phi_into(
         phi[i, i] += 1.0
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def phi_times_into(out: np.ndarray, phi: np.ndarray, A: np.ndarray, transposed: bool) -> None:
     """out = phi @ A (``transposed``: phi @ A.T) for phi of ``jacobian_phi_into``, leaving
     out the products with its known zeros (37 of 81 entries are not: rows 0-1 reach the
@@ -402,8 +402,7 @@ def _correct_one_into(
     """``correct_into`` for one measured row (the gyro's yaw rate every step, the compass):
     the same operations in the same order without the second row's terms, which for m = 1
     are products with an exact zero gain (x + 0 y = x for finite y: the same bits, checked
-    against the two-row form in ``tests/test_ekf_correct.py``). About half the arithmetic:
-    70 against 128 ns a call (docs/speed.md, tenth pass).
+    against the two-row form in ``tests/test_ekf_correct.py``). About half the arithmetic.
     Returns the normalised innovation squared."""
     e0 = z0 - x[row0]
     if angle:

@@ -1,13 +1,10 @@
-"""Compiled closed-loop chunks as jobs, so one run's stepping can be driven alone or beside
-other runs' (``control.batch``) without two copies of the stepping logic.
+"""Compiled closed-loop chunks as jobs.
 
 ``Simulation.step_jobs(n)`` and ``MissionDriver.advance_jobs`` are generators: where a run
 needs the compiled closed-loop kernel for its next chunk they yield a ``ChunkJob`` (the
 run's own environment rows and sensor noise, drawn from its own seed, and the run itself
 for its state and configuration) and take back a ``ChunkResult``. ``run_jobs`` drives such
-a generator alone, running each job with ``loop.run_chunk`` at once; ``control.batch``
-drives many, running the jobs of all its runs in one compiled program. Either way a job is
-the same arithmetic on the same numbers, so a run gives the same figures.
+a generator, running each job with ``loop.run_chunk`` at once.
 """
 
 from __future__ import annotations
@@ -43,17 +40,16 @@ class ChunkJob:
     fresh: np.ndarray  # which sensors have a fresh sample at each step
     out: np.ndarray | None = None
     """Where the chunk's log rows go, (n, the log's width: ``Simulation.log_keep``): a slice
-    of its request's rows (C-contiguous); None, a new array. A batch's kernel and ``run``
-    (``loop.run_chunk_into``) write the rows straight there."""
+    of its request's rows (C-contiguous); None, a new array. ``run`` (``loop.run_chunk_into``)
+    writes the rows straight there."""
     spring: np.ndarray | None = None
     """(n, 3) the control model's wire spring in force at each step, [k_h, p_eq north, east]
     (``site.chunk_rows_into``: it refreshes on whole seconds, as the wire's entries); None,
     ``C``'s throughout. Row 0 is ``C``'s own as the simulation makes a job. A chunk that runs
-    past whole seconds while the winch or the crane moves has others further on: the batch's
-    kernel puts each row into the run's configuration before its step, and ``run`` runs the
-    chunk in pieces between the rows where it changes, each with ``C`` holding that piece's
-    spring (the chunks of a second the simulator would otherwise have cut, with the same
-    numbers)."""
+    past whole seconds while the winch or the crane moves has others further on: ``run`` runs
+    the chunk in pieces between the rows where it changes, each with ``C`` holding that
+    piece's spring (the chunks of a second the simulator would otherwise have cut, with the
+    same numbers)."""
 
     @property
     def n(self) -> int:
@@ -86,9 +82,7 @@ class ChunkJob:
         return (*state, out, self.n)
 
     def _config_at(self, a: int, C: Any) -> Any:
-        """``C`` holding row a's spring (``C`` itself when it does already: the batch's
-        kernel puts every row's spring into the configuration, so alone the rows decide
-        too)."""
+        """``C`` holding row a's spring (``C`` itself when it does already)."""
         if self.spring is None:
             return C
         k_h, p_n, p_e = self.spring[a]

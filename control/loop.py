@@ -61,7 +61,7 @@ def _matvec(A: np.ndarray, v: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def _matvec_into(out: np.ndarray, A: np.ndarray, v: np.ndarray) -> None:
     """``_matvec`` into ``out`` (must not alias ``v``)."""
     for i in range(A.shape[0]):
@@ -165,8 +165,7 @@ W_TAU3, W_F, W_N, W_ACH, W_ACH3, W_TAU_OBS = 8, 9, 10, 11, 12, 13
 W_F0, W_K0, W_K1 = 14, 17, 18  # the EKF's
 W_NE, W_UV, W_ACCEPT, W_BTAU, W_ZERO = 19, 20, 21, 22, 23
 W_ETA4, W_DETA4, W_FI, W_E4, W_TAU_ROV, W_ROWS = 24, 25, 26, 27, 28, 29
-W_ACC4, W_RVAR4, W_Z6 = 15, 16, 30  # a run's samples for the batch kernel's observer block
-N_CVEC = 31
+N_CVEC = 30
 CW_WIDTH = 12
 """Width of the work rows: the longest vector of the step (the EKF's 9, the thrusters' M_MAX,
 the allocation's rows)."""
@@ -268,7 +267,7 @@ def tree_heading(y: np.ndarray, C: ControlArrays) -> float:
     return y[4] - C.psi_rel
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def _truth_tree_into(eta: np.ndarray, deta: np.ndarray, x: np.ndarray) -> None:
     """Perfect feedback: the tree's [north, east, psi] and their NED rates."""
     eta[0], eta[1], eta[2] = x[0], x[1], x[5]
@@ -278,7 +277,7 @@ def _truth_tree_into(eta: np.ndarray, deta: np.ndarray, x: np.ndarray) -> None:
     deta[2] = x[11]
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def _rov_pose_into(
     eta4: np.ndarray, deta4: np.ndarray, x: np.ndarray, y: np.ndarray, use_truth: bool
 ) -> None:
@@ -335,25 +334,6 @@ def _observe_into(
         ekf.correct_into(xhat, P, 1, rate, 0.0, 5, -1, C.r_gyro, 0.0, -1, k0, k1, A)
     if accepted[sensors.DVL] > 0.5:
         ekf.correct_into(xhat, P, 2, uv[0], uv[1], 3, 4, C.r_dvl, C.r_dvl, -1, k0, k1, A)
-
-
-@njit(inline="always", **JIT_NOALLOC)
-def log_nis(
-    log_row: np.ndarray,
-    compass: bool,
-    nis_psi: float,
-    position: bool,
-    nis_north: float,
-    nis_east: float,
-) -> None:
-    """The normalised innovations of the corrections made (the compass's, the position
-    fix's) into the row's columns, as ``_observe_into`` writes them: for the batch kernel,
-    whose observer blocks correct apart from the row (``control.batch_ekf``)."""
-    if compass:
-        log_row[L_NIS + 2] = nis_psi
-    if position:
-        log_row[L_NIS] = nis_north
-        log_row[L_NIS + 1] = nis_east
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -489,7 +469,7 @@ def control_step(
     return tau6, xhat, Pc, cs
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def control_step_into(
     tau6: np.ndarray,
     t: float,
@@ -526,10 +506,9 @@ def control_law_into(
     log_row: np.ndarray,
     W: ControlWork,
 ) -> None:
-    """``control_step_into`` after the observer's corrections (the batch kernel makes those
-    in its blocks): the reference, the controller of the mode and the row's control
-    columns, from the corrected estimate ``xhat`` (or, without an observer, the plant's
-    state ``x``)."""
+    """``control_step_into`` after the observer's corrections: the reference, the controller
+    of the mode and the row's control columns, from the corrected estimate ``xhat`` (or,
+    without an observer, the plant's state ``x``)."""
     eta = W.vec[W_ETA, 0:3]
     deta = W.vec[W_DETA, 0:3]
     if C.feedback_ekf:
@@ -828,7 +807,7 @@ def predict_with_input_into(
     )
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def observe_into(
     x: np.ndarray,
     env_k: np.ndarray,
@@ -913,7 +892,7 @@ def run_chunk_into(
     return x, held_y, xhat, Pc, cs, n_done
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def _zero_rows(log: np.ndarray) -> None:
     """Every number of ``log`` (rows, N_LOG) to 0.0 (the columns a step leaves unwritten stay
     zero, as in a new array of zeros)."""
@@ -958,7 +937,7 @@ def _closed_steps(
         # ``finish_step_into`` with the plant's step inlined
         n_rps = W.vec[W_N, 0 : f.shape[0]]
         thrusters_into(n_rps, f, C, row, W)
-        plant.rk4_step_inline(x, x, n_rps, env[j], P, dt, work)
+        plant.rk4_step_into(x, x, n_rps, env[j], P, dt, work)
         observe_into(x, env[j], xhat, Pc, C, P, dt, t + dt, held_y, row, work, W)
         if not plant.all_finite(x):
             return j
@@ -1074,7 +1053,7 @@ def _open_steps(
     m = n_rps.shape[0]
     for j in range(n):
         row = log[j]
-        plant.rk4_step_inline(x, x, n_rps, env[j], P, dt, work)
+        plant.rk4_step_into(x, x, n_rps, env[j], P, dt, work)
         if not plant.all_finite(x):
             return j
         sensors.sample_into(held_y, x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)

@@ -64,12 +64,11 @@ def quality_config(noise_std: NDArray[np.float64], dt: float) -> QualityConfig:
     return QualityConfig(lo, hi, wild, max_rate, frozen, variance)
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def variance(h: np.ndarray) -> float:
     """``h.var()`` of a 1-D array, numba's operations in numba's order (the mean a sum from
     0.0 in index order over the length, then the squared deviations' sum the same way over
-    the length), in plain loops: the same bits at half the cost of the method's iterator
-    (the gyro's check of every step, 112 -> 62 ns; docs/speed.md, twenty-sixth pass)."""
+    the length), in plain loops: the same bits at half the cost of the method's iterator."""
     n = h.shape[0]
     c = 0.0
     for j in range(n):
@@ -82,7 +81,7 @@ def variance(h: np.ndarray) -> float:
     return ssd / n
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def check_sample(
     k: int,
     y: np.ndarray,

@@ -143,8 +143,7 @@ def third_order_step_into(
 ) -> None:
     """``third_order_step`` into ``out`` (9,), which may be ``state`` itself. An axis whose
     k_acc is the one before's (the parameter sets give the three axes one bandwidth and one
-    damping) takes that axis's decay, the same number, not a second libm ``expm1`` (some
-    15 ns each, a fifth of the control law's step; docs/speed.md, twenty-sixth pass)."""
+    damping) takes that axis's decay, the same number, not a second libm ``expm1``."""
     k_prev = np.nan
     decay_m1 = np.nan
     for i in range(3):

@@ -104,7 +104,7 @@ elastic wire's lumped mass. On the whole seconds of the step grid (steps 0, 1/dt
 and chunks end there (or, with only the wire's entries and the control model's spring to
 refresh, run past them and refresh those at the rows of whole seconds: ``LONG_CHUNK_S``,
 ``control.jobs.ChunkJob.spring``), so a run gives the same numbers however
-it is cut into requests (the console's ticks, the command line's requests, a batch). A second
+it is cut into requests (the console's ticks, the command line's requests). A second
 is short beside how fast any of them changes: the current walks by millimetres a second, the
 winch pays out at most 2 m/s on a wire hundreds of metres long (its horizontal stiffness moves
 by 1 % at most), and the tree moves centimetres against waves hundreds of metres long."""
@@ -112,12 +112,9 @@ by 1 % at most), and the tree moves centimetres against waves hundreds of metres
 
 LONG_CHUNK_S = 5.0
 """The longest chunk while nothing but the quasi-static wire's entries needs a refresh
-(``Simulation._still``: winch and crane at rest, no sea, no faults) [s]. A chunk costs some
-40 us of Python and numpy calls besides its steps (its inputs, the kernel's call, the rows'
-bookkeeping), 0.4 us a step in chunks of a second; five seconds make that 0.08 us, and
-longer ones gain little more (measured: the plant alone 1.97 us a step in chunks of 5 s,
-1.94 in chunks of 10 s, 2.12 in chunks of 1 s) while their rows outgrow the processor's
-second-level cache (500 rows of 115 columns are 460 kB)."""
+(``Simulation._still``: winch and crane at rest, no sea, no faults) [s]. Each chunk costs some
+Python besides its steps; longer chunks share it over more steps, and much longer ones gain
+little while their rows outgrow the processor's cache (docs/performance.md)."""
 
 
 class SimulationDiverged(RuntimeError):
@@ -317,6 +314,7 @@ class Simulation:
         self._spring_rows = np.zeros((0, 3))  # the rows of the chunk whose inputs were made last
         self._refresh_point = np.zeros(5)  # tree north, east, depth; crane tip north, east
         self._pivot_tops = np.zeros((0, 3))  # the elastic wire's top, the last two steps
+        self._last_env: FloatArray | None = None  # the last step's environment row
         self._refresh_wire_m = 0.0  # the payout at the last refresh [m]
         # One stream per purpose, each spawned from the seed and read in step order, so the
         # numbers a step gets do not depend on how the run is cut into chunks, nor on what
@@ -526,19 +524,10 @@ class Simulation:
         )
 
     def wire_tension_newton(self) -> float:
-        """Present wire tension at the tree [N]."""
-        if self.mdwire is not None:
-            return float(np.linalg.norm(self.mdwire.wire_force_n))
-        env = site.wire_environment(
-            self.plant_ps,
-            self.wire_length_m,
-            self.crane_tip_n,
-            self.current_state.speed_mps,
-            self.current_state.direction_rad,
-        )
-        R_t = Rzyx(*self.x[3:6])
-        p_att = self.x[0:3] + R_t @ self.arrays.tree_r_att
-        return float(np.linalg.norm(plant.wire_force_n(p_att, env, self.arrays.tree_W0)))
+        """Present wire tension at the tree [N]: the logged tension of the last step (the
+        same function on the same numbers, whatever the wire model), before any step the
+        site's at rest."""
+        return float(LAYOUT.take(self.present_row(), "wire_tension"))
 
     def mount_pose_n(self) -> FloatArray:
         """Where the ROV's origin belongs on the tree now: [north, east, down, psi] (truth of
@@ -573,18 +562,20 @@ class Simulation:
 
     def present_row(self) -> FloatArray:
         """A log row for the present state (before the next step): time, plant, reference,
-        estimate, mode and site."""
+        estimate, mode and site (the site of the last step's environment row, as logged)."""
         row = np.zeros(N_LOG)
-        env = site.wire_environment(
-            self.plant_ps,
-            self.wire_length_m,
-            self.crane_tip_n,
-            self.current_state.speed_mps,
-            self.current_state.direction_rad,
-        )
-        env[plant.E_LREST] = self.wire_length_m + site.self_weight_stretch(
-            self.plant_ps, self.wire_length_m
-        )
+        env = self._last_env
+        if env is None:  # no step yet: the site at rest
+            env = site.wire_environment(
+                self.plant_ps,
+                self.wire_length_m,
+                self.crane_tip_n,
+                self.current_state.speed_mps,
+                self.current_state.direction_rad,
+            )
+            env[plant.E_LREST] = self.wire_length_m + site.self_weight_stretch(
+                self.plant_ps, self.wire_length_m
+            )
         loop.write_plant_row(
             row,
             self.t_s,
@@ -831,10 +822,9 @@ class Simulation:
 
     def step_jobs(self, n: int) -> Generator[ChunkJob, ChunkResult, LogRows]:
         """``step`` as a generator: it yields each compiled closed-loop chunk as a
-        ``ChunkJob`` for whoever drives it to run (``run_jobs`` here, one at a time; or
-        ``control.batch`` beside other runs' chunks, with the same arithmetic) and takes its
-        ``ChunkResult`` back; the chunks no batch takes (open loop, QP allocation, MoorDyn)
-        it runs itself. Returns the rows of the ``n`` steps."""
+        ``ChunkJob`` for whoever drives it to run (``run_jobs``) and takes its ``ChunkResult``
+        back; the other chunks (open loop, QP allocation, MoorDyn) it runs itself. Returns
+        the rows of the ``n`` steps."""
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 0:
             raise ValueError(f"steps must be a whole number >= 0, got {n!r}")
         out: FloatArray | None = None
@@ -858,7 +848,7 @@ class Simulation:
                 out = yield from self._chunk(k)
             else:
                 # several chunks: each writes its rows straight into the request's (the
-                # kernels' ``*_into`` forms, a batch's kernel too; no join of the parts)
+                # kernels' ``*_into`` forms; no join of the parts)
                 if out is None:
                     out = np.empty((n, self.log_layout.width))
                 yield from self._chunk(k, out[done : done + k])
@@ -1156,8 +1146,8 @@ class Simulation:
         self, n: int, out: FloatArray | None = None
     ) -> Generator[ChunkJob, ChunkResult, FloatArray]:
         """Advance n steps in one chunk; returns their rows: ``out`` (n, the log's width)
-        filled, when given, else a new array. The kernels alone make whole rows, whose kept
-        columns are taken here (``keep_log_columns``); a batch's writes only those."""
+        filled, when given, else a new array. The kernels make whole rows, whose kept
+        columns are taken here (``keep_log_columns``)."""
         env, noise = self._chunk_inputs(n)
         whole = self.log_keep.shape[0] == N_LOG
         if self.control_on:
@@ -1198,6 +1188,7 @@ class Simulation:
         if ok < n:
             self._diverged(x, ok)
         self.x, self.held_y = x, held
+        self._last_env = env[-1].copy()
         self.step_index += n
         if out is None:
             return log

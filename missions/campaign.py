@@ -39,7 +39,6 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from control.batch import run_together
 from control.config import ALLOCATIONS, FEEDBACKS
 from control.simulation import Simulation
 from missions import schema
@@ -771,33 +770,9 @@ def run_one(c: Campaign, base: schema.Mission, index: int) -> dict:
 
 
 def run_block(c: Campaign, base: schema.Mission, indices: Sequence[int]) -> list[dict]:
-    """Runs ``indices`` of the campaign to their ends together, their compiled steps in one
-    batch (``control.batch``): one row per run, in order, each with the figures ``run_one``
-    gives for it alone. A run's ``wall_s`` is its share of the block's wall time (in
-    proportion to its simulated time: the runs step side by side). A run that raises gives
-    its error row; the others go on."""
-    t0 = time.perf_counter()
-    rows: dict[int, dict] = {}
-    prepared: list[tuple[int, RunInputs, MissionDriver]] = []
-    for index in indices:
-        inputs = run_inputs(c, base, index)
-        try:
-            _, mission, sim = prepare_run(c, base, index)
-            prepared.append((index, inputs, MissionDriver(mission, sim, keep_log=False)))
-        except Exception as err:  # any failure of one run is that run's outcome
-            rows[index] = failed_row(inputs, f"{type(err).__name__}: {err}")
-    outcomes = run_together([driver.run_to_end_jobs(log=False) for _, _, driver in prepared])
-    wall_s = time.perf_counter() - t0
-    simulated_s = sum(driver.sim.t_s for _, _, driver in prepared) or 1.0
-    for (index, inputs, driver), outcome in zip(prepared, outcomes, strict=True):
-        if outcome.error is not None:
-            failure = outcome.error
-            rows[index] = failed_row(inputs, f"{type(failure).__name__}: {failure}")
-            continue
-        result = outcome.value
-        share = wall_s * driver.sim.t_s / simulated_s
-        rows[index] = {**input_row(inputs), **outcome_row(result, driver.sim.t_s, share)}
-    return [rows[index] for index in indices]
+    """Runs ``indices`` of the campaign, one after another (one Dask task: the task's
+    overhead shared by the block): one row per run, in order (``run_one``'s)."""
+    return [run_one(c, base, index) for index in indices]
 
 
 # ------------------------------------------------------------------------------------------

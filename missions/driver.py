@@ -62,9 +62,9 @@ class MissionDriver:
         self.sim = sim
         self.keep_log = keep_log
         """False: the simulation logs only the columns the scores and the legs read
-        (``LEAN_LAYOUT``), not the whole log: a campaign's runs, many of them alive at once
-        in a batch (the whole log of a 500 s docking is 47 MB). The figures are the same;
-        the result's ``log`` has those columns only."""
+        (``LEAN_LAYOUT``), not the whole log: a campaign's runs (the whole log of a 500 s
+        docking is 47 MB). The figures are the same; the result's ``log`` has those columns
+        only."""
         if not keep_log:
             sim.keep_log_columns(LEAN_LAYOUT)
         self.ctx = MissionContext(sim)
@@ -215,7 +215,7 @@ class MissionDriver:
         self, max_steps: int | None = None, rows: bool = True
     ) -> Generator[ChunkJob, ChunkResult, LogRows]:
         """``advance`` as a generator of the simulation's compiled chunks
-        (``Simulation.step_jobs``), for ``control.batch`` to run beside other missions'.
+        (``Simulation.step_jobs``).
         ``rows=False`` returns no rows (``run_to_end_jobs``: the result has them).
 
         A request longer than ``Simulation.long_chunk_steps`` (5 s) runs in pieces of that

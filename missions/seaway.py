@@ -552,9 +552,8 @@ def limits_over_seeds(
     sweep: Callable[[int], tuple[float, list[SeawayLanding]]], first_seed: int, seeds: int
 ) -> list[SeedLimit]:
     """``sweep(seed)`` for ``seeds`` seeds from ``first_seed`` on, lowest limit first (ties:
-    the lower seed). One seed's limit is one sea's: with the draws of 2026-11-27, Tp 10 s,
-    2 m steps, seeds 0 to 11 gave limits from 2 to 6 m, so a margin is judged on the lowest
-    of several."""
+    the lower seed). One seed's limit is one sea's: at Tp 10 s in 2 m steps, twelve seeds gave
+    limits from 2 to 6 m, so a margin is judged on the lowest of several."""
     if isinstance(seeds, bool) or not isinstance(seeds, int) or not 1 <= seeds <= SEEDS_MAX:
         raise ValueError(f"seeds must be a whole number in [1, {SEEDS_MAX}], got {seeds!r}")
     out = []

@@ -486,7 +486,6 @@ def compute_campaign() -> Results:
     res = _benchmark_json(
         "benchmarks/campaign_benchmark.py", "--runs", "200", "--workers", "1,2", "--plain", "2"
     )
-    res["batch"] = _benchmark_json("benchmarks/batch_benchmark.py", "--runs", "64", "--repeat", "3")
     return res
 
 
@@ -565,6 +564,40 @@ def render_log_size(res: Results) -> str:
     return f"About {per_minute:.1f} MB per simulated minute ({res['mission']})."
 
 
+# ------------------------------------------------------------------------------ fresh clone
+
+
+def compute_fresh_clone() -> Results:
+    """A fresh clone of HEAD: to a stepping console, to a first docking, to the tests' end."""
+    return _benchmark_json("benchmarks/fresh_clone.py", "--what", "start,run,test")
+
+
+def render_fresh_clone(res: Results) -> str:
+    start, run, test = res["start"], res["run"], res["test"]
+    rows = [
+        para(
+            "`.venv/bin/python benchmarks/fresh_clone.py --what start,run,test`: each from a "
+            f"new clone of commit {res['commit']}, packages downloaded as on a new machine, on "
+            + (machine_text(res.get("machine")) or "this 2-core machine")
+            + f" (load average {res['load_average_before'][0]:.1f} before):"
+        ),
+        "",
+        "| from a fresh clone | s |",
+        "|---|---|",
+        f"| `./scripts/start.sh` until the console answers, stepping | {start['serving_s']:.0f} |",
+        f"| `./scripts/setup.sh` alone | {run['setup_s']:.0f} |",
+        f"| then the first `rov-console run {MISSION_OF_RUN}`, its compile included "
+        f"| {run['first_run_s']:.0f} |",
+        f"| the same run again, from the cache | {run['second_run_s']:.1f} |",
+        f"| `./scripts/test.sh`, set-up and static checks included | {test['test_s']:.0f} |",
+    ]
+    return "\n".join(rows)
+
+
+MISSION_OF_RUN = "full-docking-current-0.3"
+"""The mission ``benchmarks/fresh_clone.py`` runs."""
+
+
 # ------------------------------------------------------------------------------ the blocks
 
 
@@ -577,6 +610,7 @@ BLOCKS: dict[str, tuple[Callable[[], Results], Callable[[Results], str]]] = {
     "log-size": (compute_log_size, render_log_size),
     "speed": (compute_speed, render_speed),
     "campaign": (compute_campaign, render_campaign),
+    "fresh-clone": (compute_fresh_clone, render_fresh_clone),
 }
 
 

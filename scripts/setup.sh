@@ -13,7 +13,7 @@ fi
 stamp=".venv/.installed$(echo "$extras" | tr -d '[]')"
 want="$(sha256sum pyproject.toml | cut -c1-16)"
 if [[ ! -f "$stamp" || "$(cat "$stamp")" != "$want" ]]; then
-  echo "setup: installing rov-console$extras into .venv" >&2
+  echo "setup: installing rov-console$extras and its packages into .venv (about a minute, once)" >&2
   .venv/bin/python -m pip install --quiet --disable-pip-version-check --upgrade pip >&2
   .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".$extras" >&2
   echo "$want" > "$stamp"
@@ -30,7 +30,3 @@ site_packages=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths
 cat > "$site_packages/rov_console_openblas.pth" <<'PTH'
 import os; os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell") if os.uname().machine == "x86_64" and {"avx2", "fma"} <= set(open("/proc/cpuinfo").read().split()) else None
 PTH
-# compile the numeric core into numba's cache now, so every run loads the same machine code;
-# the cache is kept per version of the sources (sim/numba_cache.py): after a change to them
-# this compiles again (a few minutes), otherwise it returns at once
-.venv/bin/python -m app.precompile --if-needed >&2

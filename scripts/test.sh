@@ -18,12 +18,19 @@ if [[ -f tests/js/package.json && ! -d tests/js/node_modules ]]; then
   echo "test: installing the JavaScript test packages" >&2
   (cd tests/js && npm ci --no-audit --no-fund --loglevel=error >&2)
 fi
-# static checks first: lint, format and types (CI enforces all three)
+# the numeric core's kernels into numba's cache (a minute or two after a change of the core,
+# nothing otherwise), beside the static checks, so the tests load them instead of compiling
+# them inside a console's paced loop
+echo "test: compiling the numeric core in the background (python -m app.precompile)" >&2
+.venv/bin/python -m app.precompile >&2 &
+precompile=$!
+# static checks: lint, format and types (CI enforces all three)
 code=(sim control missions app web tests benchmarks scripts)
 echo "test: ruff check, ruff format --check, mypy" >&2
 .venv/bin/ruff check "${code[@]}"
 .venv/bin/ruff format --check "${code[@]}"
 .venv/bin/mypy
+wait "$precompile"
 # two workers (this is a 2-core machine); a test module stays on one worker (its module
 # fixtures: the browser modules share one server and one Chromium per module), and the browser
 # modules all on one worker, one after the other (tests/conftest.py says why and how).

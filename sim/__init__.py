@@ -1,8 +1,8 @@
 """The numeric core: vehicles, wire, environment, sensors.
 
-Importing it first chooses numba's cache folder for this version of the sources
-(``sim.numba_cache``), before any kernel is compiled or loaded from a cache."""
+Importing it first installs the core's numba cache locator (``sim.numba_cache``), before
+any kernel is compiled or loaded from the cache."""
 
 from sim import numba_cache as _numba_cache
 
-_numba_cache.configure()
+_numba_cache.install()

@@ -48,7 +48,7 @@ def ssa(angle: float) -> float:
     return wrapped - np.pi
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def ssa_scalar(angle: float) -> float:
     """``ssa`` of one number, the same bits, for the compiled loop: an angle already within
     [-pi, pi) (almost every call) skips the floating-point remainder, a call into numba's
@@ -301,7 +301,7 @@ def mv_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
         out[i] = s
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def mv3_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
     """``mv_into`` for a 3x3 A: the same sums, with loop bounds the compiler sees (and
     inlined where it is called, so no call per product)."""
@@ -312,7 +312,7 @@ def mv3_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
         out[i] = s
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def mv6_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
     """``mv_into`` for a 6x6 A (see ``mv3_into``)."""
     for i in range(6):
@@ -322,7 +322,7 @@ def mv6_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
         out[i] = s
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def mtv3_into(out: np.ndarray, A: np.ndarray, x: np.ndarray) -> None:
     """``mtv_into`` for a 3x3 A (see ``mv3_into``)."""
     for j in range(3):

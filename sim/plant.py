@@ -237,7 +237,7 @@ def make_work(n_thrusters: int) -> PlantWork:
     return PlantWork(np.zeros((N_VEC, max(N_STATE, n_thrusters))), np.zeros((N_MAT, 3, 3)))
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def _hydro_into(tau, M_rb, M_a, D_l, D_nl, nu, nu_r, nu_c_dot_lin, c_rb, c_a):
     """Rigid-body Coriolis, added-mass Coriolis, damping and the added-mass part of the water's
     acceleration, as forces on the right-hand side (eq. 2.11-2.12), into ``tau`` (6,);
@@ -259,7 +259,7 @@ def _hydro(M_rb, M_a, D_l, D_nl, nu, nu_r, nu_c_dot_lin):
     return tau
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def _relative_velocity_into(nu_r, v_c_b, v_c_dot_b, R_nb, nu, v_c_n, a_c_n):
     """nu_r = nu - nu_c (eq. 2.10) into ``nu_r`` (6,), the current's body components into
     ``v_c_b`` (3,) and their rate d/dt (R^T v_c) = R^T a_c - omega x (R^T v_c) into
@@ -285,57 +285,49 @@ def _relative_velocity(R_nb, nu, v_c_n, a_c_n):
     return nu_r, v_c_dot_b
 
 
+@njit(**JIT_NOALLOC)
+def wire_pivot_xyz(env: np.ndarray, W0: float) -> tuple[float, float, float, float]:
+    """Virtual pivot (north, east, down) [m] and rest length [m] of the wire's equivalent
+    elastic pendulum (see ``wire_force_damped_into``)."""
+    rest = W0 / env[E_KH] - W0 / env[E_KZ]
+    north = env[E_CT] + env[E_OFF]
+    east = env[E_CT + 1] + env[E_OFF + 1]
+    down = env[E_CT + 2] + env[E_LREST] - rest
+    return north, east, down, rest
+
+
 @njit(**JIT)
 def wire_pivot(env: np.ndarray, W0: float) -> tuple[np.ndarray, float]:
-    """Virtual pivot and rest length of the equivalent elastic pendulum (see wire_force_n)."""
-    rest = W0 / env[E_KH] - W0 / env[E_KZ]
-    pivot = np.empty(3)
-    pivot[0] = env[E_CT] + env[E_OFF]
-    pivot[1] = env[E_CT + 1] + env[E_OFF + 1]
-    pivot[2] = env[E_CT + 2] + env[E_LREST] - rest
-    return pivot, rest
+    """``wire_pivot_xyz`` as (pivot (3,), rest length)."""
+    north, east, down, rest = wire_pivot_xyz(env, W0)
+    return np.array([north, east, down]), rest
 
 
-@njit(**JIT)
-def wire_force_n(p_att_n: np.ndarray, env: np.ndarray, W0: float) -> np.ndarray:
-    """Force of the wire on the tree at its attachment point, NED [N].
+@njit(**JIT_NOALLOC)
+def wire_force_damped_into(
+    f: np.ndarray, p_att_n: np.ndarray, v_att_n: np.ndarray, env: np.ndarray, W0: float
+) -> None:
+    """Force of the wire on the tree at its attachment point into ``f`` (3,), NED [N].
 
     The wire is represented by an elastic pendulum: a spring of stiffness k_z (eq. 2.25) from a
     virtual pivot straight above the equilibrium point (crane tip plus the drag offset of
     eq. 2.29), with a rest length chosen so that at the static hang the tension is W0, the
     vertical stiffness is k_z and the horizontal stiffness T / d is exactly k of eq. 2.30. The
-    force is central and depends on distance only, so it is conservative (no energy is made by
-    the wire), and it vanishes when the wire is slack (eq. 2.28)."""
-    pivot, rest = wire_pivot(env, W0)
-    dx = p_att_n[0] - pivot[0]
-    dy = p_att_n[1] - pivot[1]
-    dz = p_att_n[2] - pivot[2]
-    d = np.sqrt(dx * dx + dy * dy + dz * dz)
-    f = np.zeros(3)
-    if d > rest and d > 0.0:
-        tension = env[E_KZ] * (d - rest)
-        f[0] = -tension * dx / d
-        f[1] = -tension * dy / d
-        f[2] = -tension * dz / d
-    return f
-
-
-@njit(inline="always", **JIT_NOALLOC)
-def wire_force_damped_into(
-    f: np.ndarray, p_att_n: np.ndarray, v_att_n: np.ndarray, env: np.ndarray, W0: float
-) -> None:
-    """``wire_force_damped_n`` into ``f`` (3,), allocating nothing (the pivot as scalars).
-    With ``E_WEXT`` set, the force given from outside (``E_FWIRE``, the coupled MoorDyn wire)
-    instead of the plant's own wire."""
+    spring's force is central and depends on distance only, so it is conservative (no energy
+    is made by the wire). The elastic wire adds its axial damping (``E_WDAMP``): the tension
+    is k_z (d - rest) + c d_dot along the wire, d_dot the stretch rate of the attachment
+    point against the wire's top (``E_VPIV``); never negative, zero when the wire is slack
+    (eq. 2.28). With ``E_WEXT`` set, the force given from outside (``E_FWIRE``, the coupled
+    MoorDyn wire) instead of the plant's own wire."""
     if env[E_WEXT] > 0.0:
         f[0] = env[E_FWIRE]
         f[1] = env[E_FWIRE + 1]
         f[2] = env[E_FWIRE + 2]
         return
-    rest = W0 / env[E_KH] - W0 / env[E_KZ]
-    dx = p_att_n[0] - (env[E_CT] + env[E_OFF])
-    dy = p_att_n[1] - (env[E_CT + 1] + env[E_OFF + 1])
-    dz = p_att_n[2] - (env[E_CT + 2] + env[E_LREST] - rest)
+    north, east, down, rest = wire_pivot_xyz(env, W0)
+    dx = p_att_n[0] - north
+    dy = p_att_n[1] - east
+    dz = p_att_n[2] - down
     d = np.sqrt(dx * dx + dy * dy + dz * dz)
     f[0] = 0.0
     f[1] = 0.0
@@ -357,17 +349,13 @@ def wire_force_damped_into(
 def wire_force_damped_n(
     p_att_n: np.ndarray, v_att_n: np.ndarray, env: np.ndarray, W0: float
 ) -> np.ndarray:
-    """``wire_force_n`` with the wire's axial damping (``E_WDAMP``): the tension is
-    k_z (d - rest) + c d_dot along the wire, d_dot the stretch rate of the attachment point
-    against the wire's top (``E_VPIV``); never negative, zero when slack. With c = 0 it is
-    ``wire_force_n`` exactly. With ``E_WEXT`` set, the force given from outside
-    (``E_FWIRE``, the coupled MoorDyn wire) instead."""
+    """``wire_force_damped_into`` into a new array."""
     f = np.empty(3)
     wire_force_damped_into(f, p_att_n, v_att_n, env, W0)
     return f
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def attachment_velocity_into(
     out: np.ndarray, x: np.ndarray, R_t: np.ndarray, r_att: np.ndarray, tmp: np.ndarray
 ) -> None:
@@ -517,7 +505,7 @@ def coupling_wrench(
     return w_rov, w_tree
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def _kinematics_into(
     out: np.ndarray, nu: np.ndarray, R_nb: np.ndarray, T_theta: np.ndarray
 ) -> None:
@@ -846,7 +834,7 @@ def contact_energy(x: np.ndarray, env: np.ndarray, P: PlantArrays) -> float:
     return energy
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def _froude_krylov_into(
     tau: np.ndarray, fk_mass: float, R_nb: np.ndarray, a_c_n: np.ndarray, tmp: np.ndarray
 ) -> None:
@@ -860,7 +848,7 @@ def _froude_krylov_into(
         tau[i] += fk_mass * tmp[i]
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def _fluid_wrench_into(
     tau: np.ndarray,
     nu: np.ndarray,
@@ -908,9 +896,8 @@ def tree_wrench_into(
 CONTACT_MARGIN_M = 0.01
 """[m] A tree more than its reach plus this above the landing surface cannot touch it (see
 ``contact_reach``). The depths compared (some 400 m) carry rounding errors of about 1e-13 m,
-eleven orders below this margin; a margin of 1 m had the batch's contact computed for 26 % of a
-docking run's steps instead of 18 % (the tree hangs a few decimetres above the posts while it
-is aligned over them), 2-3 % of a batch's time."""
+eleven orders below this margin; a larger margin only makes the contact's arithmetic run on
+more steps where it finds nothing."""
 
 
 @njit(inline="always", **JIT_NOALLOC)
@@ -945,8 +932,8 @@ def tree_wrench_trig_into(
     The contact wrench is computed only for a tree within ``contact_reach`` of the landing
     surface: farther up it is exactly zero (every term of ``contact_wrench_trig_into`` is
     skipped), and ``tau`` gets the same ``+ 0.0`` it got from the zero wrench. In a docking
-    run the tree hangs far above the frame for most of its steps; the contact's corners and
-    posts were a fifth of the plant's step there (measured, docs/speed.md)."""
+    run the tree hangs far above the frame for most of its steps, where the contact's corners
+    and posts would cost a fifth of the plant's step for nothing."""
     vec = work.vec
     _fluid_wrench_into(
         tau,
@@ -1138,24 +1125,6 @@ def rk4_step_into(
     dt: float,
     work: PlantWork,
 ) -> None:
-    """``rk4_step_inline`` compiled once, as a function of its own that kernels call (the
-    plant's step is the largest piece of compiled code: each kernel that inlined it took half
-    a minute more to compile). The closed and open loops' own kernels, where the call would
-    cost (their step arguments, the ``PlantArrays``, are passed field by field), inline
-    ``rk4_step_inline`` instead."""
-    rk4_step_inline(out, x, n_rps, env, P, dt, work)
-
-
-@njit(inline="always", **JIT_NOALLOC)
-def rk4_step_inline(
-    out: np.ndarray,
-    x: np.ndarray,
-    n_rps: np.ndarray,
-    env: np.ndarray,
-    P: PlantArrays,
-    dt: float,
-    work: PlantWork,
-) -> None:
     """One classical Runge-Kutta step with inputs held over the step, into ``out``
     (N_STATE,), allocating nothing: the stage state and the slopes live in ``work``, and the
     thrusters' wrench is computed once for the four stages (the propeller speeds are held).
@@ -1179,7 +1148,7 @@ def rk4_step_inline(
     # (stage 0 at a copy of x: the same numbers), then sets the next stage's state
     for i in range(n):
         xs[i] = x[i]
-    for stage in range(4):
+    for stage in range(min(4, work.vec.shape[0])):
         k = vec[V_K1 + stage, 0:n]
         rhs_into(k, xs, thrust_b, env, P, work)
         if stage == 0:

@@ -131,10 +131,9 @@ class NoiseStream:
     N_SENSORS uniforms a step, ``normals`` N_Y standard normals), so ``take(cfg, k, n)`` for
     consecutive pieces gives the numbers ``draw_noise`` gives for them, bit for bit, however
     the run is cut. The draws are made in compiled code (numba's ``Generator`` methods run
-    numpy's algorithms on the generator's own state: the same numbers), some 3.6 ns a number
-    against numpy's 7-8, which pays once numba's 7 us a call for each generator is spread
-    over a block (``docs/speed.md``, twenty-fourth pass). The generators must not be read by
-    anyone else while the stream holds them."""
+    numpy's algorithms on the generator's own state: the same numbers), in blocks, so a
+    call's cost is shared by many steps. The generators must not be read by anyone else
+    while the stream holds them."""
 
     BLOCK_STEPS = 2048
     """Steps drawn at a time (2048 x 16 numbers, 256 kB)."""

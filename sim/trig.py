@@ -1,4 +1,4 @@
-"""Sine and cosine the compiler can vectorise, shared by the plant and the batch plant.
+"""Sine and cosine from one reduction, without branches or calls, for the plant's step.
 
 numba finds no SVML on this machine, so a loop over runs that calls ``math.sin`` stays
 scalar (one libm call per element). ``sincos_poly`` computes both from one reduction,
@@ -10,7 +10,7 @@ without branches or calls, so a loop of it becomes AVX-512 code:
 - **Polynomials**: fdlibm's minimax polynomials of ``__kernel_sin`` and ``__kernel_cos`` on
   [-pi/4, pi/4], evaluated on the reduced argument (without its tail).
 - **Quadrant** ``n mod 4`` by two-way selects (a four-way chain of them stayed a branch
-  and kept the loop scalar, ``benchmarks/batch_probe.py``).
+  and kept the loop scalar).
 
 Accuracy against libm's ``sin`` and ``cos``, measured in ``tests/test_trig.py`` (dense grids
 and random angles, and every angle next to a multiple of pi/2 in the range, where the
@@ -24,8 +24,7 @@ about 2^51 the rounding to an integer fails outright).
 select (a branch to libm there made the scalar plant step 20 % slower, measured). Headings
 are not wrapped in the plant's state, but 1.5e6 rad is 240 000 turns (some 35 days of
 spinning at 0.5 rad/s): a run that gets there has diverged, and the NaN stops it as the
-plant's finiteness check stops any other. Infinity and NaN give NaN. The batch plant calls
-the same ``sincos`` over a row of runs, so both give the same bits.
+plant's finiteness check stops any other. Infinity and NaN give NaN.
 """
 
 from __future__ import annotations
@@ -61,7 +60,7 @@ _QUADRANT_SAFE = 2.0**30
 so the conversion is always defined; the result there is replaced by NaN (``sincos``)."""
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def sincos_poly(x: float) -> tuple[float, float]:
     """(sin x, cos x) without branches or calls, within 2 ulp of libm for
     |x| <= ``TRIG_POLY_LIMIT`` (1 ulp to 200 rad); meaningless outside that range
@@ -86,7 +85,7 @@ def sincos_poly(x: float) -> tuple[float, float]:
     return sin_x, cos_x
 
 
-@njit(inline="always", **JIT_NOALLOC)
+@njit(**JIT_NOALLOC)
 def sincos(x: float) -> tuple[float, float]:
     """(sin x, cos x): ``sincos_poly`` for |x| <= ``TRIG_POLY_LIMIT``, NaN beyond it and
     for infinity or NaN. Branch-free, so a loop of it vectorises."""

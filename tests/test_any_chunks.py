@@ -1,8 +1,7 @@
 """A run is the same whatever pieces it is stepped in. The console advances a mission a tick
-at a time (two steps at 1x), the command line a request at a time (chunks of a second), a
-batch beside other runs: the same mission with the same seed must give the same rows in all
-of them, so a session flown in the console can be reproduced from the command line and a
-campaign's run alone.
+at a time (two steps at 1x), the command line a request at a time (chunks of a second): the
+same mission with the same seed must give the same rows in both, so a session flown in the
+console can be reproduced from the command line.
 
 Two things used to depend on the cut. One generator served every random draw, chunk by
 chunk (the current's walk, then the sensors' dropouts, then their noise), so cutting a run
@@ -142,32 +141,26 @@ def _moving(sim: Simulation) -> Simulation:
     return sim
 
 
-def test_long_chunks_while_the_winch_and_crane_move_alone_and_in_a_batch() -> None:
+def test_long_chunks_while_the_winch_and_crane_move() -> None:
     """With the winch and the crane moving, a request runs past whole seconds in chunks of up
     to ``LONG_CHUNK_S``, the control model's wire spring refreshed at each whole second inside
-    them (``ChunkJob.spring``): alone (``ChunkJob.run`` runs the pieces between the seconds
-    with ``C`` holding each one's spring) and in a batch (the kernel puts each step's spring
-    into the run's configuration), the rows are bit for bit those of the same run in odd
+    them (``ChunkJob.spring``: ``ChunkJob.run`` runs the pieces between the seconds with ``C``
+    holding each one's spring), and the rows are bit for bit those of the same run in odd
     pieces, whose chunks never pass a whole second. The spring really changed: the
     configuration after the request holds the last second's, not the first's."""
-    from control.batch import run_together
-
     # the observer and the feedforward use the spring (with the default perfect feedback and
     # no feedforward nothing reads it); the plant's tree 20 % heavier in water than the
     # control model's: the spring is the control model's (its tree's weight), not the plant's
     plant_ps = vary_tree(params.load("full-scale"), 1.0, 1.2)
     kw = {"plant_ps": plant_ps, "settings": ControlSettings(feedback="ekf", feedforward=True)}
-    runs = [_moving(_full_scale(True, **kw)) for _ in range(3)]
+    runs = [_moving(_full_scale(True, **kw)) for _ in range(2)]
     for sim in runs:
         sim.step(37)
     k_h0, p_eq0 = runs[0].C.k_h, runs[0].C.p_eq.copy()
     rows_alone, sizes = _chunk_sizes(runs[0], 1234)
     assert sizes == [63, 500, 500, 100, 71]
     rows_cut = _rows(runs[1], [5, 58, 100, 250, 301, 99, 1, 120, 300])
-    (together,) = run_together([runs[2].step_jobs(1234)])
-    assert together.error is None
     assert np.array_equal(rows_alone, rows_cut)
-    assert np.array_equal(together.value.data, rows_cut)
     for sim in runs:
         assert np.array_equal(sim.plant_state, runs[1].plant_state)
         assert sim.C.k_h == runs[1].C.k_h and np.array_equal(sim.C.p_eq, runs[1].C.p_eq)

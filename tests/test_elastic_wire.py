@@ -100,3 +100,17 @@ def test_elastic_wire_damping_decays_the_bounce_at_the_stated_ratio():
     peaks = [np.max(np.abs(z[i * n_per : (i + 1) * n_per])) for i in range(1, 9)]
     zeta = math.log(peaks[0] / peaks[-1]) / (2.0 * math.pi * (len(peaks) - 1))
     assert zeta == pytest.approx(0.02, rel=0.2)
+
+
+@pytest.mark.parametrize("wire", ["quasi-static", "elastic", "moordyn"])
+def test_reported_tension_is_the_logged_tension_in_every_wire_model(wire):
+    """Defect: ``Simulation.wire_tension_newton`` worked the tension out again with a wire
+    formula of its own, without the elastic wire's damping and without the wire's stretch
+    under its own weight, so the console's reading and the log disagreed (by the dashpot's
+    force while the tree bounced). Now one function gives both: equal to the bit."""
+    sim = Simulation(params.load("full-scale"), tree_depth_m=100.0, control=False, wire=wire)
+    sim.winch_to(sim.wire_length_m + 0.5, 0.5)  # a moving wire: the dashpot pulls
+    for _ in range(3):
+        logged = float(sim.step(37)["wire_tension"][-1])
+        assert sim.wire_tension_newton() == logged
+    assert logged > 0.5 * sim.ps.tree.submerged_weight_newton

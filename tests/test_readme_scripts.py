@@ -17,13 +17,9 @@ ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = re.compile(r"\.venv/bin/python ((?:benchmarks|scripts)/[A-Za-z0-9_]+\.py)")
 
 
-DIARY = ROOT / "docs" / "speed.md"
-"""The old log of speed passes: it names scripts of its day, and gives way to performance.md."""
-
-
 def guide_pages() -> list[Path]:
     """README.md and the pages of docs/ a reader follows."""
-    return [ROOT / "README.md", *(p for p in sorted((ROOT / "docs").glob("*.md")) if p != DIARY)]
+    return [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 
 def readme_scripts() -> list[str]:

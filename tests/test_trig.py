@@ -1,6 +1,6 @@
-"""``sim.trig``: the vectorisable sine and cosine against libm's (``math.sin``, ``math.cos``).
+"""``sim.trig``: the plant's sine and cosine against libm's (``math.sin``, ``math.cos``).
 
-The bounds are what was measured (docs/speed.md, "Batch plant"): at most 1 ulp of libm's
+The bounds are what was measured: at most 1 ulp of libm's
 answer for |x| <= 200 rad, 2 ulp up to ``TRIG_POLY_LIMIT`` (the reduced argument is used
 without its rounding tail, which costs the second ulp on rare angles past a few hundred rad).
 Angles next to the multiples of pi/2 are where the reduction cancels most; without the fourth

@@ -256,8 +256,8 @@ def _viser_event_race(err: BaseException) -> bool:
     (``AsyncMessageBuffer.push``) calls its ``asyncio.Event``'s ``set()`` directly in the thread
     that sends a message (the publisher's, here), and ``set()`` walks the event's waiters while
     viser's event loop thread may be adding one: "RuntimeError: deque mutated during iteration"
-    raised in asyncio's locks (twice in full test runs, 2026-11-26 and -27, named by
-    ``_where``: ``asyncio/locks.py in set; from web/scene.py in update``). The message being
+    raised in asyncio's locks (seen in full test runs, named by ``_where``:
+    ``asyncio/locks.py in set; from web/scene.py in update``). The message being
     pushed is already in the buffer then and goes out; the rest of that update does not, so the
     scene is drawn whole again on the next frame (``SceneView.redraw``). A race in a panel's
     update is not this: it stays an error."""

@@ -1,14 +1,13 @@
 """Run a campaign on Dask distributed: an embedded LocalCluster (one single-threaded worker
 process per core) or an existing cluster at a scheduler address.
 
-Each task is a block of runs stepped together in one batch (``missions.campaign.run_block``,
-``control.batch``: the same figures as each run alone); its rows are written as it comes
-back. Tasks of a worker that dies are rescheduled by Dask on the others; a block that is lost
-is submitted again run by run (one task each, so that a run that kills its worker takes no
-other with it), and a run whose task keeps killing workers (Dask's ``KilledWorker``) is
-submitted again up to ``LOST_RETRIES`` times, then counted as a run with an error. The client
-keeps one row per run whatever happens (a late duplicate is dropped), and ``--resume`` submits
-only the runs without a row.
+Each task is a block of runs, run one after another (``missions.campaign.run_block``); its rows
+are written as it comes back. Tasks of a worker that dies are rescheduled by Dask on the
+others; a block that is lost is submitted again run by run (one task each, so that a run that
+kills its worker takes no other with it), and a run whose task keeps killing workers (Dask's
+``KilledWorker``) is submitted again up to ``LOST_RETRIES`` times, then counted as a run with
+an error. The client keeps one row per run whatever happens (a late duplicate is dropped), and
+``--resume`` submits only the runs without a row.
 """
 
 from __future__ import annotations
@@ -42,20 +41,14 @@ LOCAL_WORKER_ENVIRON: dict[str, Any] = {
 }
 """Dask settings of the embedded cluster's workers (an existing cluster keeps its own). Dask's
 defaults suit workers holding large, changing data; a campaign worker steps small arrays in
-a tight loop, and three of them cost it time: the statistical profiler (every 10 ms a thread
-takes the interpreter lock to sample the running task's stack, for the dashboard's profile
-page), ``MALLOC_TRIM_THRESHOLD_=65536`` (glibc hands freed memory back to the system
-above 64 KiB and faults it in again for the next chunk's arrays; unset, glibc adapts its
-thresholds) and the event loop's tick (below). The first two, measured on 96 docking runs
-with one worker (``benchmarks/campaign_benchmark.py`` configuration, this machine's Zen 3):
-887x and 898x with Dask's defaults, 970x without the profiler, 992x without the trim
-threshold, 991x and 1,040x without both.
-The tick (``distributed.admin.tick.interval``, 20 ms) is the event loop's check of its
-own responsiveness, for a warning when the loop was stuck for 3 s or more
-(``distributed.admin.tick.limit``), that takes the interpreter lock from the task 50 times a
-second. Once a second is plenty for a 3 s warning; a block of 32 runs in one worker, two
-rounds each way: 1,093x and 1,127x with the 20 ms tick, 1,141x and 1,192x with 1 s, 1,216x
-and 1,222x in a plain process (``docs/speed.md``, thirteenth pass).
+a tight loop, and three of them cost it time (some 10-20 % together, measured with
+``benchmarks/campaign_benchmark.py``): the statistical profiler (every 10 ms a thread takes
+the interpreter lock to sample the running task's stack, for the dashboard's profile page),
+``MALLOC_TRIM_THRESHOLD_=65536`` (glibc hands freed memory back to the system above 64 KiB
+and faults it in again for the next chunk's arrays; unset, glibc adapts its thresholds) and
+the event loop's tick (``distributed.admin.tick.interval``, 20 ms), the loop's check of its
+own responsiveness for a warning when it was stuck for 3 s or more, which takes the
+interpreter lock from the task 50 times a second: once a second is plenty for a 3 s warning.
 A threshold in the calling process's own environment still reaches the workers (they inherit
 it): the user's own, or one that a nanny with Dask's settings exported there earlier."""
 

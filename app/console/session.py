@@ -96,11 +96,10 @@ def load_first_chunk(mission: schema.Mission) -> None:
     kernel, the environment rows, the current's walk) by running one step of a second
     simulation of the same set-up, thrown away; the run handed to the loop is not touched.
 
-    numba loads a kernel from its on-disk cache on its first call: for the closed loop's chunk
-    kernel that took 0.2 s on the AMD Zen 3 of docs/speed.md's eleventh pass, long enough to
-    count as an overrun at 50x when it fell on the paced loop's first tick. Here it happens
-    away from the loop, and only the first time per process (a few milliseconds after). A
-    step that fails here is left to the live run to report on its own first tick."""
+    numba compiles a kernel on its first call after a change of the core (tens of seconds) or
+    loads it from its cache (a fraction of a second): either would make the paced loop's
+    first tick late. Here it happens away from the loop, and only the first time per process.
+    A step that fails here is left to the live run to report on its own first tick."""
     try:
         sim = build_simulation(mission)
         sim.step(1)
