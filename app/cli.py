@@ -251,13 +251,11 @@ def run(
             return
     t0 = time.perf_counter()
     try:
-        headless.drive(driver, recorder, show=progress and not json_out)
+        result = headless.drive(driver, recorder, show=progress and not json_out)
     finally:
         if recorder is not None:
-            headless.write_new_events(driver, recorder)
             recorder.close()
     wall = time.perf_counter() - t0
-    result = driver.result()
     summary = result.summary()
     summary["simulated_s"] = round(sim.t_s, 2)
     summary["real_time_factor"] = round(sim.t_s / wall, 1) if wall > 0 else None

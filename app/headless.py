@@ -1,5 +1,6 @@
 """A mission run headless from the command line (``rov-console run``, ``rov-console campaign
-rerun``): the run with its progress bar, and its recording (``--log``)."""
+rerun``): the one run loop (``MissionDriver.run_to_end``) with a progress bar over the legs,
+and its recording (``--log``)."""
 
 from __future__ import annotations
 
@@ -7,16 +8,46 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from app.recording import SessionRecorder
+    from control.columns import LogRows
     from control.simulation import Simulation
     from missions.driver import MissionDriver
     from missions.schema import Mission
+    from missions.scoring import MissionResult
 
 
-def drive(driver: MissionDriver, recorder: SessionRecorder | None, show: bool) -> None:
-    """Run the mission to its end, with a progress bar over its legs."""
+class _Recording:
+    """A headless run's rows and events into its recorder, each event once."""
+
+    def __init__(self, recorder: SessionRecorder) -> None:
+        self.recorder = recorder
+        self.events_written = 0
+
+    def events(self, driver: MissionDriver) -> None:
+        """The events not written yet (leg changes, landings, faults, the wire's)."""
+        for event in driver.events[self.events_written :]:
+            self.recorder.event(event["t_s"], event["kind"], event["text"], event["data"])
+        self.events_written = len(driver.events)
+
+    def rows(self, driver: MissionDriver, rows: LogRows) -> None:
+        """A request's events, then its rows, as soon as they are run."""
+        self.events(driver)
+        if len(rows):
+            sim = driver.sim
+            self.recorder.write_log(
+                rows.data, crane_tip_n=sim.crane_tip_n, wire_length_m=sim.wire_length_m
+            )
+
+
+def drive(
+    driver: MissionDriver, recorder: SessionRecorder | None = None, show: bool = False
+) -> MissionResult:
+    """Run the mission to its end and score it (``MissionDriver.run_to_end``), with a progress
+    bar over its legs when ``show``. With a recorder, each request's events and rows go into
+    it as they are run, and the events still unwritten when the run ends or fails; the caller
+    closes it."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    sim = driver.sim
+    recording = None if recorder is None else _Recording(recorder)
     columns = (
         TextColumn("{task.description}"),
         BarColumn(),
@@ -26,29 +57,23 @@ def drive(driver: MissionDriver, recorder: SessionRecorder | None, show: bool) -
     )
     with Progress(*columns, disable=not show, transient=True) as bar:
         task = bar.add_task(driver.mission.name, total=len(driver.mission.legs), sim=0.0)
-        while not driver.done:
-            rows = driver.advance()
-            if recorder is not None:
-                write_new_events(driver, recorder)
-                if len(rows):
-                    recorder.write_log(
-                        rows.data, crane_tip_n=sim.crane_tip_n, wire_length_m=sim.wire_length_m
-                    )
+
+        def show_leg(driver: MissionDriver) -> None:
             leg = driver.current_leg
             bar.update(
                 task,
                 completed=max(driver.leg_index, 0),
-                sim=sim.t_s,
+                sim=driver.sim.t_s,
                 description=f"{driver.mission.name}: {leg.type if leg else 'done'}",
             )
 
-
-def write_new_events(driver: MissionDriver, recorder: SessionRecorder) -> None:
-    """Events (leg changes, landings, alarms) go into the log as they happen."""
-    done = getattr(recorder, "_events_written", 0)
-    for event in driver.events[done:]:
-        recorder.event(event["t_s"], event["kind"], event["text"], event["data"])
-    recorder._events_written = len(driver.events)  # type: ignore[attr-defined]
+        try:
+            return driver.run_to_end(
+                record=None if recording is None else recording.rows, progress=show_leg
+            )
+        finally:
+            if recording is not None:
+                recording.events(driver)
 
 
 def open_recorder(path: str, spec: Mission, sim: Simulation, seed: int | None) -> SessionRecorder:

@@ -210,12 +210,11 @@ def rerun_command(
             return
     t0 = time.perf_counter()
     try:
-        headless.drive(driver, recorder, show=not json_out)
+        result = headless.drive(driver, recorder, show=not json_out)
     finally:
         if recorder is not None:
-            headless.write_new_events(driver, recorder)
             recorder.close()
-    figures = cm.outcome_row(driver.result(), sim.t_s, time.perf_counter() - t0)
+    figures = cm.outcome_row(result, sim.t_s, time.perf_counter() - t0)
     compare = {
         k: (stored[k], figures[k], cm.same_figure(stored[k], figures[k])) for k in cm.FIGURES
     }
