@@ -16,9 +16,14 @@ from control.columns import LogRows
 from sim.docking import DockingFrame, DockingLayout
 
 
-def _legs(ax, legs) -> None:
+def _legs(ax, legs, t0_s: float, t1_s: float) -> None:
+    """A line where each leg starts (its ``start_s`` counts from the first row, at ``t0_s``),
+    and the time axis over the rows alone, [t0_s, t1_s]: a run that starts at 410 s in its
+    recording is not drawn from 0."""
+    if t1_s > t0_s:
+        ax.set_xlim(t0_s, t1_s)
     for leg in legs:
-        ax.axvline(leg.start_s, color="0.85", lw=0.8, zorder=0)
+        ax.axvline(t0_s + leg.start_s, color="0.85", lw=0.8, zorder=0)
 
 
 def _robust_limits(ax, *series: NDArray[np.float64], pad: float = 0.15) -> None:
@@ -61,8 +66,8 @@ def pose_figure(rows: LogRows, legs, path: Path, title: str) -> Path:
         ax_err.axhline(0.0, color="0.5", lw=0.6)
         _robust_limits(ax_err, err)
         ax_err.set_ylabel("error " + labels[i].split(" ")[-1])
-        _legs(ax, legs)
-        _legs(ax_err, legs)
+        _legs(ax, legs, float(t[0]), float(t[-1]))
+        _legs(ax_err, legs, float(t[0]), float(t[-1]))
     axes[0].legend(loc="best", fontsize=8)
     axes[0].set_title(title)
     axes[-1].set_xlabel("time [s]")
@@ -141,7 +146,7 @@ def forces_figure(rows: LogRows, legs, path: Path, title: str) -> Path:
     axes[3].legend(fontsize=8, ncol=n_thrusters)
     axes[3].set_xlabel("time [s]")
     for ax in axes:
-        _legs(ax, legs)
+        _legs(ax, legs, float(t[0]), float(t[-1]))
     axes[0].set_title(title)
     fig.tight_layout()
     fig.savefig(path, dpi=100)

@@ -22,7 +22,12 @@ from pathlib import Path
 import numpy as np
 
 from app import plots
-from app.recording import load_session, recorded_docking_frame, recorded_mission_name
+from app.recording import (
+    SessionData,
+    load_session,
+    recorded_docking_frame,
+    recorded_mission_name,
+)
 from control.columns import LogRows
 from missions import schema
 from missions.scoring import (
@@ -37,8 +42,9 @@ from sim import params as params_mod
 from sim.docking import DockingFrame, DockingLayout
 
 LEG_EVENT_KINDS = {"leg": "index", "mission": "leg"}
-"""Events that start a leg, and where their leg number is: headless runs write ``leg``
-events, the console ``mission`` events."""
+"""Events that start a leg, and where their leg number is: the mission's own ``leg`` events
+(headless runs, and the console since it records them), else the console's ``mission``
+events (its recordings before)."""
 
 
 @dataclass(frozen=True)
@@ -47,6 +53,9 @@ class Debrief:
 
     name: str
     started_utc: str
+    runs: list[str]
+    """The runs the recording holds, in words ('' each when it holds one); the debrief is of
+    the last one that ran a mission's legs."""
     duration_s: float
     complete: bool
     result: MissionResult
@@ -64,8 +73,9 @@ def leg_spans(
     whole log when there are none); the recorded mission gives the legs' names and which
     legs are scored."""
     starts: list[tuple[int, int, str]] = []
+    kinds = {"leg"} if any(e.get("kind") == "leg" for e in events) else {"mission"}
     for e in events:
-        key = LEG_EVENT_KINDS.get(str(e.get("kind")))
+        key = LEG_EVENT_KINDS.get(str(e.get("kind"))) if e.get("kind") in kinds else None
         data = e.get("data") or {}
         if key is None or key not in data or not isinstance(e.get("t_s"), int | float):
             continue
@@ -78,9 +88,10 @@ def leg_spans(
         for e in events
         if e.get("kind") == "miss"
     }
+    end = _mission_end_row(t_s, events, starts[-1][0])
     spans = []
     for k, (row, index, kind) in enumerate(starts):
-        stop = starts[k + 1][0] if k + 1 < len(starts) else len(t_s)
+        stop = starts[k + 1][0] if k + 1 < len(starts) else end
         leg = mission.legs[index - 1] if mission and 0 < index <= len(mission.legs) else None
         name, scored = (leg.name, leg.score) if leg is not None else ("", True)
         if stop > row:
@@ -88,6 +99,63 @@ def leg_spans(
                 LegSpan(index, kind, name, scored, row, stop, False, misses.get(index, ""))
             )
     return spans
+
+
+def _mission_end_row(t_s: np.ndarray, events: list[dict], last_start: int) -> int:
+    """Where the mission's legs end: at the console's "mission ... completed" (or failed,
+    aborted) event after the last leg's start, else at the end of the log (a headless run
+    ends with its mission; the console's run holds station after it)."""
+    for e in events:
+        t = e.get("t_s")
+        if e.get("kind") == "mission" and "state" in (e.get("data") or {}):
+            if isinstance(t, int | float):
+                row = int(np.searchsorted(t_s, float(t), side="right"))
+                if row > last_start:
+                    return min(row, len(t_s))
+    return len(t_s)
+
+
+@dataclass(frozen=True)
+class RunPart:
+    """The part of a recording one run covers: its set-up and the recording times
+    [start_s, stop_s) of its rows and events."""
+
+    setup: dict
+    start_s: float
+    stop_s: float
+    index: int
+
+
+def recorded_runs(data: SessionData) -> list[RunPart]:
+    """The runs of a recording (one when it holds no ``run.N`` records)."""
+    setups = data.runs or [data.metadata or {}]
+    parts = []
+    for k, setup in enumerate(setups):
+        start = setup.get("start_t_s") if k else None
+        stop = setups[k + 1].get("start_t_s") if k + 1 < len(setups) else None
+        parts.append(
+            RunPart(
+                setup,
+                float(start) if isinstance(start, int | float) else -math.inf,
+                float(stop) if isinstance(stop, int | float) else math.inf,
+                k + 1,
+            )
+        )
+    return parts
+
+
+def debriefed_run(parts: list[RunPart]) -> RunPart:
+    """The run a debrief is of: the last that ran a mission's legs (the last run when
+    none did; files before ``legs_run`` was recorded ran theirs)."""
+    with_legs = [p for p in parts if p.setup.get("legs_run", True)]
+    return (with_legs or parts)[-1]
+
+
+def _run_words(part: RunPart, name: str) -> str:
+    what = "its legs" if part.setup.get("legs_run", True) else "set-up only, holding station"
+    start = "start" if math.isinf(part.start_s) else f"{part.start_s:.1f} s"
+    stop = "end" if math.isinf(part.stop_s) else f"{part.stop_s:.1f} s"
+    return f"run {part.index}: {name} ({what}), {start} to {stop}"
 
 
 def _mission(meta: dict) -> schema.Mission | None:
@@ -104,30 +172,46 @@ def _mission(meta: dict) -> schema.Mission | None:
 def debrief(path: str | Path) -> Debrief:
     """Read a session log and score it (ValueError naming the file when it cannot be read)."""
     data = load_session(path)
-    rows: LogRows = data.log
+    parts = recorded_runs(data)
+    part = debriefed_run(parts)
+    t_all = data.log.t_s
+    keep = (t_all >= part.start_s - 1e-9) & (t_all < part.stop_s - 1e-9)
+    rows = LogRows(data.log.data[keep], data.log.n_thrusters, layout=data.log.layout)
     if len(rows) < 2:
         raise ValueError(f"{path}: the log holds {len(rows)} rows; a debrief needs two or more")
     t = rows.t_s
     dt_s = float(np.median(np.diff(t)))
     meta = data.metadata or {}
-    name = recorded_mission_name(meta, Path(path).stem)
+    run = part.setup
+    name = recorded_mission_name(run, Path(path).stem)
     ps = _params(meta)
-    docking = _docking(meta, ps)
+    docking = _docking(run, ps)
     tree_size = float(max(ps.tree.dimensions_m)) if ps is not None else 3.6
-    spans = leg_spans(t, data.events, _mission(meta))
+    events = sorted(
+        (
+            e
+            for e in data.events
+            if isinstance(e.get("t_s"), int | float)
+            and part.start_s - 1e-9 <= e["t_s"] < part.stop_s - 1e-9
+        ),
+        key=lambda e: float(e["t_s"]),
+    )
+    spans = leg_spans(t, events, _mission(run))
     result = score(name, rows, spans, dt_s, tree_size, False, [])
     force = np.abs(rows["thruster_force"])
     impulse = float(np.sum(np.trapezoid(force, t, axis=0))) if len(t) > 1 else 0.0
-    landings = [str(e.get("text", "")) for e in data.events if e.get("kind") == "landing"]
+    landings = [str(e.get("text", "")) for e in events if e.get("kind") == "landing"]
+    runs = [_run_words(p, recorded_mission_name(p.setup, "?")) for p in parts]
     return Debrief(
         name=name,
         started_utc=str(meta.get("started_utc", "")),
+        runs=runs if len(runs) > 1 else [],
         duration_s=float(t[-1] - t[0]),
         complete=bool(data.complete),
         result=result,
         thrust_impulse_newton_s=impulse,
         landings=landings,
-        events=list(data.events),
+        events=events,
         docking=docking,
     )
 
@@ -160,6 +244,17 @@ def _table(header: tuple[str, ...], rows: Sequence[tuple[str, ...]]) -> str:
         "<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in rows
     )
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _runs_html(runs: list[str]) -> str:
+    """The runs of a recording that holds several, and which one the debrief is of."""
+    if not runs:
+        return ""
+    items = "".join(f"<li>{html.escape(r)}</li>" for r in runs)
+    return (
+        "<p>The recording holds several runs; this debrief is of the last that ran a "
+        f"mission's legs (its rows and events only):</p><ul>{items}</ul>"
+    )
 
 
 def render_html(d: Debrief) -> str:
@@ -207,6 +302,7 @@ img {{ max-width: 100%; }}
 <h1>Debrief: {html.escape(d.name)}</h1>
 <p>Recorded {html.escape(d.started_utc or "(start time not recorded)")}; report written
 {datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")}.</p>
+{_runs_html(d.runs)}
 <h2>Scores</h2>
 {_table(LEG_TABLE_COLUMNS, leg_table_rows(summary))}
 {_table(("figure", "value"), figures_rows)}

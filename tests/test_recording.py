@@ -82,6 +82,9 @@ SESSION_KEYS = {
     "crane_tip_n",
     "wire_length_m",
     "docking_frame",
+    "legs_run",
+    "current",
+    "time_offset_s",
 }
 
 

@@ -181,6 +181,8 @@ class Session:
         self.notices: tuple[str, ...] = ()
         self._faults_noted = 0
         """Entries of ``sim.fault_events`` already written as events."""
+        self._mission_events_written = 0
+        """Entries of ``driver.events`` already written into the recording."""
 
     def replace_run(self, run: PreparedRun) -> None:
         """Swap in a new simulation. A recording in progress goes on in the same file, its
@@ -199,6 +201,7 @@ class Session:
             self.flush_recording()
             self._rec_offset_s += self.sim.t_s - run.sim.t_s + self.sim.dt_s
             self._install(run)
+            self._record_run_setup()
             self.note(
                 "run",
                 f"new run: {run.mission.name}" + (" (its legs)" if run.run_legs else ""),
@@ -233,6 +236,7 @@ class Session:
             assert self.driver is not None
             rows = self.driver.advance(remaining)
             self._follow_leg()
+            self._record_mission_events()
             if len(rows):
                 self._take_rows(rows)
             if self.driver.diverged:
@@ -344,6 +348,49 @@ class Session:
             if sum(len(r) for r in self._rec_rows) >= RECORD_FLUSH_ROWS:
                 self.flush_recording()
 
+    def _record_mission_events(self) -> None:
+        """The mission's own events (legs, landings, misses, the wire's; as ``run --log``
+        writes them, at their own times) into the recording; its faults are noted by
+        ``_note_faults``, with who injected them."""
+        if self.driver is None:
+            return
+        events = self.driver.events
+        if self.recorder is not None:
+            self.flush_recording()
+            for event in events[self._mission_events_written :]:
+                if event["kind"] == "fault":
+                    continue
+                try:
+                    self.recorder.event(
+                        max(0.0, event["t_s"] + self._rec_offset_s),
+                        event["kind"],
+                        event["text"],
+                        event["data"],
+                    )
+                except Exception as err:
+                    self._recording_failed(err)
+                    return
+        self._mission_events_written = len(events)
+
+    def _run_metadata(self, label: str = "") -> dict[str, Any]:
+        """The set-up of the present run, as the recording holds it."""
+        return session_metadata(
+            self.sim,
+            self.mission,
+            label=label,
+            legs_run=self.driver is not None,
+            time_offset_s=self._rec_offset_s,
+        )
+
+    def _record_run_setup(self) -> None:
+        """A run started while recording: its set-up into the recording (``add_run``)."""
+        if self.recorder is None:
+            return
+        try:
+            self.recorder.add_run(self._run_metadata(self._recording_label))
+        except Exception as err:
+            self._recording_failed(err)
+
     def _note_faults(self) -> None:
         """Fault starts and ends into the recording (events of kind 'fault')."""
         events = self.sim.fault_events
@@ -407,17 +454,20 @@ class Session:
         while (self.recordings_dir / name).exists():
             k += 1
             name = f"{base}-{k}.mcap"
-        metadata = session_metadata(self.sim, self.mission, label=label, docking=self.scene.frame)
+        self._rec_offset_s = 0.0
         self.recorder = SessionRecorder(
             recording_path(self.recordings_dir, name),
-            metadata=metadata,
+            metadata=self._run_metadata(label),
             params=self.sim.ps,
             n_thrusters=self.scene.n_thrusters,
+            docking=self.scene.frame,
         )
         self.recording_name = name
         self._recording_label = label
         self._rec_rows = []
-        self._rec_offset_s = 0.0
+        # a mission already under way: what it did before the recording started goes in too
+        self._mission_events_written = 0
+        self._record_mission_events()
         return name
 
     def flush_recording(self) -> None:

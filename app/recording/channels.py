@@ -29,6 +29,10 @@ the whole row on ``/session/log``, and the setup keys of ``session_metadata``; 1
 files (readers take all three)."""
 SETUP_RECORD = "setup"
 """Name of the metadata record holding the session's set-up."""
+RUN_RECORD_PREFIX = "run."
+"""Metadata records ``run.2``, ``run.3``, ... hold the set-up of each run started while the
+recording went on (``session_metadata``, with ``start_t_s`` on the recording's time axis); the
+``setup`` record holds the first run's."""
 RESERVED_SETUP_KEYS = ("params", "columns", "recorder")
 """Keys of the setup record that the recorder writes itself."""
 

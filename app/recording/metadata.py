@@ -9,7 +9,14 @@
 - ``params_name`` (str), ``label`` (str, '' when none), ``started_utc`` (ISO 8601);
 - ``start_t_s`` and ``dt_s`` [s]: simulation time at the start and the plant step;
 - ``crane_tip_n`` [north, east, down] [m], ``wire_length_m`` [m];
-- ``docking_frame``: {center_n [m], heading_rad, landing_depth_m [m]} or null.
+- ``docking_frame``: {center_n [m], heading_rad, landing_depth_m [m]} or null;
+- ``legs_run`` (bool): the mission's legs are run (False: its set-up only, holding station);
+- ``current``: {speed_mps, direction_deg (towards)} when the run started;
+- ``time_offset_s`` [s]: added to the run's simulation time on the recording's time axis (a
+  run started while recording goes on after the one before; ``start_t_s`` includes it).
+
+A run started while recording gets the same keys in a metadata record of its own
+(``run.2``, ``run.3``, ...: ``SessionRecorder.add_run``); ``SessionData.runs`` reads them all.
 
 The recorder adds ``params``, ``columns`` and ``recorder`` (software version, thrusters,
 rates) itself. Recordings made before this layout differ: ``rov-console run`` wrote
@@ -20,6 +27,7 @@ rates) itself. Recordings made before this layout differ: ``rov-console run`` wr
 from __future__ import annotations
 
 import dataclasses
+import math
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any
 
@@ -52,11 +60,13 @@ def session_metadata(
     label: str = "",
     docking: DockingFrame | None = None,
     started_utc: datetime | None = None,
+    legs_run: bool = True,
+    time_offset_s: float = 0.0,
 ) -> dict[str, Any]:
     """The setup metadata of a recording of ``sim`` running ``mission`` (see the module
     docstring). ``seed``: the seed ``sim`` was built with (default: the mission's);
     ``docking``: the docking frame drawn (default: the simulation's); ``started_utc``: default
-    now."""
+    now; ``legs_run`` and ``time_offset_s``: see the module docstring."""
     frame = docking if docking is not None else sim.docking_frame
     started = started_utc or datetime.now(UTC)
     gains = sim.gains
@@ -69,11 +79,17 @@ def session_metadata(
         "params_name": sim.ps.name,
         "label": label,
         "started_utc": started.isoformat(),
-        "start_t_s": float(sim.t_s),
+        "start_t_s": float(sim.t_s) + float(time_offset_s),
         "dt_s": float(sim.dt_s),
         "crane_tip_n": [float(v) for v in sim.crane_tip_n],
         "wire_length_m": float(sim.wire_length_m),
         "docking_frame": docking_frame_metadata(frame),
+        "legs_run": bool(legs_run),
+        "current": {
+            "speed_mps": float(sim.current_speed_mps),
+            "direction_deg": math.degrees(float(sim.current_direction_rad)),
+        },
+        "time_offset_s": float(time_offset_s),
     }
 
 

@@ -33,7 +33,13 @@ from mcap.records import Channel, Chunk, Header, Message, Metadata, Schema, Stat
 from mcap.stream_reader import StreamReader, breakup_chunk
 from numpy.typing import NDArray
 
-from app.recording.channels import COLUMNS, EVENTS_TOPIC, SESSION_TOPIC, SETUP_RECORD
+from app.recording.channels import (
+    COLUMNS,
+    EVENTS_TOPIC,
+    RUN_RECORD_PREFIX,
+    SESSION_TOPIC,
+    SETUP_RECORD,
+)
 from control.columns import M_MAX, Layout, LogRows
 
 FloatArray = NDArray[np.float64]
@@ -65,6 +71,20 @@ class SessionData:
     """Bytes of whole, valid records from the start; the rest is cut off or damaged."""
     problem: str = ""
     """Why the file is not complete ('' when it is)."""
+    runs: list[dict] = field(default_factory=list)
+    """The set-up of each run in the file, in order: the ``setup`` record's keys, then each
+    ``run.N`` record's (a run started while recording); ``start_t_s`` is where each starts on
+    the recording's time axis. Empty for a file with no setup record."""
+
+    def run_at(self, t_s: float) -> dict:
+        """The set-up of the run going on at recording time ``t_s`` (the first run before it
+        starts; the setup record when the file has no runs)."""
+        here = self.runs[0] if self.runs else self.metadata
+        for run in self.runs[1:]:
+            start = run.get("start_t_s")
+            if isinstance(start, int | float) and start <= t_s + 1e-9:
+                here = run
+        return here
 
     @property
     def n_thrusters(self) -> int:
@@ -206,14 +226,33 @@ def _check_statistics(scan: FileScan) -> None:
             )
 
 
-def _decode_setup(scan: FileScan) -> dict:
+def _decode_record(record: dict[str, str]) -> dict:
     out = {}
-    for key, text in scan.metadata.get(SETUP_RECORD, {}).items():
+    for key, text in record.items():
         try:
             out[key] = json.loads(text)
         except json.JSONDecodeError:
             out[key] = text
     return out
+
+
+def _decode_setup(scan: FileScan) -> dict:
+    return _decode_record(scan.metadata.get(SETUP_RECORD, {}))
+
+
+def _decode_runs(scan: FileScan, setup: dict) -> list[dict]:
+    """The setup record, then the ``run.N`` records in the order of N."""
+
+    def number(name: str) -> int:
+        tail = name.removeprefix(RUN_RECORD_PREFIX)
+        return int(tail) if tail.isdigit() else 0
+
+    later = sorted(
+        (name for name in scan.metadata if name.startswith(RUN_RECORD_PREFIX) and number(name)),
+        key=number,
+    )
+    first = [setup] if setup else []
+    return first + [_decode_record(scan.metadata[name]) for name in later]
 
 
 def _session_channel_metadata(scan: FileScan) -> dict[str, str]:
@@ -324,6 +363,7 @@ def read_scan(path: str | Path) -> tuple[FileScan, SessionData]:
         file_bytes=scan.file_bytes,
         intact_bytes=scan.intact_bytes,
         problem=scan.problem,
+        runs=_decode_runs(scan, setup),
     )
     return scan, data
 

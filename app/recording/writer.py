@@ -64,6 +64,7 @@ from app.recording.channels import (
     FORMAT_VERSION,
     LOG_TOPIC,
     RESERVED_SETUP_KEYS,
+    RUN_RECORD_PREFIX,
     SCENE_TOPIC,
     SESSION_TOPIC,
     SETUP_RECORD,
@@ -232,6 +233,14 @@ class _Event:
 
 
 @dataclass(frozen=True)
+class _Record:
+    """A metadata record written mid-file (a run's set-up)."""
+
+    name: str
+    values: dict[str, str]
+
+
+@dataclass(frozen=True)
 class _Flush:
     """Close the chunk, write and fsync now; ``done`` is set once that is done."""
 
@@ -312,6 +321,8 @@ class SessionRecorder:
         self._queue: queue.Queue[object] = queue.Queue(MAX_QUEUED)
         self._chunk_bytes = 0
         """Bytes of messages in the chunk in progress (the writer thread's)."""
+        self.runs = 1
+        """Runs whose set-up the file holds (the ``setup`` record's, then ``add_run``'s)."""
         self._thread = threading.Thread(target=self._write_loop, name="mcap-writer", daemon=True)
         self._thread.start()
 
@@ -420,6 +431,24 @@ class SessionRecorder:
             self._check_open()
             self._put(_Event(t_ns, event, json_bytes(log_message(t_ns, kind, text))))
 
+    def add_run(self, metadata: Mapping[str, Any]) -> str:
+        """Record the set-up of a run started while recording (``session_metadata`` of the
+        new run, its ``start_t_s`` on this recording's time axis) as the metadata record
+        ``run.N`` (N = 2, 3, ...); returns the record's name. Readers take each run's
+        mission, frame and current from these (``SessionData.runs``)."""
+        try:
+            values = {
+                str(k): json.dumps(v, sort_keys=True, allow_nan=False) for k, v in metadata.items()
+            }
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"run metadata cannot be written as JSON: {err}") from None
+        with self._lock:
+            self._check_open()
+            self.runs += 1
+            name = f"{RUN_RECORD_PREFIX}{self.runs}"
+            self._put(_Record(name, values))
+        return name
+
     def flush(self) -> None:
         """Close the chunk in progress, write everything handed over so far and fsync, now
         (returns once it is on disk)."""
@@ -499,6 +528,10 @@ class SessionRecorder:
         if isinstance(item, _Event):
             self._add(EVENTS_TOPIC, item.t_ns, item.event)
             self._add(LOG_TOPIC, item.t_ns, item.log)
+            return True
+        if isinstance(item, _Record):
+            self._close_chunk()  # the rows before the record stay before it in the file
+            self._writer.add_metadata(item.name, item.values)
             return True
         return False
 

@@ -1,0 +1,131 @@
+"""A console recording carries what a headless ``run --log`` does (issue 47, item 19): a
+mission started after the recording began has its set-up written when it starts (a ``run.N``
+metadata record) and its own events (legs, landings) at their times, so the debrief of the
+console's file says what the headless run's says."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from app.console.session import Session, prepare_run, station_keeping_mission
+from app.headless import drive, open_recorder
+from app.recording import load_session
+from app.report import Debrief, debrief, write_report
+from missions import schema
+from missions.driver import MissionDriver
+from missions.setup import build_simulation
+
+MISSION = "full-docking-current-0.3"
+BEFORE_STEPS = 2000
+"""Station keeping recorded before the mission starts (20 s)."""
+
+
+@pytest.fixture(scope="module")
+def headless(tmp_path_factory: pytest.TempPathFactory) -> Debrief:
+    """``rov-console run MISSION --log`` (its loop and recorder, in this process)."""
+    path = tmp_path_factory.mktemp("headless") / "run.mcap"
+    spec = schema.load_mission(MISSION)
+    sim = build_simulation(spec)
+    recorder = open_recorder(str(path), spec, sim, None)
+    try:
+        drive(MissionDriver(spec, sim), recorder)
+    finally:
+        recorder.close()
+    return debrief(path)
+
+
+@pytest.fixture(scope="module")
+def console(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Session]:
+    """Record, hold station, start the mission, run it to its end at full speed, stop."""
+    out = tmp_path_factory.mktemp("console")
+    session = Session(prepare_run(station_keeping_mission("full-scale", 400.0), False), out)
+    name = session.start_recording("debrief")
+    session.advance(BEFORE_STEPS)
+    session.replace_run(prepare_run(schema.load_mission(MISSION), True))
+    while session.mission_status.state == "running":
+        session.advance(500)
+    assert session.mission_status.state == "completed"
+    session.advance(300)  # the console holds station after the mission
+    session.stop_recording()
+    for _ in range(200):  # the mission is scored on the session's worker thread
+        if session._mission_result().result is not None:
+            break
+        time.sleep(0.05)
+    session.close()
+    return out / name, session
+
+
+def test_the_recording_holds_each_runs_set_up(console: tuple[Path, Session]) -> None:
+    path, _ = console
+    data = load_session(path)
+    assert [r["mission_name"] for r in data.runs] == ["station keeping", MISSION]
+    assert [r["legs_run"] for r in data.runs] == [False, True]
+    assert data.runs[0]["docking_frame"] is None, "station keeping has no frame"
+    start = data.runs[1]["start_t_s"]
+    assert start == pytest.approx(BEFORE_STEPS * 0.01, abs=0.02)
+    assert data.run_at(start + 1.0) is data.runs[1] and data.run_at(1.0) is data.runs[0]
+    assert data.runs[1]["current"]["speed_mps"] == pytest.approx(0.3)
+    kinds = {e["kind"] for e in data.events}
+    assert {"leg", "landing", "dock"} <= kinds
+
+
+def test_debrief_of_a_console_recording_matches_the_headless_runs(
+    console: tuple[Path, Session], headless: Debrief
+) -> None:
+    """Title, landings, frame, legs and figures as the headless run's; the rows are the
+    mission's (from where it started in the recording), and the leg marks fall on the
+    recorded leg starts. The console's run steps in ticks of 500 (a run does not depend on
+    how its time is cut), but its rows before the mission are not the headless run's: the
+    figures agree to the recording's 20 Hz decimation (measured: 4 decimals)."""
+    path, _ = console
+    d = debrief(path)
+    assert d.name == headless.name == MISSION
+    assert len(d.landings) == len(headless.landings) == 1
+    assert d.landings[0] == headless.landings[0]
+    assert d.docking is not None and headless.docking is not None
+    np.testing.assert_allclose(d.docking[0].center_n, headless.docking[0].center_n)
+    assert d.docking[0].heading_rad == pytest.approx(headless.docking[0].heading_rad)
+
+    t = d.result.log.t_s if d.result.log is not None else np.zeros(0)
+    start = load_session(path).runs[1]["start_t_s"]
+    assert t[0] == pytest.approx(start, abs=0.06), "rows from the mission's start"
+    ours, theirs = d.result.legs, headless.result.legs
+    assert [(leg.index, leg.type, leg.name) for leg in ours] == [
+        (leg.index, leg.type, leg.name) for leg in theirs
+    ]
+    for a, b in zip(ours, theirs, strict=True):
+        assert a.start_s == pytest.approx(b.start_s, abs=0.06)
+        assert a.duration_s == pytest.approx(b.duration_s, abs=0.06)
+        assert a.rms_north_m == pytest.approx(b.rms_north_m, rel=0.02)
+        assert a.rms_heading_deg == pytest.approx(b.rms_heading_deg, rel=0.02)
+    leg_events = [e["t_s"] for e in d.events if e["kind"] == "leg"]
+    marks = [t[0] + leg.start_s for leg in ours]
+    np.testing.assert_allclose(marks, leg_events, atol=0.06)
+    assert d.result.rms_north_m == pytest.approx(headless.result.rms_north_m, rel=0.02)
+    assert len(d.runs) == 2 and "station keeping" in d.runs[0] and MISSION in d.runs[1]
+
+
+def test_the_console_scores_what_the_debrief_scores(console: tuple[Path, Session]) -> None:
+    """The mission's own result (stored in the scores) and the debrief of its recording."""
+    path, session = console
+    summary = session.mission_status.result or {}
+    d = debrief(path)
+    dock = next(leg for leg in summary["legs"] if leg["type"] == "dock")
+    ours = next(leg for leg in d.result.legs if leg.type == "dock")
+    assert ours.duration_s == pytest.approx(dock["duration_s"], abs=0.06)
+    assert ours.rms_north_m == pytest.approx(dock["rms_north_m"], rel=0.02)
+
+
+def test_the_report_page_says_which_run_it_is_of(
+    console: tuple[Path, Session], tmp_path: Path
+) -> None:
+    path, _ = console
+    out = tmp_path / "report.html"
+    write_report(path, out)
+    page = out.read_text()
+    assert f"<h1>Debrief: {MISSION}</h1>" in page
+    assert "several runs" in page and "<li>none</li>" not in page
