@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from control import allocation as alloc
-from control import loop, model, quality, refkernel
+from control import loop, model, pid, quality, refkernel
 from control.columns import LAYOUT, N_LOG, Layout, LogRows
 from control.config import (
     ALLOCATIONS,
@@ -613,12 +613,16 @@ class Simulation:
     def set_gains(self, gains: Gains) -> None:
         """New tree-controller gains, bumpless: the jump of the P and D terms at this instant
         is moved into the integral, so the commanded force does not change."""
-        e = self.cs[loop.CS_E : loop.CS_E + 3]
-        de = self.cs[loop.CS_DE : loop.CS_DE + 3]
-        old_pd = -self.C.Kp * e - self.C.Kd * de
         new_kp, new_kd = np.array(gains.kp), np.array(gains.kd)
-        new_pd = -new_kp * e - new_kd * de
-        self.cs[loop.CS_I : loop.CS_I + 3] += old_pd - new_pd
+        self.cs[loop.CS_I : loop.CS_I + 3] = pid.retuned_tree_integral(
+            self.cs[loop.CS_I : loop.CS_I + 3],
+            self.cs[loop.CS_E : loop.CS_E + 3],
+            self.cs[loop.CS_DE : loop.CS_DE + 3],
+            self.C.Kp,
+            self.C.Kd,
+            new_kp,
+            new_kd,
+        )
         self.gains = gains
         self.C = self.C._replace(Kp=new_kp, Ki=np.array(gains.ki), Kd=new_kd)
 
