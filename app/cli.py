@@ -12,6 +12,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
+from app import headless
 from app.campaign.cli import campaign_app
 from app.log_cli import log_app
 
@@ -244,19 +245,17 @@ def run(
     if log:
         try:
             Path(log).parent.mkdir(parents=True, exist_ok=True)
-            recorder = _open_recorder(log, spec, sim, seed)
+            recorder = headless.open_recorder(log, spec, sim, seed)
         except OSError as err:
             _fail(f"--log {log}: cannot write: {err.strerror or err}")
             return
     t0 = time.perf_counter()
     try:
-        _drive(driver, recorder, show=progress and not json_out)
+        result = headless.drive(driver, recorder, show=progress and not json_out)
     finally:
         if recorder is not None:
-            _write_new_events(driver, recorder)
             recorder.close()
     wall = time.perf_counter() - t0
-    result = driver.result()
     summary = result.summary()
     summary["simulated_s"] = round(sim.t_s, 2)
     summary["real_time_factor"] = round(sim.t_s / wall, 1) if wall > 0 else None
@@ -363,59 +362,6 @@ def _json_default(value: object) -> object:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return str(value)
-
-
-def _drive(driver, recorder, show: bool) -> None:
-    """Run the mission to its end, with a progress bar over its legs."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-    sim = driver.sim
-    columns = (
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TextColumn("leg {task.completed:.0f}/{task.total:.0f}"),
-        TextColumn("sim {task.fields[sim]:7.0f} s"),
-        TimeElapsedColumn(),
-    )
-    with Progress(*columns, disable=not show, transient=True) as bar:
-        task = bar.add_task(driver.mission.name, total=len(driver.mission.legs), sim=0.0)
-        while not driver.done:
-            rows = driver.advance()
-            if recorder is not None:
-                _write_new_events(driver, recorder)
-                if len(rows):
-                    recorder.write_log(
-                        rows.data, crane_tip_n=sim.crane_tip_n, wire_length_m=sim.wire_length_m
-                    )
-            leg = driver.current_leg
-            bar.update(
-                task,
-                completed=max(driver.leg_index, 0),
-                sim=sim.t_s,
-                description=f"{driver.mission.name}: {leg.type if leg else 'done'}",
-            )
-
-
-def _write_new_events(driver, recorder) -> None:
-    """Events (leg changes, landings, alarms) go into the log as they happen."""
-    done = getattr(recorder, "_events_written", 0)
-    for event in driver.events[done:]:
-        recorder.event(event["t_s"], event["kind"], event["text"], event["data"])
-    recorder._events_written = len(driver.events)
-
-
-def _open_recorder(path: str, spec, sim, seed):
-    """A recorder for ``run --log``, with the setup metadata every recording has."""
-    from app.recording import SessionRecorder, session_metadata
-
-    metadata = session_metadata(sim, spec, seed=seed)  # seed None: the mission's
-    return SessionRecorder(
-        path,
-        metadata=metadata,
-        params=sim.ps,
-        n_thrusters=sim.n_thrusters,
-        docking=sim.docking_frame,
-    )
 
 
 def _print_landings(summary: dict) -> None:

@@ -760,10 +760,7 @@ def run_one(c: Campaign, base: schema.Mission, index: int) -> dict:
     t0 = time.perf_counter()
     try:
         _, mission, sim = prepare_run(c, base, index)
-        driver = MissionDriver(mission, sim, keep_log=False)
-        while not driver.done:
-            driver.advance()
-        result = driver.result(log=False)
+        result = MissionDriver(mission, sim, keep_log=False).run_to_end(log=False)
     except Exception as err:  # any failure of one run is that run's outcome
         return failed_row(inputs, f"{type(err).__name__}: {err}")
     return {**input_row(inputs), **outcome_row(result, sim.t_s, time.perf_counter() - t0)}

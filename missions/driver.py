@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Generator
+from collections.abc import Callable, Generator
 
 import numpy as np
 from numpy.typing import NDArray
@@ -251,10 +251,26 @@ class MissionDriver:
                 budget -= k
         return LogRows.join(out, self.sim.n_thrusters)
 
-    def run_to_end(self, log: bool = True) -> MissionResult:
-        """Run the mission to its end and score it (``log`` as ``result``'s)."""
+    def run_to_end(
+        self,
+        log: bool = True,
+        *,
+        record: Callable[[MissionDriver, LogRows], None] | None = None,
+        progress: Callable[[MissionDriver], None] | None = None,
+    ) -> MissionResult:
+        """Run the mission to its end, one request at a time, and score it: the one headless
+        run loop (``runner.run_mission``, a campaign's ``run_one``, ``rov-console run`` and
+        ``campaign rerun``).
+
+        ``record(driver, rows)`` gets each request's rows as soon as they are run (a
+        recorder: ``driver.events`` holds the events so far); ``progress(driver)`` is called
+        after each request; ``log`` as ``result``'s."""
         while not self.done:
-            self.advance(rows=False)
+            rows = self.advance(rows=record is not None)
+            if record is not None:
+                record(self, rows)
+            if progress is not None:
+                progress(self)
         return self.result(log)
 
     def _fail_leg(self, err: Exception) -> None:

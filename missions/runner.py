@@ -38,13 +38,9 @@ def run_mission(
     feedforward: bool | None = None,
     progress: Callable[[MissionDriver], None] | None = None,
 ) -> MissionResult:
-    """Execute all legs and score them; ``progress`` is called after each request."""
+    """Execute all legs and score them (``MissionDriver.run_to_end``); ``progress`` is called
+    after each request."""
     sim = build_simulation(
         mission, seed=seed, allocation=allocation, feedback=feedback, feedforward=feedforward
     )
-    driver = MissionDriver(mission, sim)
-    while not driver.done:
-        driver.advance()
-        if progress:
-            progress(driver)
-    return driver.result()
+    return MissionDriver(mission, sim).run_to_end(progress=progress)

@@ -26,7 +26,7 @@ from mcap.writer import Writer
 from scipy.spatial.transform import Rotation
 from typer.testing import CliRunner
 
-from app import cli, recording
+from app import cli, headless, recording
 from app.console.replay import Replay
 from app.console.snapshot import scene_info
 from app.log_cli import log_app
@@ -562,7 +562,7 @@ def test_run_and_console_recordings_share_one_metadata_layout(tmp_path):
     mission = the TOML; console: mission = the name) still give the mission's name and file."""
     spec = schema.load_mission(MISSION)
     sim = Simulation(params.load("model-scale"), tree_depth_m=100.0)
-    with cli._open_recorder(str(tmp_path / "run.mcap"), spec, sim, None) as rec:
+    with headless.open_recorder(str(tmp_path / "run.mcap"), spec, sim, None) as rec:
         rec.write_log(sim.run_for(0.1))
     meta = recording.load_session(tmp_path / "run.mcap").metadata
     assert set(meta) == SESSION_KEYS | set(channels.RESERVED_SETUP_KEYS)

@@ -10,21 +10,23 @@ other (``app.console.faults``); the trainee's operations log leaves them out.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import Any
+
+import viser
 
 from app.console import (
     FAULT_KINDS,
     INSTRUCTOR_TOKEN_ENV,
     THRUSTER_KINDS,
     ClearFaults,
+    Console,
     ConsoleError,
     InjectFault,
     Snapshot,
     md_text,
 )
-
-if TYPE_CHECKING:
-    from web.panels import ClientPanel
+from web.widgets import masked_input_style
 
 STARTS = ("now", "at time")
 OFF_TEXT = (
@@ -64,10 +66,19 @@ def faults_markdown(snap: Snapshot) -> str:
 class InstructorPanel:
     """The instructor's tab of one browser."""
 
-    def __init__(self, owner: ClientPanel) -> None:
-        self.owner = owner
-        self.console = owner.console
-        self.gui = owner.gui
+    def __init__(
+        self,
+        gui: viser.GuiApi,
+        console: Console,
+        who: Callable[[], str],
+        guess_client: str,
+    ) -> None:
+        """``who``: the browser as the operations log names it ('viewer 3 (Anna)');
+        ``guess_client``: whom its wrong tokens count against."""
+        self.console = console
+        self.gui = gui
+        self.who = who
+        self.guess_client = guess_client
         self.unlocked = False
         self._guarded: list[Any] = []
         self.last_error = ""
@@ -77,11 +88,9 @@ class InstructorPanel:
         self._build()
 
     def _build(self) -> None:
-        from web.panels import _masked_input_style
-
         gui = self.gui
         self.token_text = gui.add_text("Instructor token", initial_value="")
-        gui.add_html(_masked_input_style(self.token_text))
+        gui.add_html(masked_input_style(self.token_text))
         self.unlock_button = gui.add_button("Unlock instructor")
         self.unlock_button.on_click(self._on_unlock)
         self.lock_button = gui.add_button("Lock instructor", visible=False)
@@ -120,7 +129,7 @@ class InstructorPanel:
     # ------------------------------------------------------------------ callbacks
     def _on_unlock(self, event: Any) -> None:
         verdict, wait = self.console.check_instructor(
-            str(self.token_text.value).strip(), self.owner.guess_client
+            str(self.token_text.value).strip(), self.guess_client
         )
         self.token_text.value = ""  # type: ignore[misc]  # the token does not stay on the page
         if verdict == "ok":
@@ -164,7 +173,7 @@ class InstructorPanel:
         else:
             try:
                 return self.console.loop.call_blocking(
-                    make(), timeout_s=15.0, who=f"instructor, {self.owner.who}"
+                    make(), timeout_s=15.0, who=f"instructor, {self.who()}"
                 )
             except (ConsoleError, ValueError) as err:
                 self.last_error = str(err)

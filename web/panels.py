@@ -43,6 +43,7 @@ from web.builder_panel import BuilderPanel
 from web.instructor_panel import InstructorPanel
 from web.scene import SceneView
 from web.scores_panel import ScoresPanel
+from web.widgets import masked_input_style
 
 if TYPE_CHECKING:
     from app.console import Console
@@ -119,9 +120,13 @@ class ClientPanel:
         with tabs.add_tab("Record"):
             self._build_record()
         with tabs.add_tab("Scores"):
-            self.scores = ScoresPanel(self)
+            self.scores = ScoresPanel(
+                self.gui, console, lambda: str(self.name_text.value), self._any_unlocked
+            )
         with tabs.add_tab("Instructor"):
-            self.instructor = InstructorPanel(self)
+            self.instructor = InstructorPanel(
+                self.gui, console, lambda: self.who, self.guess_client
+            )
         # not a tab: the plots page redraws whenever it is shown again (its own ResizeObserver)
         with self.gui.add_folder("Plots", expand_by_default=True):
             self._build_plots()
@@ -146,9 +151,7 @@ class ClientPanel:
                 "Your name", initial_value="", hint="shown in the operations log beside what you do"
             )
             self.token_text = gui.add_text("Token", initial_value="")
-            # viser has no password input: this page's style draws the token's characters as
-            # dots (the field is found by its label's 'for', which is the input's uuid)
-            gui.add_html(_masked_input_style(self.token_text))
+            gui.add_html(masked_input_style(self.token_text))
             self.unlock_button = gui.add_button("Unlock controls")
             self.unlock_button.on_click(self._on_unlock)
             self.lock_button = gui.add_button("Lock controls", visible=False)
@@ -479,6 +482,10 @@ class ClientPanel:
         self.lock_button.visible = False
         self.unlock_button.visible = True
         self._say("controls locked")
+
+    def _any_unlocked(self) -> bool:
+        """Unlocked with the console token or the instructor's."""
+        return self.unlocked or self.instructor.unlocked
 
     @property
     def guess_client(self) -> str:
@@ -879,17 +886,6 @@ def _operations_text(snap: Snapshot) -> str:
         for op in reversed(operations[-10:])
     ]
     return "\n".join(lines)
-
-
-def _masked_input_style(handle: Any) -> str:
-    """CSS that draws a text input's characters as dots (Chromium, Firefox, Safari)."""
-    uuid = handle._impl.uuid  # viser labels an input with for="<uuid>"
-    return (
-        "<style>"
-        f'div:has(> div > p > label[for="{uuid}"]) input '
-        "{ -webkit-text-security: disc; }"
-        "</style>"
-    )
 
 
 def _gain_row_text(values: tuple[float, ...]) -> str:

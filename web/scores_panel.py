@@ -11,14 +11,14 @@ instructor token (they carry the console's debrief ticket).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import Any
 from urllib.parse import quote
 
-from app.console import SCORES_DB, list_recordings, md_text
-from app.console import scores as store
+import viser
 
-if TYPE_CHECKING:
-    from web.panels import ClientPanel
+from app.console import SCORES_DB, Console, list_recordings, md_text
+from app.console import scores as store
 
 HISTORY_ROWS = 10
 
@@ -73,10 +73,18 @@ def scores_markdown(
 class ScoresPanel:
     """The scores tab of one browser."""
 
-    def __init__(self, owner: ClientPanel) -> None:
-        self.owner = owner
-        self.console = owner.console
-        gui = owner.gui
+    def __init__(
+        self,
+        gui: viser.GuiApi,
+        console: Console,
+        trainee: Callable[[], str],
+        unlocked: Callable[[], bool],
+    ) -> None:
+        """``trainee``: the name typed under Access; ``unlocked``: whether this browser is
+        unlocked with the console or the instructor token."""
+        self.console = console
+        self.trainee = trainee
+        self.unlocked = unlocked
         settings = self.console.settings
         host = f"[{settings.host}]" if ":" in settings.host else settings.host
         self.api_base = f"http://{host}:{settings.port}"
@@ -95,7 +103,7 @@ class ScoresPanel:
 
     def show(self) -> str:
         """Fill in the scores of the name typed under Access (and return the text)."""
-        name = " ".join(str(self.owner.name_text.value).split())
+        name = " ".join(self.trainee().split())
         if not name:
             text = "enter your name under Access to see your scores"
         else:
@@ -138,5 +146,4 @@ class ScoresPanel:
 
     def _ticket(self) -> str | None:
         """The debrief ticket for a browser unlocked with the console or instructor token."""
-        unlocked = self.owner.unlocked or self.owner.instructor.unlocked
-        return self.console.debrief_ticket() if unlocked else None
+        return self.console.debrief_ticket() if self.unlocked() else None

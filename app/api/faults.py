@@ -16,8 +16,9 @@ from pydantic import BaseModel, Field
 
 from app.api.deps import ConsoleDep, SnapshotDep, run_command
 from app.api.schemas import CommandOut, Finite, _In
-from app.console.faults import ClearFaults, FaultView, InjectFault
+from app.console.faults import ClearFaults, InjectFault
 from app.console.operations import Operation, trainee_view
+from app.console.snapshot import FaultView
 from app.console.tokens import INSTRUCTOR_TOKEN_ENV
 from control.faults import DURATION_MAX_S, FAULT_KINDS
 

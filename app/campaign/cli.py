@@ -189,8 +189,8 @@ def rerun_command(
 ) -> None:
     """Run one run of a campaign again, alone, and check it gives the same figures; exit 1 if
     a figure differs."""
+    from app import headless
     from app.campaign import runner
-    from app.cli import _drive, _open_recorder, _write_new_events
     from missions import campaign as cm
     from missions.driver import MissionDriver
 
@@ -204,18 +204,17 @@ def rerun_command(
     if log:
         try:
             Path(log).parent.mkdir(parents=True, exist_ok=True)
-            recorder = _open_recorder(log, mission, sim, inputs["sim_seed"])
+            recorder = headless.open_recorder(log, mission, sim, inputs["sim_seed"])
         except OSError as err:
             _fail(f"--log {log}: cannot write: {err.strerror or err}")
             return
     t0 = time.perf_counter()
     try:
-        _drive(driver, recorder, show=not json_out)
+        result = headless.drive(driver, recorder, show=not json_out)
     finally:
         if recorder is not None:
-            _write_new_events(driver, recorder)
             recorder.close()
-    figures = cm.outcome_row(driver.result(), sim.t_s, time.perf_counter() - t0)
+    figures = cm.outcome_row(result, sim.t_s, time.perf_counter() - t0)
     compare = {
         k: (stored[k], figures[k], cm.same_figure(stored[k], figures[k])) for k in cm.FIGURES
     }

@@ -7,14 +7,15 @@ from here.
     settings.py   ConsoleSettings (options of ``rov-console serve``)
     instance.py   Console
     loop.py       PacedLoop: pacing, command queue, jitter statistics
-    commands.py   the commands (Pause, SetTarget, StartRun, ...)
+    commands.py   the commands (Pause, SetTarget, StartRun, ...) and LoopControls, what they
+                  may change of the loop
     session.py    Session: simulation, mission driver, alarms, recorder, replay
     replay.py     recordings on disk and their replay
     viewer_replay.py  one reader's (a browser's) own replay beside the live run
-    snapshot.py   Snapshot and the other immutable views
+    snapshot.py   Snapshot and the other immutable views (FaultView among them)
     alarms.py     operator alarms from the log rows
     texts.py      the page's Markdown for results and signal-check counters
-    faults.py     the instructor's commands (InjectFault, ClearFaults) and FaultView
+    faults.py     the instructor's commands (InjectFault, ClearFaults)
 
 It also passes on the core's rotations (``Rzyx``, ``quaternion_wxyz_from_rpy_radians``) and the
 wire's attachment point, so the view draws with the same geometry as the simulation.
@@ -25,7 +26,7 @@ from app.console import commands
 from app.console.alarms import ALARM_NAMES, Alarm
 from app.console.commands import SPEED_MAX, SPEED_MIN, Command
 from app.console.errors import ConsoleError
-from app.console.faults import ClearFaults, FaultView, InjectFault
+from app.console.faults import ClearFaults, InjectFault
 from app.console.instance import Console, initial_run
 from app.console.loop import PacedLoop
 from app.console.operations import trainee_view
@@ -39,6 +40,7 @@ from app.console.session import (
 )
 from app.console.settings import ConsoleSettings, allowed_hosts, is_loopback, origin_allowed
 from app.console.snapshot import (
+    FaultView,
     LoopStats,
     MissionStatus,
     ReplayStatus,

@@ -8,18 +8,16 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Mapping, Sequence
+from concurrent.futures import Future
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import Protocol
 
 import numpy as np
 
 from app.console.errors import ConsoleError
-from app.console.session import PreparedRun
+from app.console.session import PreparedRun, Session
 from app.recording import SessionData
 from control.config import Allocation, Gains, Mode
-
-if TYPE_CHECKING:
-    from app.console.loop import PacedLoop
 
 SPEED_MIN, SPEED_MAX = 0.25, 50.0
 """Simulated seconds per wall-clock second the loop can run at."""
@@ -76,27 +74,41 @@ def number(
     return v
 
 
+class LoopControls(Protocol):
+    """What a command may change: the session, the pause and speed of the loop that steps it,
+    and the steps queued while paused. ``app.console.loop.PacedLoop`` is the one loop; the
+    commands know it only by this (the loop imports them, not they the loop)."""
+
+    session: Session
+    paused: bool
+    speed: float
+
+    def step_later(self, steps: int) -> Future: ...
+
+    def cancel_steps(self, why: str) -> None: ...
+
+
 class Command(Protocol):
     """Something that changes the run, applied by the loop task between two steps."""
 
-    def apply(self, console: PacedLoop) -> object: ...
+    def apply(self, loop: LoopControls) -> object: ...
 
 
 # ---------------------------------------------------------------------- run control
 @dataclass(frozen=True)
 class Pause:
-    def apply(self, console: PacedLoop) -> object:
-        console.paused = True
+    def apply(self, loop: LoopControls) -> object:
+        loop.paused = True
         return {"paused": True}
 
 
 @dataclass(frozen=True)
 class Resume:
-    def apply(self, console: PacedLoop) -> object:
-        if console.session.error is not None:
-            raise ConsoleError(console.session.error)
-        console.paused = False
-        console.cancel_steps("step: the run was resumed")
+    def apply(self, loop: LoopControls) -> object:
+        if loop.session.error is not None:
+            raise ConsoleError(loop.session.error)
+        loop.paused = False
+        loop.cancel_steps("step: the run was resumed")
         return {"paused": False}
 
 
@@ -107,9 +119,9 @@ class SetSpeed:
     def __post_init__(self) -> None:
         number("speed", self.speed, SPEED_MIN, SPEED_MAX)
 
-    def apply(self, console: PacedLoop) -> object:
-        console.speed = number("speed", self.speed, SPEED_MIN, SPEED_MAX)
-        return {"speed": console.speed}
+    def apply(self, loop: LoopControls) -> object:
+        loop.speed = number("speed", self.speed, SPEED_MIN, SPEED_MAX)
+        return {"speed": loop.speed}
 
 
 @dataclass(frozen=True)
@@ -126,10 +138,10 @@ class Step:
         if not 1 <= self.steps <= STEPS_MAX:
             raise ValueError(f"steps must be in [1, {STEPS_MAX}], got {self.steps}")
 
-    def apply(self, console: PacedLoop) -> object:
-        if not console.paused:
+    def apply(self, loop: LoopControls) -> object:
+        if not loop.paused:
             raise ConsoleError("step: pause the run first")
-        return console.step_later(self.steps)
+        return loop.step_later(self.steps)
 
 
 @dataclass(frozen=True)
@@ -138,12 +150,12 @@ class StartRun:
 
     run: PreparedRun
 
-    def apply(self, console: PacedLoop) -> object:
-        stopped_by_error = console.session.error is not None
-        console.session.replace_run(self.run)
+    def apply(self, loop: LoopControls) -> object:
+        stopped_by_error = loop.session.error is not None
+        loop.session.replace_run(self.run)
         if stopped_by_error:  # the run had stopped itself; a fresh one runs again
-            console.paused = False
-        console.session.note(
+            loop.paused = False
+        loop.session.note(
             "command",
             f"start {self.run.mission.name}",
             {"mission": self.run.mission.name, "legs": self.run.run_legs},
@@ -153,8 +165,8 @@ class StartRun:
 
 @dataclass(frozen=True)
 class AbortMission:
-    def apply(self, console: PacedLoop) -> object:
-        console.session.abort_mission()
+    def apply(self, loop: LoopControls) -> object:
+        loop.session.abort_mission()
         return {"state": "aborted"}
 
 
@@ -170,8 +182,8 @@ class SetTarget:
         number("east_m", self.east_m, -TARGET_RANGE_M, TARGET_RANGE_M, "m")
         number("heading_deg", self.heading_deg, -HEADING_RANGE_DEG, HEADING_RANGE_DEG, "deg")
 
-    def apply(self, console: PacedLoop) -> object:
-        eng = console.session
+    def apply(self, loop: LoopControls) -> object:
+        eng = loop.session
         eng.require_live("target")
         eng.require_no_mission("target")
         eng.sim.set_target(self.north_m, self.east_m, math.radians(self.heading_deg))
@@ -187,12 +199,12 @@ class SetTarget:
 class SetGains:
     gains: Gains
 
-    def apply(self, console: PacedLoop) -> object:
-        sim = console.session.sim
+    def apply(self, loop: LoopControls) -> object:
+        sim = loop.session.sim
         check_gain_band(self.gains, Gains.of(sim.ps.gains.kp, sim.ps.gains.ki, sim.ps.gains.kd))
         sim.set_gains(self.gains)
         g = self.gains
-        console.session.note(
+        loop.session.note(
             "command", "gains", {"kp": list(g.kp), "ki": list(g.ki), "kd": list(g.kd)}
         )
         return g
@@ -202,9 +214,9 @@ class SetGains:
 class SetMode:
     mode: Mode
 
-    def apply(self, console: PacedLoop) -> object:
-        console.session.sim.set_mode(self.mode)
-        console.session.note("command", f"mode {self.mode}", {"mode": self.mode})
+    def apply(self, loop: LoopControls) -> object:
+        loop.session.sim.set_mode(self.mode)
+        loop.session.note("command", f"mode {self.mode}", {"mode": self.mode})
         return {"mode": self.mode}
 
 
@@ -216,9 +228,9 @@ class SetGrip:
         if not isinstance(self.grip, bool):
             raise ValueError(f"grip must be true or false, got {type(self.grip).__name__}")
 
-    def apply(self, console: PacedLoop) -> object:
-        console.session.sim.set_grip(self.grip)
-        console.session.note("command", f"grip {self.grip}", {"grip": self.grip})
+    def apply(self, loop: LoopControls) -> object:
+        loop.session.sim.set_grip(self.grip)
+        loop.session.note("command", f"grip {self.grip}", {"grip": self.grip})
         return {"grip": self.grip}
 
 
@@ -226,9 +238,9 @@ class SetGrip:
 class SetAllocation:
     allocation: Allocation
 
-    def apply(self, console: PacedLoop) -> object:
-        console.session.sim.set_allocation(self.allocation)
-        console.session.note(
+    def apply(self, loop: LoopControls) -> object:
+        loop.session.sim.set_allocation(self.allocation)
+        loop.session.note(
             "command", f"allocation {self.allocation}", {"allocation": self.allocation}
         )
         return {"allocation": self.allocation}
@@ -246,9 +258,9 @@ class SetCurrent:
             "direction_deg", self.direction_deg, -DIRECTION_RANGE_DEG, DIRECTION_RANGE_DEG, "deg"
         )
 
-    def apply(self, console: PacedLoop) -> object:
-        console.session.set_current(self.speed_mps, self.direction_deg)
-        console.session.note(
+    def apply(self, loop: LoopControls) -> object:
+        loop.session.set_current(self.speed_mps, self.direction_deg)
+        loop.session.note(
             "command", "current", {"speed_mps": self.speed_mps, "direction_deg": self.direction_deg}
         )
         return {"speed_mps": self.speed_mps, "direction_deg": self.direction_deg}
@@ -265,9 +277,9 @@ class MoveVessel:
         number("east_m", self.east_m, -VESSEL_RANGE_M, VESSEL_RANGE_M, "m")
         number("speed_mps", self.speed_mps, 0.0, VESSEL_SPEED_MAX_MPS, "m/s", lo_open=True)
 
-    def apply(self, console: PacedLoop) -> object:
-        console.session.move_vessel(self.north_m, self.east_m, self.speed_mps)
-        console.session.note(
+    def apply(self, loop: LoopControls) -> object:
+        loop.session.move_vessel(self.north_m, self.east_m, self.speed_mps)
+        loop.session.note(
             "command",
             "vessel",
             {"north_m": self.north_m, "east_m": self.east_m, "speed_mps": self.speed_mps},
@@ -280,14 +292,14 @@ class MoveVessel:
 class StartRecording:
     label: str = ""
 
-    def apply(self, console: PacedLoop) -> object:
-        return {"name": console.session.start_recording(self.label)}
+    def apply(self, loop: LoopControls) -> object:
+        return {"name": loop.session.start_recording(self.label)}
 
 
 @dataclass(frozen=True)
 class StopRecording:
-    def apply(self, console: PacedLoop) -> object:
-        return {"name": console.session.stop_recording()}
+    def apply(self, loop: LoopControls) -> object:
+        return {"name": loop.session.stop_recording()}
 
 
 @dataclass(frozen=True)
@@ -297,16 +309,16 @@ class OpenReplay:
     name: str
     data: SessionData
 
-    def apply(self, console: PacedLoop) -> object:
-        return console.session.open_replay(self.name, self.data)
+    def apply(self, loop: LoopControls) -> object:
+        return loop.session.open_replay(self.name, self.data)
 
 
 @dataclass(frozen=True)
 class PlayReplay:
     playing: bool
 
-    def apply(self, console: PacedLoop) -> object:
-        rp = console.session.require_replay()
+    def apply(self, loop: LoopControls) -> object:
+        rp = loop.session.require_replay()
         if self.playing and rp.at_end:
             rp.seek(rp.start_s)
         rp.playing = self.playing
@@ -320,15 +332,15 @@ class SeekReplay:
     def __post_init__(self) -> None:
         number("t_s", self.t_s, 0.0, REPLAY_T_MAX_S, "s")
 
-    def apply(self, console: PacedLoop) -> object:
-        rp = console.session.require_replay()
+    def apply(self, loop: LoopControls) -> object:
+        rp = loop.session.require_replay()
         rp.seek(self.t_s)
         return rp.status()
 
 
 @dataclass(frozen=True)
 class CloseReplay:
-    def apply(self, console: PacedLoop) -> object:
-        console.session.require_replay()
-        console.session.close_replay()
+    def apply(self, loop: LoopControls) -> object:
+        loop.session.require_replay()
+        loop.session.close_replay()
         return {"replay": None}

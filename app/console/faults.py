@@ -1,5 +1,5 @@
 """The instructor's commands: inject a fault (now or at a later simulation time) and clear them
-all, and the view of the faults a snapshot carries (``FaultView``).
+all. The view of the faults a snapshot carries is ``app.console.snapshot.FaultView``.
 
 Only the instructor may send these (the HTTP routes and the page's instructor panel check the
 instructor token, ``Console.check_instructor``). They are logged like every command, but
@@ -14,62 +14,21 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from app.console.commands import LoopControls
 from app.console.errors import ConsoleError
+from app.console.snapshot import fault_views
 from control.faults import DURATION_MAX_S, FAULT_KINDS, THRUSTER_KINDS, Fault
 from missions.schema import MAX_FAULTS
 
 if TYPE_CHECKING:
-    from app.console.loop import PacedLoop
     from control.simulation import Simulation
 
-FAULT_LOG_KEEP = 20
-"""Fault starts and ends a snapshot carries (the newest)."""
 MAX_LIVE_FAULTS = MAX_FAULTS
 """Faults active or scheduled at once, at most: as many as a mission file may carry. Each
 one costs every step a look (1 342 scheduled ahead took the loop's step p99 to 226 ms)."""
 MAX_RUN_FAULTS = 500
 """Faults one run keeps, past ones included (the simulation checks them all each chunk);
 clearing the faults or a new run starts the count again."""
-
-
-@dataclass(frozen=True)
-class FaultView:
-    """One injected fault as the instructor sees it."""
-
-    kind: str
-    start_s: float
-    duration_s: float
-    value: float
-    unit: str
-    thruster: int
-    direction_deg: float
-    state: str
-    """'active' or 'scheduled'."""
-    text: str
-    """In words: 'compass bias 20 deg from 30 s for 60 s'."""
-
-
-def fault_views(sim: Simulation) -> tuple[FaultView, ...]:
-    """The faults active now or still to come (past ones are left out), by start."""
-    t = sim.t_s + 1e-9
-    out = []
-    for f in sorted(sim.faults, key=lambda f: f.start_s):
-        if f.end_s <= t:
-            continue
-        out.append(
-            FaultView(
-                f.kind,
-                f.start_s,
-                f.duration_s,
-                f.value,
-                FAULT_KINDS[f.kind][0],
-                f.thruster,
-                f.direction_deg,
-                "active" if f.active(t) else "scheduled",
-                f.describe(),
-            )
-        )
-    return tuple(out)
 
 
 def kinds_text() -> str:
@@ -106,8 +65,8 @@ class InjectFault:
             self.kind, start_s, self.duration_s, self.value, self.direction_deg, self.thruster
         )
 
-    def apply(self, console: PacedLoop) -> object:
-        session = console.session
+    def apply(self, loop: LoopControls) -> object:
+        session = loop.session
         session.require_live("fault")
         sim = session.sim
         now = sim.t_s
@@ -163,8 +122,8 @@ class ClearFaults:
 
     instructor_only = True
 
-    def apply(self, console: PacedLoop) -> object:
-        session = console.session
+    def apply(self, loop: LoopControls) -> object:
+        session = loop.session
         session.require_live("clear faults")
         n = len(fault_views(session.sim))
         if n == 0 and not session.sim.faults:

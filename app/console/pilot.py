@@ -11,13 +11,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
-from app.console.commands import number
+from app.console.commands import LoopControls, number
 from control.simulation import Simulation
-
-if TYPE_CHECKING:
-    from app.console.loop import PacedLoop
 
 AXES = ("surge", "sway", "heave", "yaw")
 """The pilot's axes, in the ROV's own frame: forward, starboard, down, clockwise from above."""
@@ -79,8 +76,8 @@ class PilotDemand:
         for axis in AXES:
             number(f"pilot {axis}", getattr(self, axis), -1.0, 1.0)
 
-    def apply(self, console: PacedLoop) -> object:
-        eng = console.session
+    def apply(self, loop: LoopControls) -> object:
+        eng = loop.session
         eng.require_live("pilot")
         eng.sim.set_pilot_demand(self.surge, self.sway, self.heave, self.yaw)
         return pilot_status(eng.sim)
@@ -98,8 +95,8 @@ class PilotHolds:
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} hold must be true or false")
 
-    def apply(self, console: PacedLoop) -> object:
-        eng = console.session
+    def apply(self, loop: LoopControls) -> object:
+        eng = loop.session
         eng.require_live("pilot holds")
         eng.sim.set_pilot_holds(self.heading, self.depth)
         eng.note("command", "pilot holds", {"heading": self.heading, "depth": self.depth})
@@ -120,8 +117,8 @@ class PilotTakeOver:
         if not isinstance(self.pilot, bool):
             raise ValueError("pilot must be true or false")
 
-    def apply(self, console: PacedLoop) -> object:
-        eng = console.session
+    def apply(self, loop: LoopControls) -> object:
+        eng = loop.session
         eng.require_live("pilot")
         eng.require_no_mission("pilot")
         sim = eng.sim
@@ -142,8 +139,8 @@ class PilotTakeOver:
 class PilotConnected:
     """A pilot page signed in (logged with the pilot's name); changes nothing."""
 
-    def apply(self, console: PacedLoop) -> object:
-        return pilot_status(console.session.sim)
+    def apply(self, loop: LoopControls) -> object:
+        return pilot_status(loop.session.sim)
 
 
 @dataclass(frozen=True)
@@ -153,7 +150,7 @@ class PilotDisconnected:
 
     reason: str
 
-    def apply(self, console: PacedLoop) -> object:
-        sim = console.session.sim
+    def apply(self, loop: LoopControls) -> object:
+        sim = loop.session.sim
         sim.set_pilot_demand(0.0, 0.0, 0.0, 0.0)
         return pilot_status(sim)

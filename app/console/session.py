@@ -25,10 +25,10 @@ from numpy.typing import NDArray
 from app import scores
 from app.console.alarms import AlarmLimits, AlarmMonitor
 from app.console.errors import ConsoleError
-from app.console.faults import FAULT_LOG_KEEP, fault_views
 from app.console.operations import Operation, trainee_of
 from app.console.replay import Replay, recording_path
 from app.console.snapshot import (
+    FAULT_LOG_KEEP,
     LoopStats,
     MissionStatus,
     ReplayStatus,
@@ -37,6 +37,7 @@ from app.console.snapshot import (
     Snapshot,
     TrendBuffer,
     default_docking_frame,
+    fault_views,
     frozen_copy,
     row_view,
     scene_info,

@@ -9,18 +9,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from app.console.alarms import Alarm
-from app.console.faults import FaultView
 from app.console.operations import Operation
 from control.columns import LogRows
 from control.config import MODES, Gains
+from control.faults import FAULT_KINDS
 from sim.docking import DockingFrame, DockingLayout
 from sim.drawing import rov_drawing_box_m
 from sim.params import ParameterSet
+
+if TYPE_CHECKING:
+    from control.simulation import Simulation
 
 FloatArray = NDArray[np.float64]
 Vec3 = tuple[float, float, float]
@@ -30,6 +34,48 @@ TREND_COLUMNS = ("t_s", "north_m", "east_m", "psi_rad", "north_ref_m", "east_ref
 """Columns of ``Snapshot.trend``: the tree against the reference, one row per 0.1 s."""
 TREND_DECIMATION = 10
 """Plant steps per trend row (10 steps of 0.01 s = 0.1 s at the plant's 100 Hz)."""
+FAULT_LOG_KEEP = 20
+"""Fault starts and ends a snapshot carries (the newest)."""
+
+
+@dataclass(frozen=True)
+class FaultView:
+    """One injected fault as the instructor sees it."""
+
+    kind: str
+    start_s: float
+    duration_s: float
+    value: float
+    unit: str
+    thruster: int
+    direction_deg: float
+    state: str
+    """'active' or 'scheduled'."""
+    text: str
+    """In words: 'compass bias 20 deg from 30 s for 60 s'."""
+
+
+def fault_views(sim: Simulation) -> tuple[FaultView, ...]:
+    """The faults active now or still to come (past ones are left out), by start."""
+    t = sim.t_s + 1e-9
+    out = []
+    for f in sorted(sim.faults, key=lambda f: f.start_s):
+        if f.end_s <= t:
+            continue
+        out.append(
+            FaultView(
+                f.kind,
+                f.start_s,
+                f.duration_s,
+                f.value,
+                FAULT_KINDS[f.kind][0],
+                f.thruster,
+                f.direction_deg,
+                "active" if f.active(t) else "scheduled",
+                f.describe(),
+            )
+        )
+    return tuple(out)
 
 
 @dataclass(frozen=True)
