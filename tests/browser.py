@@ -8,6 +8,8 @@ missing.
 from __future__ import annotations
 
 import io
+import os
+import tempfile
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -43,7 +45,12 @@ TEST_CHROMIUM_ARGS = [
     "--webgl-antialiasing-mode=none",
 ]
 """Chromium as the tests launch it."""
-SCREENSHOTS = Path(__file__).resolve().parents[1] / "docs" / "screenshots"
+SCREENSHOTS = Path(
+    os.environ.get("ROV_SCREENSHOTS_DIR") or Path(tempfile.gettempdir()) / "rov-console-screenshots"
+)
+"""Where the browser tests save their screenshots, to look at: a folder of the machine's temp
+directory, so a test run leaves the checkout as it was. ``ROV_SCREENSHOTS_DIR=docs/screenshots``
+refreshes the pictures the docs show."""
 
 
 def _playwright():

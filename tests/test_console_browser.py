@@ -110,7 +110,9 @@ def test_gain_change_in_the_panel_is_applied(
     # the typed row reaches the server before Apply is pressed (viser sends an input's value
     # at most every 50 ms; under load 10 in CI a fixed 0.2 s was not enough)
     panel = next(iter(server.app.state.view._panels.values()))
-    wait_for(lambda: str(panel.gain_rows["kp"].value) == kp, 10.0, "the typed kp on the server")
+    wait_for(
+        lambda: str(panel.control.gain_rows["kp"].value) == kp, 10.0, "the typed kp on the server"
+    )
     click(page, "Apply gains")
     wait_for(
         lambda: abs(api.get("/api/gains").json()["kp"][0] - target) < 1e-6,
@@ -228,7 +230,7 @@ def test_recording_from_the_panel_is_written_and_replayed(
     # one full run; not reproduced alone)
     time_box = field(page, "Replay time s")
     # 0.15 s: the panel shows the replay's time rounded to 0.1 s, and moves the bar only
-    # when it is more than 0.05 s off (web/panels.py _update_replay)
+    # when it is more than 0.05 s off (web/tabs/record.py, RecordTab.update)
     wait_for(
         lambda: abs(float(time_box.input_value() or "nan") - panel.replay.status().t_s) < 0.15,
         10.0,

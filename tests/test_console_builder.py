@@ -41,7 +41,7 @@ def panel_of(server: RunningServer):
     """The builder of the (only) browser."""
     panels = list(server.app.state.view._panels.values())
     assert len(panels) == 1
-    return panels[0].builder
+    return panels[0].mission.builder
 
 
 @pytest.fixture

@@ -100,10 +100,10 @@ def test_engine_refuses_what_cannot_be_done_now(tmp_path: Path) -> None:
         eng.start_recording("../x")
 
 
-async def _run_for(console: PacedLoop, seconds: float) -> None:
-    task = asyncio.create_task(console.run())
+async def _run_for(loop: PacedLoop, seconds: float) -> None:
+    task = asyncio.create_task(loop.run())
     await asyncio.sleep(seconds)
-    console.stop()
+    loop.stop()
     await task
 
 
@@ -111,15 +111,15 @@ def test_loop_keeps_wall_clock_pace_at_each_speed(tmp_path: Path) -> None:
     async def scenario() -> dict[float, float]:
         eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
         eng.advance(1)  # compiled code warmed up
-        console = PacedLoop(eng)
-        task = asyncio.create_task(console.run())
+        loop = PacedLoop(eng)
+        task = asyncio.create_task(loop.run())
         rates = {}
         for speed in (1.0, 5.0, 0.25):
-            await console.call(cmd.SetSpeed(speed))
-            t0, w0 = console.snapshot.t_s, time.perf_counter()
+            await loop.call(cmd.SetSpeed(speed))
+            t0, w0 = loop.snapshot.t_s, time.perf_counter()
             await asyncio.sleep(1.5)
-            rates[speed] = (console.snapshot.t_s - t0) / (time.perf_counter() - w0)
-        console.stop()
+            rates[speed] = (loop.snapshot.t_s - t0) / (time.perf_counter() - w0)
+        loop.stop()
         await task
         return rates
 
@@ -131,25 +131,25 @@ def test_loop_keeps_wall_clock_pace_at_each_speed(tmp_path: Path) -> None:
 def test_pause_step_and_commands_between_steps(tmp_path: Path) -> None:
     async def scenario() -> None:
         eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
-        console = PacedLoop(eng, paused=True)
-        task = asyncio.create_task(console.run())
+        loop = PacedLoop(eng, paused=True)
+        task = asyncio.create_task(loop.run())
         await asyncio.sleep(0.2)
-        t0 = console.snapshot.t_s
+        t0 = loop.snapshot.t_s
         await asyncio.sleep(0.2)
-        assert console.snapshot.t_s == t0, "paused"
-        result = await console.call(cmd.Step(13))
+        assert loop.snapshot.t_s == t0, "paused"
+        result = await loop.call(cmd.Step(13))
         assert result["t_s"] == pytest.approx(t0 + 0.13)
         with pytest.raises(ValueError, match=r"speed must be in \[0.25, 50\], got 1000"):
-            await console.call(cmd.SetSpeed(1000.0))
+            await loop.call(cmd.SetSpeed(1000.0))
         with pytest.raises(ValueError, match="allocation"):
-            await console.call(cmd.SetAllocation("magic"))  # type: ignore[arg-type]
-        await console.call(cmd.Resume())
+            await loop.call(cmd.SetAllocation("magic"))  # type: ignore[arg-type]
+        await loop.call(cmd.Resume())
         await asyncio.sleep(0.3)
-        assert console.snapshot.t_s > t0 + 0.2, "bad commands did not stop the loop"
-        assert console.running
-        console.stop()
+        assert loop.snapshot.t_s > t0 + 0.2, "bad commands did not stop the loop"
+        assert loop.running
+        loop.stop()
         await task
-        assert not console.running
+        assert not loop.running
 
     asyncio.run(scenario())
 
@@ -157,13 +157,13 @@ def test_pause_step_and_commands_between_steps(tmp_path: Path) -> None:
 def test_commands_from_threads_are_applied_by_the_loop(tmp_path: Path) -> None:
     async def scenario() -> None:
         eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
-        console = PacedLoop(eng)
-        task = asyncio.create_task(console.run())
+        loop = PacedLoop(eng)
+        task = asyncio.create_task(loop.run())
         target = Gains((3000.0, 3000.0, 3000.0), (100.0, 100.0, 50.0), (9000.0, 9000.0, 40000.0))
         # what a viser callback does: block its own thread until the loop has applied it
-        result = await asyncio.to_thread(console.call_blocking, cmd.SetGains(target))
-        assert result == target and console.snapshot.gains == target
-        console.stop()
+        result = await asyncio.to_thread(loop.call_blocking, cmd.SetGains(target))
+        assert result == target and loop.snapshot.gains == target
+        loop.stop()
         await task
 
     asyncio.run(scenario())
@@ -188,24 +188,24 @@ def test_operations_log_names_who_did_what_and_goes_into_the_recording(tmp_path:
 
     async def scenario() -> str:
         eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
-        console = PacedLoop(eng)
-        task = asyncio.create_task(console.run())
-        name = (await console.call(cmd.StartRecording("ops")))["name"]
-        await asyncio.to_thread(console.call_blocking, cmd.Pause(), 10.0, "viewer 2 (Anna)")
+        loop = PacedLoop(eng)
+        task = asyncio.create_task(loop.run())
+        name = (await loop.call(cmd.StartRecording("ops")))["name"]
+        await asyncio.to_thread(loop.call_blocking, cmd.Pause(), 10.0, "viewer 2 (Anna)")
         too_big = Gains((99999.0, 2000.0, 2000.0), (175.0, 175.0, 75.0), (8e3, 8e3, 38500.0))
         with pytest.raises(ValueError, match=r"gain kp surge must be in \[0, 8000\]"):
-            await console.call(cmd.SetGains(too_big))
-        await console.call(cmd.Resume())
+            await loop.call(cmd.SetGains(too_big))
+        await loop.call(cmd.Resume())
         await asyncio.sleep(0.1)
-        ops = console.snapshot.operations
+        ops = loop.snapshot.operations
         assert [(op.who, op.action, op.outcome[:7]) for op in ops[-3:]] == [
             ("viewer 2 (Anna)", "pause", "done"),
             ("console", ops[-2].action, "refused"),
             ("console", "resume", "done"),
         ]
         assert "99999" in ops[-2].action and "8000]" in ops[-2].outcome
-        await console.call(cmd.StopRecording())
-        console.stop()
+        await loop.call(cmd.StopRecording())
+        loop.stop()
         await task
         return name
 
@@ -300,22 +300,22 @@ def test_a_commands_answer_comes_after_the_state_that_shows_it(tmp_path: Path) -
 
     async def scenario() -> None:
         eng = Session(prepare_run(station_keeping_mission("full-scale", 100.0), False), tmp_path)
-        console = PacedLoop(eng, paused=True)
-        task = asyncio.create_task(console.run())
+        loop = PacedLoop(eng, paused=True)
+        task = asyncio.create_task(loop.run())
         await asyncio.sleep(0.1)
         paused_seen: list[bool] = []
         t_seen: list[float] = []
         # a done-callback runs where the future is resolved (the loop), at that moment: what
         # a reader woken by the answer would find at the earliest
-        resumed = console.submit(cmd.Resume())
-        resumed.add_done_callback(lambda f: paused_seen.append(console.snapshot.paused))
+        resumed = loop.submit(cmd.Resume())
+        resumed.add_done_callback(lambda f: paused_seen.append(loop.snapshot.paused))
         await asyncio.wrap_future(resumed)
-        await console.call(cmd.Pause())
-        t_before = console.snapshot.t_s
-        stepped = console.submit(cmd.Step(7))
-        stepped.add_done_callback(lambda f: t_seen.append(console.snapshot.t_s))
+        await loop.call(cmd.Pause())
+        t_before = loop.snapshot.t_s
+        stepped = loop.submit(cmd.Step(7))
+        stepped.add_done_callback(lambda f: t_seen.append(loop.snapshot.t_s))
         result = await asyncio.wrap_future(stepped)
-        console.stop()
+        loop.stop()
         await task
         assert paused_seen == [False], "the answer to Resume found the state still paused"
         # 7 steps of 0.01 s added one by one: equal to a few ulp (pytest.approx's 1e-6 relative)

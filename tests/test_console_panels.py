@@ -18,7 +18,7 @@ import pytest
 
 from app.server import RunningServer
 from tests.browser import button, click, field, open_console, tab, unlock, wait_for
-from web.panels import _gain_row_text
+from web.tabs.control import gain_row_text
 
 
 def _text(pg) -> str:
@@ -139,17 +139,17 @@ def test_a_typed_value_is_not_written_over_before_its_edit_callback_runs(
     unlock(page, server.token)
     tab(page, "Control")
     panel = next(iter(server.app.state.view._panels.values()))
-    box = panel.gain_rows["kp"]
-    wait_for(lambda: not panel._editing("gains"), 5.0, "the gains shown live")
+    box = panel.control.gain_rows["kp"]
+    wait_for(lambda: not panel.operator.editing("gains"), 5.0, "the gains shown live")
     typed = "1234, 2000, 1000"
     box._impl.value = typed  # viser's _handle_gui_updates: the value first, callbacks later
-    panel._update_controls(panel.console.loop.snapshot)
+    panel.control.update(panel.console.loop.snapshot)
     assert box.value == typed
-    assert panel._editing("gains"), "held as an edit from then on"
+    assert panel.operator.editing("gains"), "held as an edit from then on"
     # once the gains are sent the row follows the live values again
     click(page, "Preset gains")
     wait_for(
-        lambda: box.value == _gain_row_text(api.get("/api/gains").json()["kp"]),
+        lambda: box.value == gain_row_text(api.get("/api/gains").json()["kp"]),
         10.0,
         "the row back on the live gains",
     )
@@ -222,8 +222,8 @@ def test_the_publisher_sends_no_camera_pose_while_a_preset_is_being_sent(
         panel.update(panel.console.loop.snapshot)
         framed.set()
 
-    with panel._camera_lock:
-        panel._camera_pending = True
+    with panel.camera.lock:
+        panel.camera.pending = True
         publisher = threading.Thread(target=frame, daemon=True)
         publisher.start()
         # a frame takes a few milliseconds: half a second free of it is no race won by luck

@@ -342,15 +342,16 @@ def test_one_viewers_wrong_tokens_lock_only_that_viewer(served) -> None:
         proto = [f"viser-v{viser.__version__}"]
         async with websockets.connect(uri, subprotocols=proto) as first:
             async with websockets.connect(uri, subprotocols=proto) as second:
-                guesser = await _viewer(view, first)
-                operator = await _viewer(view, second)
+                guessing = await _viewer(view, first)
+                operating = await _viewer(view, second)
+                guesser, operator = guessing.operator, operating.operator
                 for _ in range(12):
                     guesser.token_text.value = "wrong-wrong-wrong-wrong"
                     guesser._on_unlock(None)
-                assert "too many wrong tokens" in guesser.message_md.content
+                assert "too many wrong tokens" in guessing.status.message_md.content
                 operator.token_text.value = served.token
                 operator._on_unlock(None)
-                assert operator.unlocked, operator.message_md.content
+                assert operator.unlocked, operating.status.message_md.content
                 guesser.token_text.value = served.token
                 guesser._on_unlock(None)
                 assert guesser.unlocked, "the right token is accepted during a lockout"
@@ -444,7 +445,7 @@ def test_unfinished_uploads_from_the_view_are_capped_before_the_token(served) ->
         uri = f"ws://127.0.0.1:{view.port}"
         async with websockets.connect(uri, subprotocols=[f"viser-v{viser.__version__}"]) as ws:
             panel = await _viewer(view, ws)
-            button = panel.builder.upload_button._impl.uuid
+            button = panel.mission.builder.upload_button._impl.uuid
             states = panel.client.gui._current_file_upload_states
 
             def start(transfer: str, size: int, parts: int) -> dict:
@@ -474,11 +475,11 @@ def test_unfinished_uploads_from_the_view_are_capped_before_the_token(served) ->
             await ws.send(msgspec.msgpack.encode(part("locked", 0, b"x" * 500)))
             await asyncio.sleep(0.5)
             assert states == {}, "nothing kept for refused uploads"
-            assert "mission file has at most" in panel.builder.builder_md.content or (
-                "locked" in panel.builder.builder_md.content
+            assert "mission file has at most" in panel.mission.builder.builder_md.content or (
+                "locked" in panel.mission.builder.builder_md.content
             )
             # unlocked: one unfinished upload at a time; a part past the declared size drops it
-            panel.unlocked = True
+            panel.operator.unlocked = True
             for k in range(20):
                 await ws.send(msgspec.msgpack.encode(start(f"t{k}", MAX_UPLOAD_BYTES, 4)))
                 await ws.send(msgspec.msgpack.encode(part(f"t{k}", 0, b"x" * 1000)))
@@ -622,9 +623,10 @@ def test_what_the_view_writes_shows_names_and_messages_as_text() -> None:
     name, who and message the view writes is escaped, whatever rule made it."""
     from app.console import md_code, md_text, result_markdown
     from app.console.operations import Operation
-    from web.instructor_panel import faults_markdown
-    from web.panels import _mission_text, _operations_text
-    from web.scores_panel import scores_markdown
+    from web.status import operations_markdown
+    from web.tabs.instructor import faults_markdown
+    from web.tabs.mission import mission_markdown
+    from web.tabs.scores import scores_markdown
 
     assert "<" not in md_text(XSS) and "&lt;iframe" in md_text(XSS)
     assert md_code("a`b") == "``a`b``" and md_code("x") == "`x`"
@@ -635,7 +637,7 @@ def test_what_the_view_writes_shows_names_and_messages_as_text() -> None:
     ]
     op = Operation(utc="2026-01-01T00:00:00", t_s=1.0, who=XSS, action=XSS, outcome="done")
     snap = _snapshot_with(op)
-    texts += [_mission_text(snap), _operations_text(snap), faults_markdown(snap)]
+    texts += [mission_markdown(snap), operations_markdown(snap), faults_markdown(snap)]
     for text in texts:
         assert "<iframe" not in text and "<img" not in text, text
 

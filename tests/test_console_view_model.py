@@ -384,14 +384,14 @@ def test_panel_updates_keep_their_rate_whatever_the_frame_period(
     frame that did the last update, so each period was rounded up to whole publisher frames:
     with 60 ms frames the status line came 4.2 times a second, not 5 (4 frames = 0.24 s) and
     the plots 1.7 (9 frames). Counting from the due time keeps the promised rate on average."""
-    from web.panels import _next_due
+    from web.status import next_due
 
     due, sent, now = 0.0, 0, 0.0
     frames = int(round(60.0 / frame_s))
     for k in range(frames):
         now = k * frame_s
         if now >= due:
-            due = _next_due(due, period_s, now)
+            due = next_due(due, period_s, now)
             sent += 1
     # over 60 s the count is 60 / period, give or take the first and the last update
     assert abs(sent - 60.0 / period_s) <= 1
@@ -400,11 +400,11 @@ def test_panel_updates_keep_their_rate_whatever_the_frame_period(
 def test_panel_updates_do_not_burst_after_a_stall() -> None:
     """After a stall of several periods, one update and then the normal rate (no catch-up
     burst of the missed ones)."""
-    from web.panels import _next_due
+    from web.status import next_due
 
-    due = _next_due(0.0, 0.2, 0.0)
+    due = next_due(0.0, 0.2, 0.0)
     assert due == pytest.approx(0.2)
-    due = _next_due(due, 0.2, 3.0)  # 2.8 s late
+    due = next_due(due, 0.2, 3.0)  # 2.8 s late
     assert due == pytest.approx(3.2)
 
 
@@ -412,31 +412,30 @@ def test_a_seek_is_not_undone_by_a_frame_update_that_comes_before_its_callback()
     """The scrub bar's race (a flaky browser test found it): viser sets the bar to the value
     a viewer typed, then runs the seek callback; a frame update in between used to set the
     bar back to the replay's present time, so the seek went nowhere. The panel's own methods
-    on a stand-in panel, in that order."""
+    on a stand-in tab, in that order."""
     from types import SimpleNamespace
 
     from app.console.snapshot import ReplayStatus
-    from web.panels import ClientPanel
+    from web.tabs.record import RecordTab
 
     seeks: list[float] = []
     bar = SimpleNamespace(value=20.0)
-    panel = SimpleNamespace(
+    tab = SimpleNamespace(
         replay=SimpleNamespace(seek=seeks.append),
         replay_time=bar,
-        unlocked=True,
+        operator=SimpleNamespace(unlocked=True, say=lambda text: None),
         _replay_name="trial",
         _replay_shown=20.0,
-        _say=lambda text: None,
     )
 
     def frame(t_s: float) -> None:
         status = ReplayStatus("trial", t_s, 0.0, 60.0, False, True)
-        ClientPanel._update_replay(panel, SimpleNamespace(source="replay", replay=status))
+        RecordTab.update(tab, SimpleNamespace(source="replay", replay=status))
 
     frame(20.0)
     bar.value = 5.0  # the viewer's value, as viser sets it before the callback
     frame(20.0)  # paused at 20 s: this frame's time is the old one
-    ClientPanel._on_seek_replay(panel, SimpleNamespace(client=object()))
+    RecordTab._on_seek_replay(tab, SimpleNamespace(client=object()))
     assert seeks == [5.0]
     frame(5.0)
     assert bar.value == 5.0

@@ -136,7 +136,7 @@ def test_inject_now_and_later_list_clear_and_the_trainee_does_not_see_it(
 
 
 def test_the_pages_operations_text_leaves_the_instructors_commands_out() -> None:
-    from web.panels import _operations_text  # the trainee's view of the log in the page
+    from web.status import operations_markdown  # the trainee's view of the log in the page
 
     ops = (
         Operation("2026-01-01T00:00:01Z", 1.0, "viewer 1 (Anna)", "pause", "done"),
@@ -149,5 +149,5 @@ def test_the_pages_operations_text_leaves_the_instructors_commands_out() -> None
     class Snap:
         operations = ops
 
-    text = _operations_text(Snap())  # type: ignore[arg-type]
+    text = operations_markdown(Snap())  # type: ignore[arg-type]
     assert "pause" in text and "inject fault" not in text and "Ian" not in text

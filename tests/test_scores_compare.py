@@ -24,7 +24,7 @@ from control.columns import LAYOUT, LogRows
 from control.simulation import Simulation
 from missions.scoring import LandingResult, MissionResult
 from sim import params
-from web.scores_panel import report_url, scores_markdown
+from web.tabs.scores import report_url, scores_markdown
 
 MODEL = params.load("model-scale")
 TOKEN = "scores-test-token-000001"

@@ -101,7 +101,7 @@ class ConsoleView:
 
     def _connect(self, client: viser.ClientHandle) -> None:
         panel = ClientPanel(client, self.console, self.scene)
-        self.uploads.guard(client.gui, lambda: panel.unlocked, panel.builder.say)
+        self.uploads.guard(client.gui, lambda: panel.operator.unlocked, panel.mission.builder.say)
         with self._lock:
             self._panels[client.client_id] = panel
 

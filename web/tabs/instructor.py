@@ -1,4 +1,4 @@
-"""The instructor's panel, one per browser (a tab of ``web.panels.ClientPanel``).
+"""The "Instructor" tab, one per browser.
 
 It stays locked until the instructor token is entered in its own field (the console token does
 not open it, and opening it does not unlock the console's controls). Unlocked, it injects a
@@ -10,10 +10,7 @@ other (``app.console.faults``); the trainee's operations log leaves them out.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
-
-import viser
 
 from app.console import (
     FAULT_KINDS,
@@ -26,7 +23,7 @@ from app.console import (
     Snapshot,
     md_text,
 )
-from web.widgets import masked_input_style
+from web.widgets import Operator, masked_input_style
 
 STARTS = ("now", "at time")
 OFF_TEXT = (
@@ -63,22 +60,14 @@ def faults_markdown(snap: Snapshot) -> str:
     return "\n".join(lines)
 
 
-class InstructorPanel:
-    """The instructor's tab of one browser."""
+class InstructorTab:
+    """The instructor's tab of one browser: ``operator`` names the browser in the operations
+    log and counts its wrong tokens; its own token unlocks it."""
 
-    def __init__(
-        self,
-        gui: viser.GuiApi,
-        console: Console,
-        who: Callable[[], str],
-        guess_client: str,
-    ) -> None:
-        """``who``: the browser as the operations log names it ('viewer 3 (Anna)');
-        ``guess_client``: whom its wrong tokens count against."""
+    def __init__(self, operator: Operator, console: Console) -> None:
+        self.operator = operator
         self.console = console
-        self.gui = gui
-        self.who = who
-        self.guess_client = guess_client
+        self.gui = operator.gui
         self.unlocked = False
         self._guarded: list[Any] = []
         self.last_error = ""
@@ -129,7 +118,7 @@ class InstructorPanel:
     # ------------------------------------------------------------------ callbacks
     def _on_unlock(self, event: Any) -> None:
         verdict, wait = self.console.check_instructor(
-            str(self.token_text.value).strip(), self.guess_client
+            str(self.token_text.value).strip(), self.operator.guess_client
         )
         self.token_text.value = ""  # type: ignore[misc]  # the token does not stay on the page
         if verdict == "ok":
@@ -173,7 +162,7 @@ class InstructorPanel:
         else:
             try:
                 return self.console.loop.call_blocking(
-                    make(), timeout_s=15.0, who=f"instructor, {self.who()}"
+                    make(), timeout_s=15.0, who=f"instructor, {self.operator.who}"
                 )
             except (ConsoleError, ValueError) as err:
                 self.last_error = str(err)

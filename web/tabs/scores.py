@@ -1,4 +1,4 @@
-"""The pilot's scores and debriefs, one per browser (a tab of ``web.panels.ClientPanel``).
+"""The "Scores" tab, one per browser: the pilot's scores and debriefs.
 
 "Show my scores" reads the scores database (``app.scores``) for the name typed under Access:
 the latest runs (who flew them: autopilot, hand or mixed) and the best run of each mission,
@@ -15,10 +15,9 @@ from collections.abc import Callable
 from typing import Any
 from urllib.parse import quote
 
-import viser
-
 from app.console import SCORES_DB, Console, list_recordings, md_text
 from app.console import scores as store
+from web.widgets import Operator
 
 HISTORY_ROWS = 10
 
@@ -70,21 +69,16 @@ def scores_markdown(
     return "\n".join(lines)
 
 
-class ScoresPanel:
-    """The scores tab of one browser."""
+class ScoresTab:
+    """The scores tab of one browser: the trainee is the name typed under Access."""
 
-    def __init__(
-        self,
-        gui: viser.GuiApi,
-        console: Console,
-        trainee: Callable[[], str],
-        unlocked: Callable[[], bool],
-    ) -> None:
-        """``trainee``: the name typed under Access; ``unlocked``: whether this browser is
-        unlocked with the console or the instructor token."""
+    def __init__(self, operator: Operator, console: Console, unlocked: Callable[[], bool]) -> None:
+        """``unlocked``: whether this browser is unlocked with the console or the instructor
+        token (its debrief links then carry the console's ticket)."""
+        self.operator = operator
         self.console = console
-        self.trainee = trainee
         self.unlocked = unlocked
+        gui = operator.gui
         settings = self.console.settings
         host = f"[{settings.host}]" if ":" in settings.host else settings.host
         self.api_base = f"http://{host}:{settings.port}"
@@ -103,7 +97,7 @@ class ScoresPanel:
 
     def show(self) -> str:
         """Fill in the scores of the name typed under Access (and return the text)."""
-        name = " ".join(self.trainee().split())
+        name = " ".join(str(self.operator.name_text.value).split())
         if not name:
             text = "enter your name under Access to see your scores"
         else:

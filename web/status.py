@@ -1,0 +1,152 @@
+"""The top of one browser's panel: the status line, the pilot's readout, the alarms, the
+message line (what the last action did), the operations log and the thrusters' bars."""
+
+from __future__ import annotations
+
+import html
+import math
+from typing import Any, Literal
+
+import numpy as np
+import viser
+
+from app.console import SATURATED, Snapshot, md_code, md_text, trainee_view
+from web import geometry as geo
+
+BarColor = Literal["red", "orange", "blue"]
+
+
+def bar_color(utilisation: float) -> BarColor:
+    if utilisation >= SATURATED:
+        return "red"
+    return "orange" if utilisation >= 0.8 else "blue"
+
+
+def next_due(due: float, period: float, now: float) -> float:
+    """The next time an every-``period`` update is due: one period after the last due time
+    (not after now: frames come every 50 ms, and counting from the frame that did the update
+    rounded each period up to the next frame, 0.2 s to 0.25 s), or one period from now when
+    more than a period behind (no burst of catch-up updates)."""
+    due += period
+    return due if due > now - period else now + period
+
+
+def status_markdown(snap: Snapshot, live: Snapshot) -> str:
+    """The status line: live or replay, time, run state, the tree's pose, the mission."""
+    tree = snap.tree_eta_n
+    m = snap.mission
+    leg = f"leg {m.leg_index}/{m.legs_total} {m.leg_type}" if m.leg_index else ""
+    state = "paused" if snap.paused else f"running x{snap.speed:g}"
+    replaying = snap.source == "replay" and snap.replay is not None
+    source = f"REPLAY {md_code(snap.replay.name)}" if replaying and snap.replay else "live"
+    return (
+        f"**{source}** t = {snap.t_s:8.1f} s, {state}  \n"
+        + (f"live run goes on: t = {live.t_s:.1f} s  \n" if replaying else "")
+        + f"tree N {tree[0]:.2f} m, E {tree[1]:.2f} m, heading "
+        f"{math.degrees(tree[5]):.1f} deg, mode {snap.mode}  \n"
+        f"mission: {md_text(m.name or '-')} ({m.state}) {md_text(leg)}"
+        + (f"  \n**{md_text(snap.error)}**" if snap.error else "")
+        + (f"  \nrecording {md_code(snap.recording)}" if snap.recording else "")
+    )
+
+
+def alarms_html(snap: Snapshot) -> str:
+    """A badge per alarm (red when active) and the active alarms' messages."""
+    badges = "".join(
+        f"<span style='display:inline-block;margin:1px;padding:1px 5px;border-radius:4px;"
+        f"color:white;background:{'#c0392b' if a.active else '#27ae60'}' "
+        f"title='{html.escape(a.message)}'>{html.escape(a.name)}</span>"
+        for a in snap.alarms
+    )
+    active = html.escape("; ".join(f"{a.name}: {a.message}" for a in snap.active_alarms))
+    return f"<div>{badges}</div>" + (f"<div style='color:#c0392b'>{active}</div>" if active else "")
+
+
+def operations_markdown(snap: Snapshot) -> str:
+    """The latest operations, newest first: time, who, what, outcome (a trainee's view: the
+    instructor's commands are left out, ``trainee_view``)."""
+    operations = trainee_view(snap.operations)
+    if not operations:
+        return "*nothing done yet*"
+    lines = [
+        f"- {op.utc[11:19]} (t {op.t_s:.1f} s) **{md_text(op.who)}**: {md_text(op.action)} "
+        f"- {md_text(op.outcome)}"
+        for op in reversed(operations[-10:])
+    ]
+    return "\n".join(lines)
+
+
+def readout_markdown(snap: Snapshot) -> str:
+    """Height over the post tops, distance and heading error to the frame, wire tension."""
+    info = snap.scene
+    readout = geo.pilot_readout(
+        np.array(snap.tree_eta_n),
+        info.tree_dimensions_m[2],
+        info.frame.center_n,
+        info.frame.heading_rad,
+        info.frame.post_top_depth_m(info.layout),
+        snap.wire_tension_newton,
+    )
+    return geo.readout_markdown(readout)
+
+
+def _set(handle: Any, content: str) -> None:
+    """Send a text only when it changed."""
+    if handle.content != content:
+        handle.content = content
+
+
+class StatusHeader:
+    """The status line, readout, alarms and message line of one browser (at the top of its
+    panel); ``add_folders`` adds the operations log and the thrusters below the folders that
+    come between."""
+
+    def __init__(self, gui: viser.GuiApi) -> None:
+        self.gui = gui
+        self.status_md = gui.add_markdown("starting...")
+        self.readout_md = gui.add_markdown("")
+        self.alarms_html = gui.add_html("")
+        self.message_md = gui.add_markdown("")
+
+    def say(self, text: str) -> None:
+        """Show what the last action did."""
+        self.message_md.content = text
+
+    def add_folders(self, n_thrusters: int) -> None:
+        gui = self.gui
+        with gui.add_folder("Operations log", expand_by_default=False):
+            self.operations_md = gui.add_markdown("*nothing done yet*")
+        with gui.add_folder("Thrusters") as self.thruster_folder:
+            self.thruster_md = gui.add_markdown("")
+        self.bars: list[Any] = []
+        self._make_bars(n_thrusters)
+
+    def _make_bars(self, n: int) -> None:
+        """One bar a thruster (the ROV of a new set-up may have another number of them)."""
+        for bar in self.bars:
+            bar.remove()
+        with self.thruster_folder:
+            self.bars = [self.gui.add_progress_bar(0.0, color="blue") for _ in range(n)]
+
+    def update(self, snap: Snapshot, live: Snapshot) -> None:
+        """From what this browser shows (``snap``: the live run or its replay) and the live
+        run."""
+        _set(self.status_md, status_markdown(snap, live))
+        _set(self.readout_md, readout_markdown(snap))
+        _set(self.alarms_html, alarms_html(snap))
+        self._update_thrusters(snap)
+        _set(self.operations_md, operations_markdown(snap))
+
+    def _update_thrusters(self, snap: Snapshot) -> None:
+        util = snap.thruster_utilisation
+        if len(self.bars) != len(util):
+            self._make_bars(len(util))
+        for bar, u in zip(self.bars, util, strict=False):
+            value = round(100.0 * min(max(u, 0.0), 1.0), 1)
+            if bar.value != value:
+                bar.value = value
+            color = bar_color(u)
+            if bar.color != color:
+                bar.color = color
+        text = " | ".join(f"T{i + 1} {100 * u:.0f}%" for i, u in enumerate(util))
+        _set(self.thruster_md, text)

@@ -1,0 +1,70 @@
+"""The "Run" tab: pause, resume, step, speed, reset to station keeping, and the target the
+tree holds when no mission runs."""
+
+from __future__ import annotations
+
+import math
+
+from app.console import Console, Snapshot, station_keeping_mission
+from app.console import commands as cmd
+from web.tabs.mission import start_mission
+from web.widgets import Operator
+
+SPEEDS = ("0.25", "0.5", "1", "2", "5", "10", "20", "50")
+
+
+class RunTab:
+    def __init__(self, operator: Operator, console: Console) -> None:
+        self.operator = operator
+        self.console = console
+        gui, op = operator.gui, operator
+        op.action(op.guard(gui.add_button("Pause")), cmd.Pause)
+        op.action(op.guard(gui.add_button("Resume")), cmd.Resume)
+        op.action(op.guard(gui.add_button("Step 0.1 s")), lambda: cmd.Step(10))
+        self.speed = op.guard(gui.add_dropdown("Speed (x real time)", SPEEDS, initial_value="1"))
+        self.speed.on_update(op.when_client(lambda: cmd.SetSpeed(float(self.speed.value))))
+        self.reset_button = op.guard(gui.add_button("Reset to station keeping"))
+        self.reset_button.on_click(lambda _: self._reset())
+        snap = console.loop.snapshot
+        goal = snap.target or snap.eta_ref
+        with gui.add_folder("Target (no mission)"):
+            self.target_n = op.live_input(
+                "target", gui.add_number("Target north m", round(goal[0], 2), step=0.1)
+            )
+            self.target_e = op.live_input(
+                "target", gui.add_number("Target east m", round(goal[1], 2), step=0.1)
+            )
+            self.target_psi = op.live_input(
+                "target",
+                gui.add_number("Target heading deg", round(math.degrees(goal[2]), 1), step=1.0),
+            )
+            op.action(
+                op.guard(gui.add_button("Go to target")),
+                lambda: cmd.SetTarget(
+                    float(self.target_n.value),
+                    float(self.target_e.value),
+                    float(self.target_psi.value),
+                ),
+                done="target",
+            )
+
+    def _reset(self) -> None:
+        snap = self.console.loop.snapshot
+        mission = station_keeping_mission(snap.scene.params_name, self.console.settings.depth_m)
+        start_mission(self.operator, mission, run_legs=False)
+
+    def update(self, live: Snapshot) -> None:
+        """The target and the speed follow the live run (changed elsewhere: the API, other
+        browsers, a mission) unless the operator is editing them."""
+        goal = live.target or live.eta_ref
+        self.operator.follow(
+            "target",
+            (
+                (self.target_n, round(goal[0], 2)),
+                (self.target_e, round(goal[1], 2)),
+                (self.target_psi, round(math.degrees(goal[2]), 1)),
+            ),
+        )
+        speed = f"{live.speed:g}"
+        if speed in SPEEDS and speed != self.speed.value:
+            self.speed.value = speed
