@@ -47,6 +47,8 @@ class CompileReport(logging.Handler):
     def _show(self, record: logging.LogRecord, live: bool) -> None:
         kernel, depth, phase = (record.__dict__[k] for k in ("kernel", "depth", "phase"))
         if phase == "start":
+            if kernel.startswith("numba."):  # numba's own pieces: not worth a word
+                return
             self.kernels += 1
             if self.kernels == 1:
                 self.first = time.perf_counter()

@@ -1,62 +1,87 @@
-"""Compiled closed-loop chunks as jobs.
+"""A chunk of the compiled closed loop as a named input and a named result.
 
-``Simulation.step_jobs(n)`` and ``MissionDriver.advance_jobs`` are generators: where a run
-needs the compiled closed-loop kernel for its next chunk they yield a ``ChunkJob`` (the
-run's own environment rows and sensor noise, drawn from its own seed, and the run itself
-for its state and configuration) and take back a ``ChunkResult``. ``run_jobs`` drives such
-a generator, running each job with ``loop.run_chunk`` at once.
+``Simulation`` hands the kernel a ``ClosedChunk`` (its state, configuration and the chunk's
+own inputs, made from the run's own seed) and takes back a ``ChunkResult``; the chunk knows
+nothing of the simulation it came from. ``run_closed_chunk`` runs it with
+``loop.run_chunk`` (or ``run_chunk_into`` when its rows go into a caller's array).
 """
 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Generator
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TypeVar
+from dataclasses import dataclass, replace
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from control import loop
 from control.columns import N_LOG
 
-if TYPE_CHECKING:
-    from control.simulation import Simulation
 
-ChunkResult = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]
-"""(x, held_y, xhat, P_cov, cs, log rows (n, N_LOG), steps done): ``loop.run_chunk``'s
-return. Steps done < n when the plant state stopped being finite."""
+class ChunkResult(NamedTuple):
+    """What a chunk leaves: the new states and the chunk's log rows."""
 
-T = TypeVar("T")
+    x: np.ndarray
+    """plant state at the chunk's end (N_STATE,)"""
+    held_y: np.ndarray
+    """the sensors' held values"""
+    xhat: np.ndarray
+    """the observer's estimate"""
+    P_cov: np.ndarray
+    """the observer's covariance"""
+    cs: np.ndarray
+    """the controller's state"""
+    rows: np.ndarray
+    """the chunk's log rows (steps, the kept columns)"""
+    steps_done: int
+    """steps run: fewer than asked when the plant state stopped being finite"""
 
 
-@dataclass(eq=False)
-class ChunkJob:
-    """The next chunk of one run's compiled closed loop: ``len(env)`` steps from the run's
-    present state with its present configuration (target, ``C``, ``Q``, ``arrays``)."""
+@dataclass(frozen=True, eq=False)
+class ClosedChunk:
+    """``len(env)`` steps of the closed loop from a run's present state."""
 
-    sim: Simulation
-    env: np.ndarray  # (n, N_ENV) environment rows
-    noise: np.ndarray  # sensor noise rows
-    fresh: np.ndarray  # which sensors have a fresh sample at each step
-    out: np.ndarray | None = None
-    """Where the chunk's log rows go, (n, the log's width: ``Simulation.log_keep``): a slice
-    of its request's rows (C-contiguous); None, a new array. ``run`` (``loop.run_chunk_into``)
-    writes the rows straight there."""
+    k0: int
+    """the run's step index at the chunk's start"""
+    x: np.ndarray
+    held_y: np.ndarray
+    xhat: np.ndarray
+    P_cov: np.ndarray
+    cs: np.ndarray
+    target: np.ndarray
+    """the reference model's target, held over the chunk"""
+    env: np.ndarray
+    """(n, N_ENV) environment rows"""
+    noise: np.ndarray
+    """sensor noise rows"""
+    fresh: np.ndarray
+    """which sensors have a fresh sample at each step"""
+    arrays: Any
+    """the plant's ``PlantArrays``"""
+    C: Any
+    """the control system's ``ControlArrays``"""
+    Q: Any
+    """the signal checks' ``QualityState`` (advanced in place)"""
+    dt_s: float
+    keep: np.ndarray
+    """the log columns kept (all N_LOG of them, or a campaign's lean layout)"""
     spring: np.ndarray | None = None
     """(n, 3) the control model's wire spring in force at each step, [k_h, p_eq north, east]
-    (``site.chunk_rows_into``: it refreshes on whole seconds, as the wire's entries); None,
-    ``C``'s throughout. Row 0 is ``C``'s own as the simulation makes a job. A chunk that runs
-    past whole seconds while the winch or the crane moves has others further on: ``run`` runs
-    the chunk in pieces between the rows where it changes, each with ``C`` holding that
-    piece's spring (the chunks of a second the simulator would otherwise have cut, with the
-    same numbers)."""
+    (``site.chunk_rows_into`` refreshes it on whole seconds); None, ``C``'s throughout. Row 0
+    is ``C``'s own. A chunk that runs past whole seconds while the winch or the crane moves
+    has others further on: it runs in pieces between the rows where it changes, each with
+    ``C`` holding that piece's spring (the chunks of a second the simulator would otherwise
+    have cut, with the same numbers)."""
+    out: np.ndarray | None = None
+    """Where the rows go, (n, len(keep)), C-contiguous (a slice of a request's rows); None,
+    a new array."""
 
     @property
     def n(self) -> int:
         return int(self.env.shape[0])
 
     def pieces(self) -> list[int]:
-        """The rows where the spring changes, with 0 and n: the pieces ``run`` runs."""
+        """The rows where the spring changes, with 0 and n."""
         n = self.n
         if self.spring is None or n < 2:
             return [0, n]
@@ -64,82 +89,56 @@ class ChunkJob:
         changed = np.flatnonzero(step[:, 0] | step[:, 1] | step[:, 2]) + 1
         return [0, *changed.tolist(), n]
 
-    def run(self) -> ChunkResult:
-        """Run the chunk alone, now (its rows straight into ``out`` when given)."""
-        cuts = self.pieces()
-        if len(cuts) == 2:
-            return self._run_piece(0, self.n, self._config_at(0, self.sim.C), self.out)
-        s = self.sim
-        out = self.out if self.out is not None else np.empty((self.n, s.log_keep.shape[0]))
-        state = (s.x, s.held_y, s.xhat, s.P_cov, s.cs)
-        C = s.C
-        for a, b in itertools.pairwise(cuts):
-            C = self._config_at(a, C)
-            x, held_y, xhat, P_cov, cs, _, done = self._run_piece(a, b, C, out[a:b], state)
-            state = (x, held_y, xhat, P_cov, cs)
-            if done < b - a:
-                return x, held_y, xhat, P_cov, cs, out, a + done
-        return (*state, out, self.n)
-
-    def _config_at(self, a: int, C: Any) -> Any:
+    def config_at(self, a: int, C: Any) -> Any:
         """``C`` holding row a's spring (``C`` itself when it does already)."""
         if self.spring is None:
             return C
         k_h, p_n, p_e = self.spring[a]
-        if k_h != C.k_h or p_n != C.p_eq[0] or p_e != C.p_eq[1]:  # as ``_sync_site``
+        if k_h != C.k_h or p_n != C.p_eq[0] or p_e != C.p_eq[1]:
             return C._replace(k_h=float(k_h), p_eq=self.spring[a, 1:3].copy())
         return C
 
-    def _run_piece(
-        self,
-        a: int,
-        b: int,
-        C: Any,
-        out: np.ndarray | None,
-        state: tuple[np.ndarray, ...] | None = None,
-    ) -> ChunkResult:
-        """Rows a to b of the chunk, from ``state`` (x, held_y, xhat, P_cov, cs; None: the
-        run's own) with configuration ``C``; the rows straight into ``out`` when given."""
-        s = self.sim
-        x, held_y, xhat, P_cov, cs = (
-            state if state is not None else (s.x, s.held_y, s.xhat, s.P_cov, s.cs)
+
+def run_closed_chunk(chunk: ClosedChunk) -> ChunkResult:
+    """Run ``chunk`` now, in pieces where its wire spring changes (its rows straight into
+    ``chunk.out`` when given)."""
+    cuts = chunk.pieces()
+    if len(cuts) == 2:
+        return _run_piece(chunk, chunk.config_at(0, chunk.C))
+    out = chunk.out if chunk.out is not None else np.empty((chunk.n, chunk.keep.shape[0]))
+    C, part = chunk.C, chunk
+    for a, b in itertools.pairwise(cuts):
+        C = chunk.config_at(a, C)
+        piece = replace(
+            part,
+            k0=chunk.k0 + a,
+            env=chunk.env[a:b],
+            noise=chunk.noise[a:b],
+            fresh=chunk.fresh[a:b],
+            spring=None,
+            out=out[a:b],
         )
-        args = (
-            s.step_index + a,
-            x,
-            held_y,
-            xhat,
-            P_cov,
-            cs,
-            s.target,
-            self.env[a:b],
-            self.noise[a:b],
-            self.fresh[a:b],
-            s.arrays,
-            C,
-            s.Q,
-            s.dt_s,
-        )
-        if s.log_keep.shape[0] != N_LOG:  # a lean log: the whole rows made, the kept taken
-            x, held_y, xhat, P_cov, cs, rows, n_done = loop.run_chunk(*args)
-            kept = rows[:, s.log_keep]
-            if out is None:
-                return x, held_y, xhat, P_cov, cs, kept, n_done
-            out[...] = kept
-            return x, held_y, xhat, P_cov, cs, out, n_done
-        if out is None:
-            return loop.run_chunk(*args)
-        x, held_y, xhat, P_cov, cs, n_done = loop.run_chunk_into(*args, out)
-        return x, held_y, xhat, P_cov, cs, out, n_done
+        res = _run_piece(piece, C)
+        if res.steps_done < b - a:
+            return res._replace(rows=out, steps_done=a + res.steps_done)
+        part = replace(part, x=res.x, held_y=res.held_y, xhat=res.xhat, P_cov=res.P_cov, cs=res.cs)
+    return ChunkResult(part.x, part.held_y, part.xhat, part.P_cov, part.cs, out, chunk.n)
 
 
-def run_jobs(gen: Generator[ChunkJob, ChunkResult, T]) -> T:
-    """Drive a generator of chunk jobs alone: run each job as it comes. Returns the
-    generator's return value (exceptions it raises pass through)."""
-    try:
-        job = next(gen)
-        while True:
-            job = gen.send(job.run())
-    except StopIteration as stop:
-        result: Any = stop.value
-        return result
+def _run_piece(c: ClosedChunk, C: Any) -> ChunkResult:
+    """All of ``c``'s rows with configuration ``C``."""
+    args = (
+        c.k0, c.x, c.held_y, c.xhat, c.P_cov, c.cs, c.target, c.env, c.noise, c.fresh,
+        c.arrays, C, c.Q, c.dt_s,
+    )  # fmt: skip
+    if c.keep.shape[0] != N_LOG:  # a lean log: the whole rows made, the kept taken
+        x, held_y, xhat, P_cov, cs, rows, n_done = loop.run_chunk(*args)
+        kept = rows[:, c.keep]
+        if c.out is not None:
+            c.out[...] = kept
+            kept = c.out
+        return ChunkResult(x, held_y, xhat, P_cov, cs, kept, n_done)
+    if c.out is None:
+        return ChunkResult(*loop.run_chunk(*args))
+    x, held_y, xhat, P_cov, cs, n_done = loop.run_chunk_into(*args, c.out)
+    return ChunkResult(x, held_y, xhat, P_cov, cs, c.out, n_done)

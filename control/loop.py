@@ -874,7 +874,7 @@ def run_chunk_into(
 ):
     """``run_chunk`` writing its rows into the caller's ``log`` (len(env), N_LOG), zeroed here
     first, instead of into a new array: a request of several chunks hands each chunk its own
-    rows of the request's array (``Simulation.step_jobs``), which saves a copy of every row
+    rows of the request's array (``Simulation.step``), which saves a copy of every row
     (920 bytes a step) and the new array's zeroing. Returns (x, held_y, xhat, Pc, cs, n_done),
     the states new arrays (the caller's are left as they were)."""
     _zero_rows(log)

@@ -307,6 +307,24 @@ def free_rov_pid_into(
         i_next[k] = i4[k] - Ki[k] * e[k] * dt
 
 
+def retuned_tree_integral(
+    i_n: np.ndarray,
+    e: np.ndarray,
+    de: np.ndarray,
+    kp_old: np.ndarray,
+    kd_old: np.ndarray,
+    kp_new: np.ndarray,
+    kd_new: np.ndarray,
+) -> np.ndarray:
+    """The tree controller's integral (NED forces and yaw moment, (3,)) after its K_p and
+    K_d change from the old to the new, bumpless: the jump of the P and D terms at this
+    instant, for the last error ``e`` and its rate ``de``, is moved into the integral, so the
+    commanded wrench does not change."""
+    old_pd = -kp_old * e - kd_old * de
+    new_pd = -kp_new * e - kd_new * de
+    return i_n + (old_pd - new_pd)
+
+
 @njit(**JIT)
 def bumpless_tree_integral(
     tau_rov3: np.ndarray,

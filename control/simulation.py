@@ -27,14 +27,13 @@ non-finite.
 from __future__ import annotations
 
 import math
-from collections.abc import Generator
 from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from control import allocation as alloc
-from control import loop, model, quality, refkernel
+from control import loop, model, pid, quality, refkernel
 from control.columns import LAYOUT, N_LOG, Layout, LogRows
 from control.config import (
     ALLOCATIONS,
@@ -50,7 +49,7 @@ from control.config import (
     system_thruster_config,
 )
 from control.faults import THRUSTER_KINDS, Fault
-from control.jobs import ChunkJob, ChunkResult, run_jobs
+from control.jobs import ClosedChunk, run_closed_chunk
 from control.startup import StartupReport, check_mount_vector
 from sim import dynamic_wire as dwire
 from sim import environment as envmod
@@ -103,7 +102,7 @@ the crane tip), the point where the waves and the vessel's motion are evaluated,
 elastic wire's lumped mass. On the whole seconds of the step grid (steps 0, 1/dt, 2/dt...),
 and chunks end there (or, with only the wire's entries and the control model's spring to
 refresh, run past them and refresh those at the rows of whole seconds: ``LONG_CHUNK_S``,
-``control.jobs.ChunkJob.spring``), so a run gives the same numbers however
+``control.jobs.ClosedChunk.spring``), so a run gives the same numbers however
 it is cut into requests (the console's ticks, the command line's requests). A second
 is short beside how fast any of them changes: the current walks by millimetres a second, the
 winch pays out at most 2 m/s on a wire hundreds of metres long (its horizontal stiffness moves
@@ -614,12 +613,16 @@ class Simulation:
     def set_gains(self, gains: Gains) -> None:
         """New tree-controller gains, bumpless: the jump of the P and D terms at this instant
         is moved into the integral, so the commanded force does not change."""
-        e = self.cs[loop.CS_E : loop.CS_E + 3]
-        de = self.cs[loop.CS_DE : loop.CS_DE + 3]
-        old_pd = -self.C.Kp * e - self.C.Kd * de
         new_kp, new_kd = np.array(gains.kp), np.array(gains.kd)
-        new_pd = -new_kp * e - new_kd * de
-        self.cs[loop.CS_I : loop.CS_I + 3] += old_pd - new_pd
+        self.cs[loop.CS_I : loop.CS_I + 3] = pid.retuned_tree_integral(
+            self.cs[loop.CS_I : loop.CS_I + 3],
+            self.cs[loop.CS_E : loop.CS_E + 3],
+            self.cs[loop.CS_DE : loop.CS_DE + 3],
+            self.C.Kp,
+            self.C.Kd,
+            new_kp,
+            new_kd,
+        )
         self.gains = gains
         self.C = self.C._replace(Kp=new_kp, Ki=np.array(gains.ki), Kd=new_kd)
 
@@ -818,13 +821,6 @@ class Simulation:
 
     def step(self, n: int) -> LogRows:
         """Advance ``n`` plant steps (commands held) and return their log rows."""
-        return run_jobs(self.step_jobs(n))
-
-    def step_jobs(self, n: int) -> Generator[ChunkJob, ChunkResult, LogRows]:
-        """``step`` as a generator: it yields each compiled closed-loop chunk as a
-        ``ChunkJob`` for whoever drives it to run (``run_jobs``) and takes its ``ChunkResult``
-        back; the other chunks (open loop, QP allocation, MoorDyn) it runs itself. Returns
-        the rows of the ``n`` steps."""
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 0:
             raise ValueError(f"steps must be a whole number >= 0, got {n!r}")
         out: FloatArray | None = None
@@ -845,13 +841,13 @@ class Simulation:
                 k = self.refresh_steps * max(1, whole)
             if done == 0 and k == n:
                 # most requests: one chunk, whose own fresh rows are the answer
-                out = yield from self._chunk(k)
+                out = self._chunk(k)
             else:
                 # several chunks: each writes its rows straight into the request's (the
                 # kernels' ``*_into`` forms; no join of the parts)
                 if out is None:
                     out = np.empty((n, self.log_layout.width))
-                yield from self._chunk(k, out[done : done + k])
+                self._chunk(k, out[done : done + k])
             done += k
         if out is None:
             out = np.empty((0, self.log_layout.width))
@@ -862,7 +858,7 @@ class Simulation:
         """Nothing refreshed on a whole second needs Python for seconds to come: the
         quasi-static wire's entries and the control model's wire spring, which
         ``site.chunk_rows_into`` refreshes at the rows of whole seconds itself (the spring's
-        rows go with the chunk: ``ChunkJob.spring``), no sea (the waves and the vessel's
+        rows go with the chunk: ``ClosedChunk.spring``), no sea (the waves and the vessel's
         motion are evaluated where the tree was at the refresh), no elastic or MoorDyn wire,
         no faults. Then a chunk may run past whole seconds (``LONG_CHUNK_S``) and give the
         same numbers as chunks of a second. With the QP allocation (its steps in Python, on
@@ -1142,9 +1138,7 @@ class Simulation:
                 self.crane_tip_n = env[-1, plant.E_CT : plant.E_CT + 3].copy()
                 self.crane_target_n = self.crane_tip_n.copy()
 
-    def _chunk(
-        self, n: int, out: FloatArray | None = None
-    ) -> Generator[ChunkJob, ChunkResult, FloatArray]:
+    def _chunk(self, n: int, out: FloatArray | None = None) -> FloatArray:
         """Advance n steps in one chunk; returns their rows: ``out`` (n, the log's width)
         filled, when given, else a new array. The kernels make whole rows, whose kept
         columns are taken here (``keep_log_columns``)."""
@@ -1172,9 +1166,12 @@ class Simulation:
         elif self.C.alloc_kind == loop.ALLOC_EXTERNAL:
             x, held, self.xhat, self.P_cov, self.cs, log, ok = self._chunk_qp(env, noise)
         else:
-            x, held, self.xhat, self.P_cov, self.cs, log, ok = yield ChunkJob(
-                self, env, noise.noise, noise.fresh, out, self._spring_rows
-            )
+            chunk = ClosedChunk(
+                self.step_index, self.x, self.held_y, self.xhat, self.P_cov, self.cs,
+                self.target, env, noise.noise, noise.fresh, self.arrays, self.C, self.Q,
+                self.dt_s, self.log_keep, self._spring_rows, out,
+            )  # fmt: skip
+            x, held, self.xhat, self.P_cov, self.cs, log, ok = run_closed_chunk(chunk)
         if not whole and log.shape[1] == N_LOG:
             log = log[:, self.log_keep]
         if self.control_on:

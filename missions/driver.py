@@ -16,7 +16,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from control.columns import LOG_COLUMNS, Layout, LogRows
-from control.jobs import ChunkJob, ChunkResult, run_jobs
 from control.simulation import Simulation, SimulationDiverged
 from missions import schema, seaway
 from missions.legs import LEG_EXECUTORS, MissionContext
@@ -205,21 +204,14 @@ class MissionDriver:
         self.rows += sum(len(p) for p in parts)
 
     # ------------------------------------------------------------------ stepping
-    def advance(self, max_steps: int | None = None) -> LogRows:
+    def advance(self, max_steps: int | None = None, rows: bool = True) -> LogRows:
         """Run the mission for up to ``max_steps`` plant steps (None: the rest of the present
-        request). Returns the rows run. A divergence ends the mission (``diverged``,
-        ``divergence`` says why) and returns the rows before it."""
-        return run_jobs(self.advance_jobs(max_steps))
-
-    def advance_jobs(
-        self, max_steps: int | None = None, rows: bool = True
-    ) -> Generator[ChunkJob, ChunkResult, LogRows]:
-        """``advance`` as a generator of the simulation's compiled chunks
-        (``Simulation.step_jobs``).
-        ``rows=False`` returns no rows (``run_to_end_jobs``: the result has them).
+        request). Returns the rows run (``rows=False``: none; the result has them). A
+        divergence ends the mission (``diverged``, ``divergence`` says why) and returns the
+        rows before it.
 
         A request longer than ``Simulation.long_chunk_steps`` (5 s) runs in pieces of that
-        many steps, each a ``step_jobs`` of its own (the same chunks and numbers; a run does
+        many steps, each a ``Simulation.step`` of its own (the same chunks and numbers; a run does
         not depend on how its time is cut): the rows of a long request then never need one
         array for all of them (a leg's merged polls can ask for minutes, 920 bytes a step;
         fresh arrays that size cost the kernel's writes a page fault every 4 kB)."""
@@ -234,7 +226,7 @@ class MissionDriver:
             k = self._pending if budget is None else min(budget, self._pending)
             k = min(k, max(1, self.sim.long_chunk_steps))
             try:
-                piece = yield from self.sim.step_jobs(k)
+                piece = self.sim.step(k)
             except SimulationDiverged as err:
                 self._mark_diverged(str(err))
                 break
@@ -268,24 +260,17 @@ class MissionDriver:
     ) -> MissionResult:
         """Run the mission to its end, one request at a time, and score it: the one headless
         run loop (``runner.run_mission``, a campaign's ``run_one``, ``rov-console run`` and
-        ``campaign rerun``; a batch of runs goes through ``run_to_end_jobs``).
+        ``campaign rerun``).
 
         ``record(driver, rows)`` gets each request's rows as soon as they are run (a
         recorder: ``driver.events`` holds the events so far); ``progress(driver)`` is called
         after each request; ``log`` as ``result``'s."""
         while not self.done:
-            rows = run_jobs(self.advance_jobs(rows=record is not None))
+            rows = self.advance(rows=record is not None)
             if record is not None:
                 record(self, rows)
             if progress is not None:
                 progress(self)
-        return self.result(log)
-
-    def run_to_end_jobs(self, log: bool = True) -> Generator[ChunkJob, ChunkResult, MissionResult]:
-        """``run_to_end`` as a generator of compiled chunks (see ``advance_jobs``); ``log``
-        as ``result``'s."""
-        while not self.done:
-            yield from self.advance_jobs(rows=False)
         return self.result(log)
 
     def _fail_leg(self, err: Exception) -> None:

@@ -130,7 +130,7 @@ class MissionContext:
         first check that might not, in one request. The checks skipped are those the loop
         would have made and failed, and the deadline's too (a poll starts only before the
         deadline), so the run is the same step for step: the simulation's chunks do not
-        depend on how requests cut its time (``Simulation.step_jobs``). Fewer requests, and
+        depend on how requests cut its time (``Simulation.step``). Fewer requests, and
         longer chunks where the winch and crane are still, are what it saves."""
         sim = self.sim
         poll_steps = int(round(poll_s / sim.dt_s))

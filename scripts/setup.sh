@@ -13,9 +13,14 @@ fi
 stamp=".venv/.installed$(echo "$extras" | tr -d '[]')"
 want="$(sha256sum pyproject.toml | cut -c1-16)"
 if [[ ! -f "$stamp" || "$(cat "$stamp")" != "$want" ]]; then
-  echo "setup: installing rov-console$extras and its packages into .venv (about a minute, once)" >&2
-  .venv/bin/python -m pip install --quiet --disable-pip-version-check --upgrade pip >&2
-  .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".$extras" >&2
+  echo "setup: installing rov-console$extras and its packages into .venv" >&2
+  # uv (from PyPI, into the venv) resolves and installs in parallel: some 15 s where pip took
+  # a minute or more on a new machine; pip itself if uv cannot be had
+  if .venv/bin/python -m pip install --quiet --disable-pip-version-check uv >&2; then
+    .venv/bin/uv pip install --quiet --python .venv/bin/python -e ".$extras" >&2
+  else
+    .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".$extras" >&2
+  fi
   echo "$want" > "$stamp"
 fi
 # One OpenBLAS kernel for every process of this environment. OpenBLAS chooses its kernels by

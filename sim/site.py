@@ -208,7 +208,7 @@ def chunk_rows_into(
     weight as the control model has them; ``spring_W0`` <= 0 keeps it as given, for a run
     without control) and the equilibrium under the crane tip there, and row j of ``spring``
     (n, 3) gets the spring in force at step j. The control system takes it from there at
-    each step of a chunk that runs past whole seconds (``control.jobs.ChunkJob``), so such a
+    each step of a chunk that runs past whole seconds (``control.jobs.ClosedChunk``), so such a
     chunk may run while the winch and the crane move."""
     n = env.shape[0]
     sum_v = 0.0

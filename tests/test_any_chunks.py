@@ -144,8 +144,8 @@ def _moving(sim: Simulation) -> Simulation:
 def test_long_chunks_while_the_winch_and_crane_move() -> None:
     """With the winch and the crane moving, a request runs past whole seconds in chunks of up
     to ``LONG_CHUNK_S``, the control model's wire spring refreshed at each whole second inside
-    them (``ChunkJob.spring``: ``ChunkJob.run`` runs the pieces between the seconds with ``C``
-    holding each one's spring), and the rows are bit for bit those of the same run in odd
+    them (``ClosedChunk.spring``: ``run_closed_chunk`` runs the pieces between the seconds
+    with ``C`` holding each one's spring), and the rows are bit for bit those of the same run in odd
     pieces, whose chunks never pass a whole second. The spring really changed: the
     configuration after the request holds the last second's, not the first's."""
     # the observer and the feedforward use the spring (with the default perfect feedback and

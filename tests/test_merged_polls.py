@@ -222,7 +222,7 @@ def test_the_simulation_runs_a_merged_request_in_whole_second_chunks():
 
     def counted(self, n, out=None):
         sizes.append(n)
-        return (yield from chunk(self, n, out))
+        return chunk(self, n, out)
 
     simulation.Simulation._chunk = counted  # type: ignore[method-assign]
     try:
@@ -242,13 +242,13 @@ def test_a_long_request_runs_in_pieces_and_hands_back_all_its_rows():
     joined (``MissionContext.last_log``)."""
     d = _driver("full-docking-current-0.3", merge=True)
     asked: list[int] = []
-    step_jobs = simulation.Simulation.step_jobs
+    step = simulation.Simulation.step
 
     def counted(self, n):
         asked.append(n)
-        return (yield from step_jobs(self, n))
+        return step(self, n)
 
-    simulation.Simulation.step_jobs = counted  # type: ignore[method-assign]
+    simulation.Simulation.step = counted  # type: ignore[method-assign]
     try:
         first = d.advance()  # the 120-s hold: one request
         assert len(first) == 12_000 and max(asked) == d.sim.long_chunk_steps == 500
@@ -260,4 +260,4 @@ def test_a_long_request_runs_in_pieces_and_hands_back_all_its_rows():
         assert np.array_equal(d.ctx.last_log.data, second.data)
         assert np.array_equal(d.ctx.previous_row, previous_last)
     finally:
-        simulation.Simulation.step_jobs = step_jobs  # type: ignore[method-assign]
+        simulation.Simulation.step = step  # type: ignore[method-assign]

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from numba import njit
 
 from control import ekf, pid
@@ -105,3 +107,18 @@ def test_tree_pid_is_its_vector_form_to_the_bit(use_ff: bool) -> None:
         i_rov = A @ pid.ned_to_body(args[5], args[0][2])
         clipped_cases += int(np.any(np.abs(i_rov) > args[17]))
     assert clipped_cases > 10  # the anti-windup branch was taken
+
+
+@given(
+    st.lists(st.floats(-50.0, 50.0), min_size=12, max_size=12),
+    st.lists(st.floats(0.0, 1e5), min_size=12, max_size=12),
+)
+def test_a_retune_keeps_p_plus_i_plus_d(values, gains):
+    """``pid.retuned_tree_integral``: the integral takes the P and D terms' jump, so P + I + D
+    is the same before and after new gains (to the rounding of sums of terms up to 5e6)."""
+    i_n, e, de = (np.array(values[k : k + 3]) for k in (0, 3, 6))
+    kp_old, kd_old, kp_new, kd_new = (np.array(gains[k : k + 3]) for k in (0, 3, 6, 9))
+    i_new = pid.retuned_tree_integral(i_n, e, de, kp_old, kd_old, kp_new, kd_new)
+    before = -kp_old * e - kd_old * de + i_n
+    after = -kp_new * e - kd_new * de + i_new
+    np.testing.assert_allclose(after, before, rtol=0, atol=1e-8 * (1.0 + np.abs(before).max()))
