@@ -702,6 +702,7 @@ def outcome_row(result: MissionResult, simulated_s: float, wall_s: float) -> dic
         return max(vals) if vals else math.nan
 
     error = result.error or next((leg.error for leg in result.legs if leg.error), "")
+    ran = result.scored_rows != 0  # the scored legs never ran: no RMS figures, not zeros
     if not error and result.diverged:
         error = "diverged"
     return {
@@ -713,9 +714,9 @@ def outcome_row(result: MissionResult, simulated_s: float, wall_s: float) -> dic
         "heading_error_deg": worst("heading_error_deg"),
         "contact_speed_mps": worst("contact_speed_mps"),
         "rests_on": ",".join(str(getattr(x, "rests_on", "")) for x in lands),
-        "rms_north_m": result.rms_north_m,
-        "rms_east_m": result.rms_east_m,
-        "rms_heading_deg": result.rms_heading_deg,
+        "rms_north_m": result.rms_north_m if ran else math.nan,
+        "rms_east_m": result.rms_east_m if ran else math.nan,
+        "rms_heading_deg": result.rms_heading_deg if ran else math.nan,
         "max_thruster_utilisation": result.max_thruster_utilisation,
         "saturated_time_s": result.saturated_time_s,
         "settling_time_s": math.nan if result.settling_time_s is None else result.settling_time_s,
@@ -764,6 +765,17 @@ def run_one(c: Campaign, base: schema.Mission, index: int) -> dict:
     except Exception as err:  # any failure of one run is that run's outcome
         return failed_row(inputs, f"{type(err).__name__}: {err}")
     return {**input_row(inputs), **outcome_row(result, sim.t_s, time.perf_counter() - t0)}
+
+
+def quick_look_runs(c: Campaign, limit: int | None) -> list[int]:
+    """The runs a campaign limited to ``limit`` runs takes (None: all, in order): the first
+    repetition of every point, then the second, and so on, so a few runs cover the grid."""
+    if limit is None:
+        return list(range(c.runs))
+    if limit < 1:
+        raise CampaignError(f"limit must be at least 1, got {limit}")
+    order = sorted(range(c.runs), key=lambda i: divmod(i, c.runs_per_point)[::-1])
+    return sorted(order[:limit])
 
 
 def run_block(c: Campaign, base: schema.Mission, indices: Sequence[int]) -> list[dict]:

@@ -84,6 +84,9 @@ class MissionResult:
     log: LogRows | None = field(default=None, repr=False)
     error: str = ""
     """Why the mission stopped early: a leg that could not go on ('' when none)."""
+    scored_rows: int = -1
+    """Rows the RMS figures are taken over (0: the scored legs never ran, e.g. a landing
+    refused at once: the RMS figures are then no figures, not a perfect 0)."""
 
     @property
     def failed(self) -> bool:
@@ -242,6 +245,7 @@ def score(
             scored.append(part.data)
             scored_figures.append(fig)
     full = utilisation_figures(rows, dt_s)
+    n_scored = sum(len(part) for part in scored) if scored else len(rows)
     if not scored:
         rms_n, rms_e, rms_psi, _, _ = tracking_figures(rows, dt_s)
     elif len(scored) == 1:  # most missions: the scored leg's own figures (the same rows)
@@ -270,6 +274,7 @@ def score(
         warnings=warnings,
         quality_counters=counters_by_name(rows.quality_counters),
         log=rows,
+        scored_rows=n_scored,
     )
 
 

@@ -76,8 +76,19 @@ def run_command(
             f"runs per worker, at most {MAX_RUNS_PER_TASK})",
         ),
     ] = None,
+    limit: Annotated[
+        int | None,
+        typer.Option(
+            "--limit",
+            "--runs",
+            min=1,
+            help="run at most N runs for a quick look: the first run of every point, then the "
+            "second, ...; --resume later runs the rest",
+        ),
+    ] = None,
 ) -> None:
-    """Run every run of a campaign on Dask; rows go to Parquet as they finish; then report."""
+    """Run every run of a campaign (or ``--limit N`` of them) on Dask; rows go to Parquet as
+    they finish; then report."""
     from app.campaign import report, runner, store
     from missions import campaign as cm
 
@@ -90,6 +101,7 @@ def run_command(
     typer.echo(
         f"campaign {campaign.name}: {campaign.runs} runs ({campaign.points} points x "
         f"{campaign.runs_per_point}) of {base.name} -> {out}"
+        + ("" if limit is None else f"; this time at most {limit} of them (--limit)")
     )
     try:
         p = runner.run_campaign(
@@ -102,6 +114,7 @@ def run_command(
             resume=resume,
             show_progress=progress,
             per_task=runs_per_task,
+            limit=limit,
         )
     except cm.CampaignError as err:
         _fail(str(err))
@@ -171,7 +184,7 @@ def _print_report(rep, out: Path) -> None:
     for row in report.failure_table(rep.rows):
         causes.add_row(*row)
     console.print(causes)
-    env = Table(title="operability envelope: largest current with >= 95 % success")
+    env = Table(title="operability envelope: currents with >= 95 % success")
     for col in report.ENVELOPE_COLUMNS:
         env.add_column(col)
     for row in report.envelope_table(rep.envelope):

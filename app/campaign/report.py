@@ -1,6 +1,7 @@
 """What a campaign found: per-point table, success rate with its 95 % Wilson interval, and the
-operability envelope (the largest current in which at least 95 % of runs succeed, against
-depth and per parameter set), as tables (Markdown) and a PNG figure."""
+operability envelope (per current, the runs that succeeded with their Wilson interval; the
+largest current up to which at least 95 % of runs succeed only when success falls with
+current), against depth and per parameter set, as tables (Markdown) and a PNG figure."""
 
 from __future__ import annotations
 
@@ -141,9 +142,26 @@ def failure_cause(row: dict) -> str:
             return "landing: a funnel missed its post"
         return "landing: too fast"
     if row["error"]:
-        # the same failure with other numbers is the same cause
-        return "leg failed: " + re.sub(r"-?\d+(\.\d+)?", "#", str(row["error"]))[:70]
+        return "leg failed: " + cause_words(str(row["error"]))
     return "other"
+
+
+LEG_FAILED = re.compile(r"^leg # \([a-z_-]+\) failed$")
+"""The driver's prefix of a leg's failure, before the cause (numbers already '#')."""
+CAUSE_MAX = 100
+"""Longest cause text; a longer one is cut at a word, with an ellipsis."""
+
+
+def cause_words(error: str) -> str:
+    """An error's cause: its first clause (up to ': ', where the figures of the case follow),
+    numbers as '#' (the same failure with other numbers is the same cause), cut at a word."""
+    text = re.sub(r"-?\d+(\.\d+)?", "#", error.strip())
+    clauses = text.split(": ")
+    keep = 2 if LEG_FAILED.match(clauses[0]) else 1  # "leg # (dock) failed: <the cause>"
+    text = ": ".join(clauses[:keep]).strip()
+    if len(text) <= CAUSE_MAX:
+        return text
+    return text[:CAUSE_MAX].rsplit(" ", 1)[0] + " ..."
 
 
 FAILURE_COLUMNS = ("cause", "runs", "saturated s (mean)", "max utilisation (mean)", "miss m (mean)")
@@ -182,12 +200,47 @@ class EnvelopeRow:
     """Largest tested current with every current up to it at >= 95 % success (None: not even
     the lowest)."""
 
+    @property
+    def passing(self) -> tuple[float, ...]:
+        """The tested currents with at least ``THRESHOLD`` of their runs succeeding."""
+        return tuple(c for c, r in zip(self.currents, self.rates, strict=True) if _passes(r))
+
+    @property
+    def is_threshold(self) -> bool:
+        """Success falls with current here: the currents that pass are the lowest ones, so
+        one largest current describes them. False when a stronger current passes above a
+        weaker one that fails (the current can help: it pushes the tree towards the frame)."""
+        return self.passing == self.currents[: len(self.passing)]
+
     def verdict(self) -> str:
+        """What the data shows, in words: a largest current only when success falls with
+        current; otherwise which currents pass and which fail."""
+        if not self.is_threshold:
+            failing = [c for c in self.currents if c not in self.passing]
+            return (
+                f"no single limit: >= {100 * THRESHOLD:.0f} % at {_speeds(self.passing)}, below at "
+                f"{_speeds(failing)} (success does not fall with current here)"
+            )
         if self.largest_mps is None:
-            return f"< {self.currents[0]:g} m/s (below the lowest tested)"
+            lowest = self.currents[0]
+            return f"none: below {100 * THRESHOLD:.0f} % from the lowest tested ({lowest:g} m/s)"
         if self.largest_mps == self.currents[-1]:
-            return f">= {self.largest_mps:g} m/s (all tested currents)"
-        return f"{self.largest_mps:g} m/s"
+            return f"up to {self.largest_mps:g} m/s (all tested currents)"
+        return f"up to {self.largest_mps:g} m/s"
+
+
+def _passes(rate: Rate) -> bool:
+    return rate.runs > 0 and rate.rate >= THRESHOLD
+
+
+def _speeds(currents: list[float] | tuple[float, ...]) -> str:
+    return ", ".join(f"{c:g}" for c in currents) + " m/s"
+
+
+def rate_words(current: float, rate: Rate) -> str:
+    """'0.35: 1/2 (3-97 %)': successes of runs at a current, with the 95 % Wilson interval."""
+    lo, hi = rate.interval
+    return f"{current:g}: {rate.successes}/{rate.runs} ({100 * lo:.0f}-{100 * hi:.0f} %)"
 
 
 def envelope(rows: list[dict], threshold: float = THRESHOLD) -> list[EnvelopeRow]:
@@ -227,15 +280,18 @@ def envelope_table(env: list[EnvelopeRow]) -> list[list[str]]:
             e.params,
             f"{e.depth_m:g}",
             e.verdict(),
-            "; ".join(
-                f"{c:g}: {r.successes}/{r.runs}" for c, r in zip(e.currents, e.rates, strict=True)
-            ),
+            "; ".join(rate_words(c, r) for c, r in zip(e.currents, e.rates, strict=True)),
         ]
         for e in env
     ]
 
 
-ENVELOPE_COLUMNS = ("parameter set", "depth m", "largest current >= 95 %", "successes by current")
+ENVELOPE_COLUMNS = (
+    "parameter set",
+    "depth m",
+    "currents with >= 95 % success",
+    "successes by current m/s (95 % Wilson interval)",
+)
 
 
 def envelope_figure(env: list[EnvelopeRow], path: Path, title: str) -> Path:
@@ -271,9 +327,16 @@ def envelope_figure(env: list[EnvelopeRow], path: Path, title: str) -> Path:
     for params, es in by_params.items():
         es = sorted(es, key=lambda e: e.depth_m)
         depth = [e.depth_m for e in es]
-        largest = [np.nan if e.largest_mps is None else e.largest_mps for e in es]
+        largest = [
+            np.nan if e.largest_mps is None or not e.is_threshold else e.largest_mps for e in es
+        ]
         line = ax_env.plot(depth, largest, marker="o", label=params)[0]
         for e in es:
+            if not e.is_threshold:  # no single limit: mark the currents that pass
+                ax_env.plot(
+                    [e.depth_m] * len(e.passing), e.passing, marker="x", color=line.get_color()
+                )
+                continue
             if e.largest_mps is not None and e.largest_mps == e.currents[-1]:
                 ax_env.annotate(
                     "all tested",
@@ -292,7 +355,7 @@ def envelope_figure(env: list[EnvelopeRow], path: Path, title: str) -> Path:
         ax_env.set_ylim(0, 1.1 * max(all_c))
     ax_env.grid(alpha=0.3)
     ax_env.legend(fontsize=8)
-    ax_env.set_title("operability envelope (v: below the lowest tested)")
+    ax_env.set_title("operability envelope (v: below the lowest; x: passing, no single limit)")
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
@@ -336,7 +399,11 @@ def make_report(campaign: cm.Campaign, rows: list[dict], out: Path) -> Report:
         "",
         markdown_table(FAILURE_COLUMNS, failure_table(rows)),
         "",
-        "## Operability envelope (largest current with >= 95 % success)",
+        "## Operability envelope",
+        "",
+        "Per parameter set and depth, the currents at which at least 95 % of runs succeeded. "
+        "A single limit ('up to X m/s') is given only when success falls with current; the "
+        "intervals say how far few runs a current can be trusted.",
         "",
         markdown_table(ENVELOPE_COLUMNS, envelope_table(env)),
         "",

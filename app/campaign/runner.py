@@ -126,16 +126,21 @@ def run_campaign(
     batch: int = 50,
     flush_s: float = 5.0,
     per_task: int | None = None,
+    limit: int | None = None,
 ) -> CampaignProgress:
     """Run every run of the campaign that has no row in ``out`` yet; rows go to Parquet parts
     as they finish. ``on_row(row, client)`` is called after each row (tests use it).
-    ``per_task``: runs per task (None: ``runs_per_task`` for the cluster's workers)."""
+    ``per_task``: runs per task (None: ``runs_per_task`` for the cluster's workers).
+    ``limit``: run at most this many runs for a quick look (``cm.quick_look_runs``: one of each
+    point first); ``resume`` later runs the rest."""
     from distributed import as_completed
 
     store.create(out, text, base, resume)
     done = store.done_runs(out)
-    todo = [i for i in range(campaign.runs) if i not in done]
-    progress = CampaignProgress(total=campaign.runs, done=len(done))
+    chosen = cm.quick_look_runs(campaign, limit)
+    todo = [i for i in chosen if i not in done]
+    total = campaign.runs if limit is None else len(set(chosen) | done)
+    progress = CampaignProgress(total=total, done=len(done))
     if resume and done:
         prior = store.read_rows(out)
         progress.failed = sum(not r["success"] for r in prior)
