@@ -140,7 +140,7 @@ def main() -> None:
             res[what] = steps[what](clone(folder))
         finally:
             shutil.rmtree(folder, ignore_errors=True)
-        figures = {k: round(v, 1) for k, v in res[what].items() if isinstance(v, float)}
+        figures = ", ".join(f"{k} {v:.1f}" for k, v in res[what].items() if isinstance(v, float))
         print(f"{what}: {figures}", flush=True)
     if args.json:
         print(json.dumps(res, indent=1))
