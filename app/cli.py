@@ -432,9 +432,13 @@ def scores(
         table.add_column(col, justify="right")
 
     for r in rows:
-        verdict = "PASS" if r.passed else "FAIL"
+        verdict = "PASS" if r.passed and not r.criteria_failed else "FAIL"
         if r.landed is not None:
             verdict += ", landed" if r.landed else ", not landed"
+        if r.faults:
+            verdict += ", faulted"
+        if r.criteria_failed:
+            verdict += " *"
         table.add_row(
             str(r.id),
             r.utc.replace("T", " ").rstrip("Z"),
@@ -450,7 +454,11 @@ def scores(
             f"{r.saturated_s:.1f}",
             r.flown_by,
         )
-    Console(width=170).print(table)
+    console = Console(width=170)
+    console.print(table)
+    for r in rows:
+        if r.criteria_failed:
+            console.print(f"* run {r.id} failed: {r.criteria_failed}", markup=False)
 
 
 def _num(v: float | None, fmt: str) -> str:

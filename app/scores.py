@@ -42,12 +42,14 @@ CREATE TABLE IF NOT EXISTS runs (
     thrust_newton_s REAL,
     faults TEXT NOT NULL DEFAULT '',
     manual_share REAL NOT NULL DEFAULT 0,
-    flown_by TEXT NOT NULL DEFAULT 'autopilot'
+    flown_by TEXT NOT NULL DEFAULT 'autopilot',
+    criteria_failed TEXT NOT NULL DEFAULT ''
 )
 """
 ADDED_COLUMNS = {
     "manual_share": "REAL NOT NULL DEFAULT 0",
     "flown_by": "TEXT NOT NULL DEFAULT 'autopilot'",
+    "criteria_failed": "TEXT NOT NULL DEFAULT ''",
 }
 """Columns added since the first version: a database written before gets them on opening
 (its runs count as flown by the autopilot: there was no manual mode then)."""
@@ -80,6 +82,7 @@ COLUMNS = (
     "faults",
     "manual_share",
     "flown_by",
+    "criteria_failed",
 )
 NAME_MAX = 60
 
@@ -111,6 +114,17 @@ class Score:
     """Share of the run's time the pilot flew by hand (the log's mode column = 2)."""
     flown_by: str = "autopilot"
     """autopilot, hand or mixed (``flown_by``)."""
+    criteria_failed: str = ""
+    """The run's criteria (``CRITERIA``) it failed, in words ('; '-separated; '' none)."""
+
+    @property
+    def verdict(self) -> str:
+        """'pass', 'fail', with ', faulted' when instructor faults acted and the criteria
+        that failed: a landing after a 9 m excursion does not pass unremarked."""
+        words = "pass" if self.passed and not self.criteria_failed else "fail"
+        if self.faults:
+            words += ", faulted"
+        return words + (f": {self.criteria_failed}" if self.criteria_failed else "")
 
 
 def trainee_name(text: str) -> str:
@@ -151,6 +165,57 @@ def faults_of(result: MissionResult) -> str:
         if e.get("kind") == "fault" and str(e.get("text", "")).startswith("fault: ")
     ]
     return "; ".join(texts)
+
+
+@dataclass(frozen=True)
+class Criterion:
+    """A limit a good run keeps, besides the mission's own verdict."""
+
+    name: str
+    limit: float
+    unit: str
+
+
+SATURATION_LIMIT = Criterion("time saturated", 30.0, "s")
+"""A thruster at its limit this long means the ROV was not in control (thesis 4.2.2)."""
+HEADING_LIMIT = Criterion("largest heading error", 20.0, "deg")
+"""Tree heading off its reference by more than this: an uncommanded turn."""
+DOCK_EXCURSION_LIMIT = Criterion("largest excursion from the reference in a dock leg", 1.5, "m")
+"""Tree this far (horizontally) from where the dock leg wants it: not over the frame."""
+CRITERIA = (SATURATION_LIMIT, HEADING_LIMIT, DOCK_EXCURSION_LIMIT)
+
+
+def criteria_values(result: MissionResult) -> dict[str, float]:
+    """Each criterion's value for a run (NaN when the log does not tell)."""
+    out = dict.fromkeys((c.name for c in CRITERIA), math.nan)
+    out[SATURATION_LIMIT.name] = float(result.saturated_time_s)
+    rows = result.log
+    if rows is None or len(rows) == 0:
+        return out
+    tree, ref = rows["tree_eta_n"], rows["eta_ref_n"]
+    heading = np.angle(np.exp(1j * (tree[:, 5] - ref[:, 2])))
+    out[HEADING_LIMIT.name] = float(np.degrees(np.max(np.abs(heading))))
+    off = np.hypot(tree[:, 0] - ref[:, 0], tree[:, 1] - ref[:, 1])
+    t = rows.t_s - float(rows.t_s[0])
+    docks = [leg for leg in result.legs if leg.type == "dock"]
+    if docks:
+        in_dock = np.zeros(len(rows), dtype=bool)
+        for leg in docks:
+            in_dock |= (t >= leg.start_s - 1e-9) & (t < leg.start_s + leg.duration_s - 1e-9)
+        if np.any(in_dock):
+            out[DOCK_EXCURSION_LIMIT.name] = float(np.max(off[in_dock]))
+    return out
+
+
+def criteria_failed(result: MissionResult) -> str:
+    """The criteria a run failed, each with its value and limit ('' when none)."""
+    values = criteria_values(result)
+    failed = [
+        f"{c.name} {values[c.name]:.1f} {c.unit} > {c.limit:g} {c.unit}"
+        for c in CRITERIA
+        if math.isfinite(values[c.name]) and values[c.name] > c.limit
+    ]
+    return "; ".join(failed)
 
 
 def flown_by(share: float) -> str:
@@ -198,6 +263,7 @@ def record(
         "faults": faults or faults_of(result),
         "manual_share": share,
         "flown_by": flown_by(share),
+        "criteria_failed": criteria_failed(result),
     }
     db.parent.mkdir(parents=True, exist_ok=True)
     with closing(sqlite3.connect(db)) as con, con:
