@@ -402,7 +402,7 @@ _NOALLOC: dict[str, Any] = {"cache": True, "_nrt": False}
 allocate (see ``sim.gnc.JIT_NOALLOC``)."""
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _dot(a: FloatArray, b: FloatArray) -> float:
     """a @ b for short vectors (a plain loop compiles faster than a BLAS call)."""
     total = 0.0
@@ -411,7 +411,7 @@ def _dot(a: FloatArray, b: FloatArray) -> float:
     return total
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _step_to_limit(
     f: FloatArray, delta: FloatArray, f_lo: FloatArray, f_hi: FloatArray
 ) -> tuple[float, int]:
@@ -432,7 +432,7 @@ def _step_to_limit(
     return alpha, blocking
 
 
-@numba.njit(**_NOALLOC)
+@numba.njit(cache=True, inline="always")
 def _serve_stage_into(
     k: int,
     A: FloatArray,
@@ -461,7 +461,7 @@ def _serve_stage_into(
         mask |= 1 << blocking
 
 
-@numba.njit(**_NOALLOC)
+@numba.njit(cache=True, inline="always")
 def _serve_remaining_into(
     f_new: FloatArray,
     k: int,
@@ -496,7 +496,7 @@ def _serve_remaining_into(
     return inside
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _priority_forces(
     A: FloatArray,
     D: FloatArray,
@@ -513,7 +513,7 @@ def _priority_forces(
     return out
 
 
-@numba.njit(**_NOALLOC)
+@numba.njit(cache=True, inline="always")
 def _priority_forces_into(
     out: FloatArray,
     A: FloatArray,

@@ -26,7 +26,7 @@ N_X = 9
 NORTH, EAST, PSI, SURGE, SWAY, YAW_RATE, B_N, B_E, B_PSI = range(9)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def coriolis3(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
     """C(nu) nu of a 3-DOF (surge, sway, yaw) mass matrix, the skew-symmetric form of m2c."""
     ax = M[0, 0] * nu[0] + M[0, 1] * nu[1] + M[0, 2] * nu[2]
@@ -56,7 +56,7 @@ def model_rhs(
     return xdot
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _model_rhs_into(
     xdot: np.ndarray,
     x: np.ndarray,
@@ -76,7 +76,7 @@ def _model_rhs_into(
     )
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _model_rhs_cs_into(
     xdot: np.ndarray,
     x: np.ndarray,
@@ -144,7 +144,7 @@ def predict(
     return x_new, P_new
 
 
-@njit(**JIT_NOALLOC)
+@njit(inline="always", **JIT_NOALLOC)
 def jacobian_phi_into(
     phi: np.ndarray,
     x: np.ndarray,
@@ -218,7 +218,7 @@ def jacobian_phi_into(
         phi[i, i] += 1.0
 
 
-@njit(**JIT_NOALLOC)
+@njit(inline="always", **JIT_NOALLOC)
 def phi_times_into(out: np.ndarray, phi: np.ndarray, A: np.ndarray, transposed: bool) -> None:
     """out = phi @ A (``transposed``: phi @ A.T) for phi of ``jacobian_phi_into``, leaving
     out the products with its known zeros (37 of 81 entries are not: rows 0-1 reach the

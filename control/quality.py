@@ -64,7 +64,7 @@ def quality_config(noise_std: NDArray[np.float64], dt: float) -> QualityConfig:
     return QualityConfig(lo, hi, wild, max_rate, frozen, variance)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def variance(h: np.ndarray) -> float:
     """``h.var()`` of a 1-D array, numba's operations in numba's order (the mean a sum from
     0.0 in index order over the length, then the squared deviations' sum the same way over
@@ -81,7 +81,7 @@ def variance(h: np.ndarray) -> float:
     return ssd / n
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def check_sample(
     k: int,
     y: np.ndarray,
