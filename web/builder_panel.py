@@ -25,6 +25,7 @@ from app.console import md_code, md_text
 from missions import schema
 from web import geometry as geo
 from web import mission_builder as mb
+from web.widgets import Bounds, wrap_deg, wrapped_text
 
 if TYPE_CHECKING:
     import viser
@@ -119,36 +120,41 @@ class BuilderPanel:
         self.name_text = gui.add_text(labels["name"], "built mission", hint="1 to 80 characters")
         sets = mb.parameter_sets()
         self.params = gui.add_dropdown(labels["setup.params"], sets, initial_value=sets[0])
-        self.depth = gui.add_number(
-            labels["setup.depth_m"], 100.0, min=5.0, max=4000.0, step=0.1, hint="tree centre"
-        )
-        self.current_speed = gui.add_number(
-            labels["setup.current.speed_mps"], 0.0, min=0.0, max=3.0, step=0.01
-        )
+        # no min or max on the inputs: viser clamps to them silently; the ranges are checked
+        # here, with the field and the range on the builder's message line
+        self.depth = gui.add_number(labels["setup.depth_m"], 100.0, step=0.1, hint="tree centre")
+        self.current_speed = gui.add_number(labels["setup.current.speed_mps"], 0.0, step=0.01)
         self.current_dir = gui.add_number(
             labels["setup.current.direction_deg"],
             0.0,
-            min=-360.0,
-            max=360.0,
             step=1.0,
-            hint="direction the current flows towards",
+            hint="direction the current flows towards, 0 to 360",
         )
         self.frame_on = gui.add_checkbox(
             labels["setup.docking_frame"], False, hint="a frame to land on (dock and lift legs)"
         )
-        self.frame_n = gui.add_number("Frame north [m]", 0.0, min=-1000.0, max=1000.0, step=0.1)
-        self.frame_e = gui.add_number("Frame east [m]", 0.0, min=-1000.0, max=1000.0, step=0.1)
+        self.frame_n = gui.add_number("Frame north [m]", 0.0, step=0.1)
+        self.frame_e = gui.add_number("Frame east [m]", 0.0, step=0.1)
         self.frame_psi = gui.add_number(
-            labels["setup.docking_frame.heading_deg"], 0.0, min=-360.0, max=360.0, step=1.0
+            labels["setup.docking_frame.heading_deg"], 0.0, step=1.0, hint="0 to 360"
         )
         self.landing = gui.add_number(
             labels["setup.docking_frame.landing_depth_m"],
             110.0,
-            min=5.0,
-            max=4000.0,
             step=0.1,
             hint="depth of the seabed the frame stands on; deeper than the tree",
         )
+        self._bounds = {
+            id(handle): Bounds(str(handle.label), lo, hi, unit)
+            for handle, lo, hi, unit in (
+                (self.depth, 5.0, 4000.0, "m"),
+                (self.current_speed, 0.0, 3.0, "m/s"),
+                (self.frame_n, -1000.0, 1000.0, "m"),
+                (self.frame_e, -1000.0, 1000.0, "m"),
+                (self.landing, 5.0, 4000.0, "m"),
+            )
+        }
+        self._angles = {id(self.current_dir), id(self.frame_psi)}
         for handle in (
             self.depth,
             self.current_speed,
@@ -161,17 +167,27 @@ class BuilderPanel:
         ):
             handle.on_update(self._on_setup_edit)
 
+    def _number(self, handle: Any) -> float:
+        """A set-up input's value: checked against its range (ValueError naming the field and
+        the range) or, for an angle, wrapped into [0, 360)."""
+        value = float(handle.value)
+        if id(handle) in self._angles:
+            if not np.isfinite(value):
+                raise ValueError(f"{handle.label}: {value:g} is not a finite number")
+            return wrap_deg(value)
+        return self._bounds[id(handle)].check(value)
+
     def _setup_values(self) -> mb.SetupValues:
         return mb.SetupValues(
             params=str(self.params.value),
-            depth_m=float(self.depth.value),
-            current_speed_mps=float(self.current_speed.value),
-            current_direction_deg=float(self.current_dir.value),
+            depth_m=self._number(self.depth),
+            current_speed_mps=self._number(self.current_speed),
+            current_direction_deg=self._number(self.current_dir),
             frame=bool(self.frame_on.value),
-            frame_north_m=float(self.frame_n.value),
-            frame_east_m=float(self.frame_e.value),
-            frame_heading_deg=float(self.frame_psi.value),
-            landing_depth_m=float(self.landing.value),
+            frame_north_m=self._number(self.frame_n),
+            frame_east_m=self._number(self.frame_e),
+            frame_heading_deg=self._number(self.frame_psi),
+            landing_depth_m=self._number(self.landing),
         )
 
     def _load_setup(self) -> None:
@@ -186,11 +202,11 @@ class BuilderPanel:
         _set(self.params, v.params)
         _set(self.depth, v.depth_m)
         _set(self.current_speed, v.current_speed_mps)
-        _set(self.current_dir, v.current_direction_deg)
+        _set(self.current_dir, wrap_deg(v.current_direction_deg))
         _set(self.frame_on, v.frame)
         _set(self.frame_n, v.frame_north_m)
         _set(self.frame_e, v.frame_east_m)
-        _set(self.frame_psi, v.frame_heading_deg)
+        _set(self.frame_psi, wrap_deg(v.frame_heading_deg))
         _set(self.landing, v.landing_depth_m)
 
     def _on_setup_pick(self, event: Any) -> None:
@@ -201,8 +217,23 @@ class BuilderPanel:
         self._draw_preview()
 
     def _on_setup_edit(self, event: Any) -> None:
-        if event.client is not None:
-            self._draw_preview()
+        """A typed set-up value: an angle outside [0, 360) is wrapped (and the message line
+        says so), a value out of its range is refused on the message line."""
+        if event.client is None:
+            return
+        handle = event.target
+        if id(handle) in self._angles:
+            value = float(handle.value)
+            if np.isfinite(value) and wrap_deg(value) != value:
+                _set(handle, wrap_deg(value))
+                self.builder_md.content = md_text(wrapped_text(str(handle.label), value))
+        elif id(handle) in self._bounds:
+            try:
+                self._number(handle)
+            except ValueError as err:
+                self._error(str(err))
+                return
+        self._draw_preview()
 
     def _setup(self) -> schema.Setup:
         """The edited set-up; KeyError or MissionError (one line) when it cannot be made."""
@@ -242,11 +273,24 @@ class BuilderPanel:
             )
         if spec.kind in ("number", "integer") and not spec.optional:
             step = 1.0 if spec.kind == "integer" else _step_for(spec)
-            return gui.add_number(spec.label, value, min=spec.lo, max=spec.hi, step=step, hint=hint)
+            # no min or max: viser would clamp to them silently; parse_input refuses a value
+            # out of range with the field and its range
+            handle = gui.add_number(spec.label, value, step=step, hint=hint)
+            handle.on_update(lambda event: self._on_leg_number(spec, event))
+            return handle
         if spec.kind == "json" and value is None and spec.name in ("kp", "ki", "kd"):
             snap = self.console.loop.snapshot
             value = list(getattr(snap.gains or snap.scene.preset_gains, spec.name))
         return gui.add_text(spec.label, mb.text_of(spec, value), hint=hint)
+
+    def _on_leg_number(self, spec: mb.FieldSpec, event: Any) -> None:
+        """A typed leg number out of its range is refused on the message line at once."""
+        if event.client is None:
+            return
+        try:
+            mb.parse_input(spec, event.target.value)
+        except ValueError as err:
+            self._error(str(err))
 
     def _on_add_leg(self, event: Any) -> None:
         try:

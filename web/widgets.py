@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import viser
@@ -21,6 +22,49 @@ EDIT_HOLD_S = 30.0
 """An input the operator has edited keeps the edit this long before it follows the live value
 again (unless its command is sent first)."""
 LOCKED_TEXT = "locked: enter the console token under Access"
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """The range a number input of the page allows.
+
+    viser's number inputs clamp what is typed to their min and max without a word (5 m/s
+    became 3), so the page's inputs are made without min and max: the typed value reaches the
+    server and is refused here, naming the field and the range."""
+
+    label: str
+    lo: float
+    hi: float
+    unit: str = ""
+
+    @property
+    def allowed(self) -> str:
+        unit = f" {self.unit}" if self.unit else ""
+        return f"{self.lo:g} to {self.hi:g}{unit}"
+
+    def check(self, value: float) -> float:
+        """``value`` when it is finite and within [lo, hi]; ValueError naming the field, the
+        value and the allowed range otherwise."""
+        if not (math.isfinite(value) and self.lo <= value <= self.hi):
+            unit = f" {self.unit}" if self.unit else ""
+            raise ValueError(
+                f"{self.label}: {value:g}{unit} is out of range; allowed {self.allowed}"
+            )
+        return value
+
+
+def wrap_deg(angle_deg: float) -> float:
+    """``angle_deg`` wrapped into [0, 360): 400 -> 40, -90 -> 270, 360 -> 0."""
+    wrapped = angle_deg % 360.0
+    return 0.0 if wrapped >= 360.0 else wrapped  # -1e-15 % 360 rounds to 360.0
+
+
+def wrapped_text(label: str, typed_deg: float) -> str:
+    """What the page says when it wraps a typed angle."""
+    return (
+        f"{label}: {typed_deg:g} deg taken as {wrap_deg(typed_deg):g} deg "
+        "(angles are wrapped into 0 to 360)"
+    )
 
 
 def masked_input_style(handle: Any) -> str:
@@ -58,6 +102,7 @@ class Operator:
         self._edited: dict[str, float] = {}
         self._inputs: dict[str, list[Any]] = {}  # the live inputs of each group
         self._put_in: dict[int, Any] = {}  # what this browser last put in each live input
+        self._bounds: dict[int, Bounds] = {}  # the range of each bounded number input
 
     def add_access(self) -> None:
         """The Access folder: the operator's name and the console token."""
@@ -137,6 +182,56 @@ class Operator:
         self._edited.pop(group, None)
         for handle in self._inputs.get(group, ()):
             self._put_in[id(handle)] = handle.value
+
+    # ------------------------------------------------------------------ numbers
+    def bounded(self, handle: Any, lo: float, hi: float, unit: str = "") -> Any:
+        """A number input (made without min and max, which viser clamps to silently) whose
+        typed value must lie in [lo, hi]: a value outside is refused on the message line at
+        once, and again by ``number`` when a command reads it."""
+        bounds = Bounds(str(handle.label), lo, hi, unit)
+        self._bounds[id(handle)] = bounds
+
+        def typed(event: Any) -> None:
+            if event.client is None:
+                return
+            try:
+                bounds.check(float(handle.value))
+            except ValueError as err:
+                self.say(f"**refused**: {md_text(str(err))}")
+
+        handle.on_update(typed)
+        return handle
+
+    def angle(self, handle: Any) -> Any:
+        """A number input of an angle in degrees: a typed value outside [0, 360) is wrapped
+        into it in the input, and the message line says so."""
+
+        def typed(event: Any) -> None:
+            if event.client is None:
+                return
+            value = float(handle.value)
+            if math.isfinite(value) and wrap_deg(value) != value:
+                handle.value = wrap_deg(value)
+                self.say(md_text(wrapped_text(str(handle.label), value)))
+
+        handle.on_update(typed)
+        return handle
+
+    def number(self, handle: Any) -> float:
+        """The value of a number input for a command: checked against its ``bounded`` range
+        (ValueError naming the field and the range), or wrapped into [0, 360) for an
+        ``angle``."""
+        value = float(handle.value)
+        bounds = self._bounds.get(id(handle))
+        if bounds is not None:
+            return bounds.check(value)
+        if not math.isfinite(value):
+            raise ValueError(f"{handle.label}: {value:g} is not a finite number")
+        return value
+
+    def degrees(self, handle: Any) -> float:
+        """The value of an ``angle`` input, wrapped into [0, 360)."""
+        return wrap_deg(self.number(handle))
 
     # ------------------------------------------------------------------ commands
     def run(self, make: Callable[[], Any]) -> Any:

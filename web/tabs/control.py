@@ -7,7 +7,7 @@ import math
 
 from app.console import MODES, Console, Gains, Snapshot
 from app.console import commands as cmd
-from web.widgets import Operator
+from web.widgets import Operator, wrap_deg
 
 TERMS = ("kp", "ki", "kd")
 
@@ -65,40 +65,51 @@ class ControlTab:
         with gui.add_folder("Current"):
             self.current_speed = op.live_input(
                 "current",
-                gui.add_number(
-                    "Speed m/s", round(snap.current_speed_mps, 3), min=0.0, max=3.0, step=0.01
+                op.bounded(
+                    gui.add_number("Speed m/s", round(snap.current_speed_mps, 3), step=0.01),
+                    0.0,
+                    cmd.CURRENT_MAX_MPS,
+                    "m/s",
                 ),
             )
             self.current_dir = op.live_input(
                 "current",
-                gui.add_number(
-                    "Towards deg",
-                    round(math.degrees(snap.current_direction_rad), 1),
-                    min=-360.0,
-                    max=360.0,
-                    step=1.0,
+                op.angle(
+                    gui.add_number(
+                        "Towards deg",
+                        round(wrap_deg(math.degrees(snap.current_direction_rad)), 1),
+                        step=1.0,
+                    )
                 ),
             )
             op.action(
                 op.guard(gui.add_button("Set current")),
-                lambda: cmd.SetCurrent(
-                    float(self.current_speed.value), float(self.current_dir.value)
-                ),
+                lambda: cmd.SetCurrent(op.number(self.current_speed), op.degrees(self.current_dir)),
                 done="current",
             )
         with gui.add_folder("Vessel (crane tip)"):
             ct = snap.crane_tip_n
             self.vessel_n = op.live_input(
                 "vessel",
-                gui.add_number("North m", round(ct[0], 2), min=-1000.0, max=1000.0, step=0.1),
+                op.bounded(
+                    gui.add_number("North m", round(ct[0], 2), step=0.1),
+                    -cmd.VESSEL_RANGE_M,
+                    cmd.VESSEL_RANGE_M,
+                    "m",
+                ),
             )
             self.vessel_e = op.live_input(
                 "vessel",
-                gui.add_number("East m", round(ct[1], 2), min=-1000.0, max=1000.0, step=0.1),
+                op.bounded(
+                    gui.add_number("East m", round(ct[1], 2), step=0.1),
+                    -cmd.VESSEL_RANGE_M,
+                    cmd.VESSEL_RANGE_M,
+                    "m",
+                ),
             )
             op.action(
                 op.guard(gui.add_button("Move vessel")),
-                lambda: cmd.MoveVessel(float(self.vessel_n.value), float(self.vessel_e.value), 0.5),
+                lambda: cmd.MoveVessel(op.number(self.vessel_n), op.number(self.vessel_e), 0.5),
                 done="vessel",
             )
 
@@ -159,7 +170,7 @@ class ControlTab:
             "current",
             (
                 (self.current_speed, round(live.current_speed_mps, 3)),
-                (self.current_dir, round(math.degrees(live.current_direction_rad), 1)),
+                (self.current_dir, round(wrap_deg(math.degrees(live.current_direction_rad)), 1)),
             ),
         )
         op.follow(

@@ -89,7 +89,7 @@ class InstructorTab:
         self.kind_md = gui.add_markdown(kind_help(kinds[0]))
         self.kind.on_update(lambda _: self._show_kind())
         self.value = self._guard(gui.add_number("Fault value", 0.0, step=0.01))
-        self.thruster = self._guard(gui.add_number("Thruster number", 1, step=1, min=1))
+        self.thruster = self._guard(gui.add_number("Thruster number", 1, step=1))
         self.start = self._guard(gui.add_dropdown("Fault start", STARTS, initial_value="now"))
         self.start_at = self._guard(gui.add_number("Start at t s", 0.0, step=1.0))
         self.duration = self._guard(gui.add_number("Fault duration s", 60.0, step=1.0))

@@ -3,12 +3,19 @@ tree holds when no mission runs."""
 
 from __future__ import annotations
 
-import math
+from typing import Any
 
 from app.console import Console, Snapshot, station_keeping_mission
 from app.console import commands as cmd
+from app.console.pilot import compass_heading_deg
 from web.tabs.mission import start_mission
 from web.widgets import Operator
+
+
+def bounded_target(op: Operator, handle: Any) -> Any:
+    """A target input within the range ``SetTarget`` allows."""
+    return op.bounded(handle, -cmd.TARGET_RANGE_M, cmd.TARGET_RANGE_M, "m")
+
 
 SPEEDS = ("0.25", "0.5", "1", "2", "5", "10", "20", "50")
 
@@ -29,21 +36,25 @@ class RunTab:
         goal = snap.target or snap.eta_ref
         with gui.add_folder("Target (no mission)"):
             self.target_n = op.live_input(
-                "target", gui.add_number("Target north m", round(goal[0], 2), step=0.1)
+                "target",
+                bounded_target(op, gui.add_number("Target north m", round(goal[0], 2), step=0.1)),
             )
             self.target_e = op.live_input(
-                "target", gui.add_number("Target east m", round(goal[1], 2), step=0.1)
+                "target",
+                bounded_target(op, gui.add_number("Target east m", round(goal[1], 2), step=0.1)),
             )
             self.target_psi = op.live_input(
                 "target",
-                gui.add_number("Target heading deg", round(math.degrees(goal[2]), 1), step=1.0),
+                op.angle(
+                    gui.add_number("Target heading deg", compass_heading_deg(goal[2]), step=1.0)
+                ),
             )
             op.action(
                 op.guard(gui.add_button("Go to target")),
                 lambda: cmd.SetTarget(
-                    float(self.target_n.value),
-                    float(self.target_e.value),
-                    float(self.target_psi.value),
+                    op.number(self.target_n),
+                    op.number(self.target_e),
+                    op.degrees(self.target_psi),
                 ),
                 done="target",
             )
@@ -62,7 +73,7 @@ class RunTab:
             (
                 (self.target_n, round(goal[0], 2)),
                 (self.target_e, round(goal[1], 2)),
-                (self.target_psi, round(math.degrees(goal[2]), 1)),
+                (self.target_psi, compass_heading_deg(goal[2])),
             ),
         )
         speed = f"{live.speed:g}"

@@ -1,0 +1,167 @@
+"""Issue 47 item 24: the page's number inputs refuse an out-of-range value with the field and
+its range (viser's inputs clamped 5 m/s to 3, depth -10 to 5 and heading 400 to 360 without a
+word), and wrap a typed angle into [0, 360) and say so.
+
+The panel parts are driven without a browser: a viser server's GUI stands in for one
+browser's, a value is set as viser sets a typed one (the value, then the callbacks with the
+client), and the loop's ``call_blocking`` is replaced by a list of the commands sent.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+import viser
+from hypothesis import given
+from hypothesis import strategies as st
+from viser._gui_handles import GuiEvent
+
+from app.console import Console, ConsoleSettings
+from app.console import commands as cmd
+from web.builder_panel import BuilderPanel
+from web.tabs.control import ControlTab
+from web.tabs.run import RunTab
+from web.widgets import Bounds, Operator, wrap_deg
+
+
+@given(st.floats(-1e6, 1e6, allow_nan=False))
+def test_wrap_deg_lands_in_0_to_360_on_the_same_direction(angle: float) -> None:
+    w = wrap_deg(angle)
+    assert 0.0 <= w < 360.0
+    assert math.cos(math.radians(w - angle)) == pytest.approx(1.0, abs=1e-9)
+
+
+def test_bounds_refuse_with_the_field_and_the_range() -> None:
+    b = Bounds("Speed m/s", 0.0, 3.0, "m/s")
+    assert b.check(3.0) == 3.0
+    with pytest.raises(ValueError, match=r"Speed m/s: 5 m/s is out of range; allowed 0 to 3 m/s"):
+        b.check(5.0)
+    with pytest.raises(ValueError, match="out of range"):
+        b.check(math.nan)
+
+
+def not_clamped(*handles: Any) -> None:
+    """viser's browser input clamps to a min or max without a word: the inputs have none."""
+    for handle in handles:
+        assert handle.min is None and handle.max is None, handle.label
+
+
+def shown(markdown: Any) -> str:
+    """A markdown element's text as the page shows it (escapes removed)."""
+    return str(markdown.content).replace("\\", "")
+
+
+class Page:
+    """One browser's panel parts over a viser server's GUI, with the messages it showed and
+    the commands it sent."""
+
+    def __init__(self, server: viser.ViserServer, console: Console) -> None:
+        self.said: list[str] = []
+        self.sent: list[Any] = []
+        self.client = SimpleNamespace(gui=server.gui, scene=server.scene, client_id=7)
+        self.operator = Operator(self.client, console, self.said.append)  # type: ignore[arg-type]
+        self.operator.add_access()
+        self.operator.unlocked = True
+
+    @property
+    def last_said(self) -> str:
+        """The last message as the page shows it (markdown escapes removed)."""
+        return shown(SimpleNamespace(content=self.said[-1]))
+
+    def type_in(self, handle: Any, value: Any) -> None:
+        """As viser applies a browser's edit: the value first, then the callbacks."""
+        handle._impl.value = value
+        for callback in list(handle._impl.update_cb):
+            callback(GuiEvent(client_id=7, client=self.client, target=handle))  # type: ignore[arg-type]
+
+    def press(self, button: Any) -> None:
+        self.type_in(button, True)
+
+
+@pytest.fixture(scope="module")
+def console(tmp_path_factory: pytest.TempPathFactory) -> Console:
+    folder = tmp_path_factory.mktemp("recordings")
+    return Console.build(ConsoleSettings(view=False, recordings_dir=folder))
+
+
+@pytest.fixture()
+def page(console: Console, monkeypatch: pytest.MonkeyPatch) -> Iterator[Page]:
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        pg = Page(server, console)
+
+        def call_blocking(command: Any, **_: Any) -> dict:
+            pg.sent.append(command)
+            return {}
+
+        monkeypatch.setattr(console.loop, "call_blocking", call_blocking)
+        yield pg
+    finally:
+        server.stop()
+
+
+def _button(gui: Any, label: str) -> Any:
+    """The last input made with this label."""
+    handles = gui._gui_input_handle_from_uuid.values()
+    return [h for h in handles if h.label == label][-1]
+
+
+def test_current_speed_out_of_range_is_refused_not_clamped(page: Page, console: Console) -> None:
+    control = ControlTab(page.operator, console)
+    not_clamped(control.current_speed, control.current_dir, control.vessel_n, control.vessel_e)
+    page.type_in(control.current_speed, 5.0)
+    assert control.current_speed.value == 5.0, "the typed value stays to be corrected"
+    assert "Speed m/s: 5 m/s is out of range; allowed 0 to 3 m/s" in page.last_said
+    page.press(_button(page.client.gui, "Set current"))
+    assert page.sent == [], "nothing sent"
+    assert "allowed 0 to 3 m/s" in page.operator.last_error
+
+
+def test_current_direction_is_wrapped_and_the_page_says_so(page: Page, console: Console) -> None:
+    control = ControlTab(page.operator, console)
+    page.type_in(control.current_speed, 0.2)
+    page.type_in(control.current_dir, 400.0)
+    assert control.current_dir.value == pytest.approx(40.0)
+    assert "400 deg taken as 40 deg" in page.last_said
+    page.press(_button(page.client.gui, "Set current"))
+    assert page.sent == [cmd.SetCurrent(0.2, 40.0)]
+
+
+def test_target_heading_is_wrapped_and_far_target_refused(page: Page, console: Console) -> None:
+    run = RunTab(page.operator, console)
+    not_clamped(run.target_n, run.target_e, run.target_psi)
+    page.type_in(run.target_psi, -90.0)
+    assert run.target_psi.value == pytest.approx(270.0)
+    assert "-90 deg taken as 270 deg" in page.last_said
+    page.type_in(run.target_n, 2e4)
+    assert "Target north m: 20000 m is out of range; allowed -10000 to 10000 m" in page.last_said
+    page.press(_button(page.client.gui, "Go to target"))
+    assert page.sent == []
+
+
+def test_builder_refuses_a_negative_depth_and_wraps_a_frame_heading(
+    page: Page, console: Console
+) -> None:
+    builder = BuilderPanel(
+        page.client,  # type: ignore[arg-type]
+        console,
+        page.operator.guard,
+        lambda mission: None,
+        lambda: True,
+    )
+    not_clamped(builder.depth, builder.current_speed, builder.current_dir, builder.frame_psi)
+    not_clamped(*(handle for _, handle in builder._leg_inputs.values() if hasattr(handle, "min")))
+    page.type_in(builder.depth, -10.0)
+    assert builder.depth.value == -10.0
+    assert "Tree depth [m]: -10 m is out of range; allowed 5 to 4000 m" in shown(builder.builder_md)
+    builder.legs = [{"type": "hold", "duration_s": 10.0}]
+    page.press(builder.validate_button)
+    assert "allowed 5 to 4000 m" in shown(builder.builder_md)
+    page.type_in(builder.depth, 100.0)
+    page.type_in(builder.frame_psi, 400.0)
+    assert builder.frame_psi.value == pytest.approx(40.0)
+    assert "400 deg taken as 40 deg" in shown(builder.builder_md)
