@@ -4,13 +4,13 @@ message line (what the last action did), the operations log and the thrusters' b
 from __future__ import annotations
 
 import html
-import math
 from typing import Any, Literal
 
 import numpy as np
 import viser
 
 from app.console import SATURATED, Snapshot, md_code, md_text, trainee_view
+from app.console.texts import alarm_meaning, alarm_title, heading_text
 from web import geometry as geo
 
 BarColor = Literal["red", "orange", "blue"]
@@ -43,7 +43,7 @@ def status_markdown(snap: Snapshot, live: Snapshot) -> str:
         f"**{source}** t = {snap.t_s:8.1f} s, {state}  \n"
         + (f"live run goes on: t = {live.t_s:.1f} s  \n" if replaying else "")
         + f"tree N {tree[0]:.2f} m, E {tree[1]:.2f} m, heading "
-        f"{math.degrees(tree[5]):.1f} deg, mode {snap.mode}  \n"
+        f"{heading_text(tree[5])}, mode {snap.mode}  \n"
         f"mission: {md_text(m.name or '-')} ({m.state}) {md_text(leg)}"
         + (f"  \n**{md_text(snap.error)}**" if snap.error else "")
         + (f"  \nrecording {md_code(snap.recording)}" if snap.recording else "")
@@ -51,14 +51,18 @@ def status_markdown(snap: Snapshot, live: Snapshot) -> str:
 
 
 def alarms_html(snap: Snapshot) -> str:
-    """A badge per alarm (red when active) and the active alarms' messages."""
+    """A badge per alarm (red when active), named in words with its meaning as the tooltip,
+    and the active alarms' messages."""
     badges = "".join(
         f"<span style='display:inline-block;margin:1px;padding:1px 5px;border-radius:4px;"
         f"color:white;background:{'#c0392b' if a.active else '#27ae60'}' "
-        f"title='{html.escape(a.message)}'>{html.escape(a.name)}</span>"
+        f"title='{html.escape(alarm_meaning(a.name) + (': ' + a.message if a.message else ''))}'>"
+        f"{html.escape(alarm_title(a.name))}</span>"
         for a in snap.alarms
     )
-    active = html.escape("; ".join(f"{a.name}: {a.message}" for a in snap.active_alarms))
+    active = html.escape(
+        "; ".join(f"{alarm_title(a.name)}: {a.message}" for a in snap.active_alarms)
+    )
     return f"<div>{badges}</div>" + (f"<div style='color:#c0392b'>{active}</div>" if active else "")
 
 

@@ -279,7 +279,10 @@ class AlarmMonitor:
         for label, window in zip(("position", "heading"), self._nis, strict=True):
             if len(window) == window.maxlen and np.mean(window) > self.limits.nis_limit:
                 return Alarm(
-                    "innovation", True, f"{label} innovation {np.mean(window):.1f} x expected"
+                    "innovation",
+                    True,
+                    f"{label} fixes off the observer's prediction: mean normalised "
+                    f"innovation {np.mean(window):.1f}, about 1 expected",
                 )
         return Alarm("innovation", False, "")
 

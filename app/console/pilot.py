@@ -9,11 +9,11 @@ pilot's arrival and departure are logged with the pilot's name.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import ClassVar
 
 from app.console.commands import LoopControls, number
+from app.console.texts import compass_heading_deg
 from control.simulation import Simulation
 
 AXES = ("surge", "sway", "heave", "yaw")
@@ -32,12 +32,6 @@ def pilot_name(name: object) -> str:
     if not text or len(text) > NAME_MAX_CHARS or not text.isprintable():
         raise ValueError(f"pilot name must be 1 to {NAME_MAX_CHARS} printable characters")
     return text
-
-
-def compass_heading_deg(psi_rad: float) -> float:
-    """A heading as a compass shows it: in [0, 360) deg at the page's 0.1 deg, so a heading a
-    hair west of north reads 0.0, not 360.0."""
-    return round(math.degrees(psi_rad), 1) % 360.0 + 0.0
 
 
 def pilot_status(sim: Simulation) -> dict[str, object]:

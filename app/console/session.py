@@ -42,6 +42,7 @@ from app.console.snapshot import (
     row_view,
     scene_info,
 )
+from app.console.texts import alarm_title
 from app.console.viewer_replay import recording_scene
 from app.recording import (
     SessionData,
@@ -339,7 +340,7 @@ class Session:
             if alarm.active != before.get(alarm.name):
                 self.note(
                     "alarm",
-                    f"{alarm.name} {'on' if alarm.active else 'off'}"
+                    f"{alarm_title(alarm.name)} {'on' if alarm.active else 'off'}"
                     f"{': ' + alarm.message if alarm.message else ''}",
                     {"name": alarm.name, "active": alarm.active},
                 )

@@ -5,6 +5,7 @@ snapshot's parts, so the 3D view only places them and the tests read them withou
 from __future__ import annotations
 
 import html
+import math
 import re
 from pathlib import Path
 
@@ -12,6 +13,50 @@ from missions.scoring import LEG_TABLE_COLUMNS, QUALITY_CHECKS, landing_lines, l
 from sim.sensors import SENSOR_NAMES
 
 _MARKDOWN_PUNCTUATION = re.compile(r"([\\`*_{}\[\]()#+\-.!|~])")
+
+
+ALARM_WORDS: dict[str, tuple[str, str]] = {
+    "saturation": ("thrusters saturated", "a thruster held at its limit for over 2 s"),
+    "position_error": (
+        "position error",
+        "the tree (in free mode the ROV) further from its set point than the mission allows",
+    ),
+    "wire_slack": ("slack wire", "the wire carries less than its share of the tree's weight"),
+    "innovation": (
+        "sensors disagree",
+        "the sensors' fixes lie further from the observer's prediction than their noise "
+        "explains (mean normalised innovation; about 1 is expected)",
+    ),
+    "dropout": ("sensor dropout", "a sensor has given no accepted fix for several periods"),
+    "mount_vector": (
+        "mount vector check",
+        "the observer's bias says the ROV's mounting vector on the tree is wrong "
+        "(the sea trial's wrong sign)",
+    ),
+}
+"""Each alarm's name (``app.console.alarms.ALARM_NAMES``, kept in the API and the recording)
+as a person reads it on the page: its title and what it means."""
+
+
+def alarm_title(name: str) -> str:
+    """An alarm as the page names it: 'position_error' -> 'position error'."""
+    return ALARM_WORDS.get(name, (name.replace("_", " "), ""))[0]
+
+
+def alarm_meaning(name: str) -> str:
+    """What an alarm means, one line ('' for a name without an explanation)."""
+    return ALARM_WORDS.get(name, ("", ""))[1]
+
+
+def compass_heading_deg(psi_rad: float) -> float:
+    """A heading as a compass shows it: in [0, 360) deg at the page's 0.1 deg, so a heading a
+    hair west of north reads 0.0, not 360.0."""
+    return round(math.degrees(psi_rad), 1) % 360.0 + 0.0
+
+
+def heading_text(psi_rad: float) -> str:
+    """A heading as the page prints it, as a compass shows it: 558.1 -> '198.1 deg'."""
+    return f"{compass_heading_deg(psi_rad):.1f} deg"
 
 
 QUOTE_MAX_CHARS = 60
