@@ -1,23 +1,40 @@
 """Recordings on disk and their replay in the console: names the recorder writes and the API
 accepts, the list of recordings, and ``Replay``, a recorded session played back against
 simulation time (read by column name, so recordings of older layouts play too).
+
+A replay shows what the recording holds, nothing made up: each run's scene (docking frame),
+mission name and current from its set-up record (``SessionData.run_at``), the current as the
+recorded 'command current' events changed it, and the alarms as the recorded ``alarm`` events
+say the console showed them (no alarm monitor re-run over the rows with guessed limits).
 """
 
 from __future__ import annotations
 
 import math
 import re
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
-from app.console.alarms import AlarmLimits, AlarmMonitor
+from app.console.alarms import ALARM_NAMES, Alarm
 from app.console.errors import ConsoleError
-from app.console.snapshot import ReplayStatus, SceneInfo, frozen_copy, trend_rows
-from app.recording import SessionData, load_session, recorded_mission_name
-from control.columns import LAYOUT, N_LOG, LogRows
+from app.console.snapshot import (
+    ReplayStatus,
+    SceneInfo,
+    frame_below_tree,
+    frozen_copy,
+    trend_rows,
+)
+from app.recording import (
+    SessionData,
+    load_session,
+    recorded_docking_frame,
+    recorded_mission_name,
+)
+from control.columns import LAYOUT, N_LOG
 
 FloatArray = NDArray[np.float64]
 RECORDING_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,120}\.mcap$")
@@ -83,9 +100,103 @@ def event_marks(events: list[dict], start_s: float, end_s: float) -> tuple[tuple
     return tuple(marks[:MAX_MARKS])
 
 
+RUN_SCENE_VERSIONS = 1 << 20
+"""A later run's scene has the recording's scene version plus this times the run's index:
+owners count scene versions up by one, so a run's scene never takes another scene's version
+(the view redraws the site when the version changes)."""
+TIME_SLACK_S = 1e-9
+"""Events and run starts at the shown row's time count as come [s]."""
+
+
+def run_scenes(data: SessionData, first: SceneInfo) -> tuple[SceneInfo, ...]:
+    """The scene of each run of a recording (one for a file without runs): ``first`` (the
+    recording's scene, of its setup record) for the first run; for a later one the same
+    parameter set with that run's docking frame, or, when it places none, a frame under the
+    tree where the run starts (as the console draws it)."""
+    scenes = [first]
+    for k, run in enumerate(data.runs[1:], start=1):
+        frame = recorded_docking_frame(run)
+        in_mission = frame is not None
+        if frame is None:
+            start = run.get("start_t_s")
+            at = float(start) if isinstance(start, int | float) else math.inf
+            i = int(np.searchsorted(data.t_s, at - TIME_SLACK_S))
+            tree = data.log["tree_eta_n"][min(i, len(data.t_s) - 1)]
+            frame = frame_below_tree(
+                first.layout,
+                first.tree_dimensions_m[2],
+                tree[0:2],
+                float(tree[5]),
+                float(tree[2]),
+            )
+        version = first.version + k * RUN_SCENE_VERSIONS
+        scenes.append(replace(first, frame=frame, frame_in_mission=in_mission, version=version))
+    return tuple(scenes)
+
+
+def _run_start_s(data: SessionData, index: int) -> float:
+    """Where run ``index`` starts on the recording's time axis [s] (-inf for the first: it
+    holds everything before the second)."""
+    start = data.runs[index].get("start_t_s") if index > 0 else None
+    return float(start) if isinstance(start, int | float) else -math.inf
+
+
+@dataclass(frozen=True)
+class RecordedCurrent:
+    """The sea current of a replayed moment, as recorded."""
+
+    speed_mps: float
+    direction_rad: float
+    """Direction the current flows towards [rad]."""
+
+
+def recorded_current(data: SessionData, t_s: float) -> RecordedCurrent:
+    """The current at recording time ``t_s``: the set-up current of the run going on then,
+    changed by that run's 'command current' events up to ``t_s`` (zero when the set-up
+    records none)."""
+    k = data.run_index_at(t_s)
+    setup = data.run_at(t_s).get("current")
+    setup = setup if isinstance(setup, dict) else {}
+    speed, direction_deg = setup.get("speed_mps", 0.0), setup.get("direction_deg", 0.0)
+    start = _run_start_s(data, k)
+    latest = -math.inf
+    for e in data.events:
+        t, values = e.get("t_s"), e.get("data") or {}
+        if e.get("kind") != "command" or e.get("text") != "current":
+            continue
+        if not isinstance(t, int | float) or not start <= t <= t_s + TIME_SLACK_S or t < latest:
+            continue
+        latest = float(t)
+        speed = values.get("speed_mps", speed)
+        direction_deg = values.get("direction_deg", direction_deg)
+    return RecordedCurrent(float(speed), math.radians(float(direction_deg)))
+
+
+def recorded_alarms(events: list[dict], start_s: float, t_s: float) -> tuple[Alarm, ...]:
+    """The alarms as the console showed them at recording time ``t_s``, from the recorded
+    ``alarm`` events from ``start_s`` (the run's start: a new run starts with none) to
+    ``t_s``: each alarm as its last event left it, in ``ALARM_NAMES`` order. An event's text
+    is '<title> on: <message>' (``Session._take_rows``); the message is what follows."""
+    last: dict[str, Alarm] = {}
+    latest: dict[str, float] = {}
+    for e in events:
+        t, values = e.get("t_s"), e.get("data") or {}
+        name = values.get("name")
+        if e.get("kind") != "alarm" or name not in ALARM_NAMES or not isinstance(t, int | float):
+            continue
+        if not start_s <= t <= t_s + TIME_SLACK_S or t < latest.get(name, -math.inf):
+            continue
+        active = bool(values.get("active", False))
+        message = str(e.get("text", "")).partition(": ")[2] if active else ""
+        last[name], latest[name] = Alarm(name, active, message), float(t)
+    return tuple(last.get(n, Alarm(n, False, "")) for n in ALARM_NAMES)
+
+
 class Replay:
     """A recorded session played back against simulation time (the recorder keeps rows at its
-    numeric rate, e.g. 20 Hz: the replay shows the last row at or before its clock)."""
+    numeric rate, e.g. 20 Hz: the replay shows the last row at or before its clock), with the
+    scene, mission, current and alarms of the run going on at that row (see the module's
+    docstring). ``scene``: the recording's scene (of its first run's set-up)."""
 
     def __init__(self, name: str, data: SessionData, scene: SceneInfo, dt_s: float) -> None:
         self.name = name
@@ -98,19 +209,32 @@ class Replay:
             if not self.log.layout.has(block):
                 raise ConsoleError(f"recording {name} has no {block} columns to replay")
         self.times = self.log.t_s
-        self.scene = scene
+        self.scenes = run_scenes(data, scene)
         self.dt_s = dt_s
         self.index = 0
         self.clock_s = float(self.times[0])
         self.playing = False
         self.trend_all = frozen_copy(trend_rows(self.log))
-        self.mission = recorded_mission_name(data.metadata or {}, name)
         self.marks = event_marks(data.events, float(self.times[0]), float(self.times[-1]))
-        self.monitor = self._new_monitor()
-        self.monitor.update(self._rows(0, 1), self._tension(0))
+        self._shown()
 
-    def _rows(self, start: int, stop: int) -> LogRows:
-        return LogRows(self.log.data[start:stop], self.log.n_thrusters, layout=self.log.layout)
+    def _shown(self) -> None:
+        """What goes with the present row: its run's index, current and alarms."""
+        t = self.t_s
+        self.run_index = self.data.run_index_at(t)
+        self.current = recorded_current(self.data, t)
+        start = _run_start_s(self.data, self.run_index)
+        self.alarms = recorded_alarms(self.data.events, start, t)
+
+    @property
+    def scene(self) -> SceneInfo:
+        """The scene of the run going on at the present row."""
+        return self.scenes[min(self.run_index, len(self.scenes) - 1)]
+
+    @property
+    def mission(self) -> str:
+        """The name of the mission of the run going on at the present row."""
+        return recorded_mission_name(self.data.run_at(self.t_s), self.name)
 
     def row(self) -> FloatArray:
         """The present row, in the live layout (blocks the file lacks are NaN)."""
@@ -135,20 +259,6 @@ class Replay:
             (float(tip[0]), float(tip[1]), 0.0),
             float(self.log["wire_rest_length"][self.index]),
             self._tension(self.index),
-        )
-
-    def _new_monitor(self) -> AlarmMonitor:
-        limits = AlarmLimits(
-            position_error_m=self.scene.layout.tolerance_m, sample_period_s=(1.0,) * 5
-        )
-        return AlarmMonitor(
-            limits,
-            self.scene.n_thrusters,
-            self.scene.tree_weight_newton,
-            uses_sensors=self.log.layout.has("accepted")
-            and bool(np.any(self.log["accepted"] > 0.5)),
-            support_depth_m=self.scene.support_depth_m,
-            tree_half_height_m=self.scene.tree_dimensions_m[2] / 2.0,
         )
 
     @property
@@ -178,8 +288,8 @@ class Replay:
         self.clock_s = min(self.clock_s + n_steps * self.dt_s, self.end_s)
         new = self._index_at(self.clock_s)
         if new > self.index:
-            self.monitor.update(self._rows(self.index + 1, new + 1), self._tension(new))
             self.index = new
+            self._shown()
         if self.clock_s >= self.end_s:
             self.playing = False
 
@@ -188,9 +298,7 @@ class Replay:
             raise ConsoleError(f"replay time must be finite, got {t_s}")
         self.clock_s = float(np.clip(t_s, self.start_s, self.end_s))
         self.index = self._index_at(self.clock_s)
-        self.monitor = self._new_monitor()
-        first = int(np.searchsorted(self.times, self.clock_s - 10.0))
-        self.monitor.update(self._rows(first, self.index + 1), self._tension(self.index))
+        self._shown()
 
     def trend(self) -> FloatArray:
         k = self.index + 1

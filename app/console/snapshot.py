@@ -231,8 +231,21 @@ def default_docking_frame(
     Used until a mission's set-up places the frame (the thesis's chapter 5 frame stands under
     the hook-up point)."""
     layout = ps.spec.docking.to_numeric()
-    height = float(ps.tree.dimensions_m[2])
-    landing = tree_depth_m + height / 2.0 + layout.post_height_m + height / 2.0
+    return frame_below_tree(
+        layout, float(ps.tree.dimensions_m[2]), center_ne, heading_rad, tree_depth_m
+    )
+
+
+def frame_below_tree(
+    layout: DockingLayout,
+    tree_height_m: float,
+    center_ne: FloatArray,
+    heading_rad: float,
+    tree_depth_m: float,
+) -> DockingFrame:
+    """A frame whose post tops are half a tree height below the bottom of a tree at
+    ``tree_depth_m`` (its centre) [m]: landing depth = depth + height + post height."""
+    landing = tree_depth_m + tree_height_m / 2.0 + layout.post_height_m + tree_height_m / 2.0
     return DockingFrame(np.asarray(center_ne, float).copy(), heading_rad, landing)
 
 

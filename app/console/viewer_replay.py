@@ -59,9 +59,10 @@ def recording_scene(data: SessionData, fallback: SceneInfo, version: int) -> Sce
 
 
 def replay_snapshot(rp: Replay, live: Snapshot) -> Snapshot:
-    """What a reader of the replay sees: the replayed row, its alarms, trend and scene, with
-    the live run's sequence number, loop statistics, operations and recording (those belong
-    to the console, not to the recording)."""
+    """What a reader of the replay sees: the replayed row, its run's scene, mission and current,
+    the alarms recorded as shown then, and its trend, with the live run's sequence number,
+    loop statistics, operations and recording (those belong to the console, not to the
+    recording)."""
     v = row_view(rp.row(), rp.scene.n_thrusters)
     crane_tip_n, wire_length_m, tension_newton = rp.site()
     return Snapshot(
@@ -83,11 +84,11 @@ def replay_snapshot(rp: Replay, live: Snapshot) -> Snapshot:
         crane_tip_n=crane_tip_n,
         wire_length_m=wire_length_m,
         wire_tension_newton=tension_newton,
-        current_speed_mps=0.0,
-        current_direction_rad=0.0,
+        current_speed_mps=rp.current.speed_mps,
+        current_direction_rad=rp.current.direction_rad,
         wire_drag_newton_per_m=0.0,
         mission=MissionStatus(name=rp.mission, state="replay"),
-        alarms=rp.monitor.state,
+        alarms=rp.alarms,
         recording=live.recording,
         replay=rp.status(),
         scene=rp.scene,

@@ -76,15 +76,20 @@ class SessionData:
     ``run.N`` record's (a run started while recording); ``start_t_s`` is where each starts on
     the recording's time axis. Empty for a file with no setup record."""
 
+    def run_index_at(self, t_s: float) -> int:
+        """Index in ``runs`` of the run going on at recording time ``t_s`` (0 before the
+        second starts, and for a file with no runs)."""
+        here = 0
+        for k, run in enumerate(self.runs[1:], start=1):
+            start = run.get("start_t_s")
+            if isinstance(start, int | float) and start <= t_s + 1e-9:
+                here = k
+        return here
+
     def run_at(self, t_s: float) -> dict:
         """The set-up of the run going on at recording time ``t_s`` (the first run before it
         starts; the setup record when the file has no runs)."""
-        here = self.runs[0] if self.runs else self.metadata
-        for run in self.runs[1:]:
-            start = run.get("start_t_s")
-            if isinstance(start, int | float) and start <= t_s + 1e-9:
-                here = run
-        return here
+        return self.runs[self.run_index_at(t_s)] if self.runs else self.metadata
 
     @property
     def n_thrusters(self) -> int:
