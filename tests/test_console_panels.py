@@ -231,3 +231,20 @@ def test_the_publisher_sends_no_camera_pose_while_a_preset_is_being_sent(
     # once the lock is free the frame goes out at once; 10 s is room for a loaded CI machine
     assert framed.wait(10.0), "the frame never went out after the preset"
     publisher.join(timeout=1.0)
+
+
+def test_an_out_of_range_speed_is_refused_not_clamped(page, server: RunningServer, api):
+    """Defect (issue 47 item 24): the browser's number input clamped a typed 5 m/s to 3 and
+    set a current of 3 m/s without a word. The typed value stays, the page names the field and
+    its range, and the current is not set."""
+    unlock(page, server.token)
+    tab(page, "Control")
+    before = api.get("/api/environment").json()["current"]
+    box = field(page, "Speed m/s")
+    box.fill("5")
+    box.press("Tab")  # Mantine clamped on blur
+    page.get_by_text("allowed 0 to 3 m/s").first.wait_for(timeout=10000)
+    assert box.input_value() == "5"
+    click(page, "Set current")
+    time.sleep(1.0)
+    assert api.get("/api/environment").json()["current"] == before
