@@ -9,6 +9,7 @@ client), and the loop's ``call_blocking`` is replaced by a list of the commands 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterator
 from types import SimpleNamespace
@@ -165,3 +166,11 @@ def test_builder_refuses_a_negative_depth_and_wraps_a_frame_heading(
     page.type_in(builder.frame_psi, 400.0)
     assert builder.frame_psi.value == pytest.approx(40.0)
     assert "400 deg taken as 40 deg" in shown(builder.builder_md)
+
+
+def test_live_current_direction_is_shown_within_0_to_360(page: Page, console: Console) -> None:
+    control = ControlTab(page.operator, console)
+    snap = console.loop.snapshot
+    for rad, shown_deg in ((math.radians(-90.0), 270.0), (math.radians(-0.02), 0.0)):
+        control.update(dataclasses.replace(snap, current_direction_rad=rad))
+        assert control.current_dir.value == pytest.approx(shown_deg)

@@ -3,11 +3,10 @@
 
 from __future__ import annotations
 
-import math
-
 from app.console import MODES, Console, Gains, Snapshot
 from app.console import commands as cmd
-from web.widgets import Operator, wrap_deg
+from app.console.texts import compass_heading_deg
+from web.widgets import Operator
 
 TERMS = ("kp", "ki", "kd")
 
@@ -77,7 +76,7 @@ class ControlTab:
                 op.angle(
                     gui.add_number(
                         "Towards deg",
-                        round(wrap_deg(math.degrees(snap.current_direction_rad)), 1),
+                        compass_heading_deg(snap.current_direction_rad),
                         step=1.0,
                     )
                 ),
@@ -170,7 +169,7 @@ class ControlTab:
             "current",
             (
                 (self.current_speed, round(live.current_speed_mps, 3)),
-                (self.current_dir, round(wrap_deg(math.degrees(live.current_direction_rad)), 1)),
+                (self.current_dir, compass_heading_deg(live.current_direction_rad)),
             ),
         )
         op.follow(
