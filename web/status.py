@@ -9,8 +9,16 @@ from typing import Any, Literal
 import numpy as np
 import viser
 
-from app.console import SATURATED, Snapshot, md_code, md_text, trainee_view
-from app.console.texts import alarm_meaning, alarm_title, heading_text
+from app.console import (
+    SATURATED,
+    Snapshot,
+    alarm_meaning,
+    alarm_title,
+    heading_text,
+    md_code,
+    md_text,
+    trainee_view,
+)
 from web import geometry as geo
 
 BarColor = Literal["red", "orange", "blue"]

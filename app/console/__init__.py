@@ -47,7 +47,16 @@ from app.console.snapshot import (
     SceneInfo,
     Snapshot,
 )
-from app.console.texts import counters_markdown, md_code, md_text, result_markdown
+from app.console.texts import (
+    alarm_meaning,
+    alarm_title,
+    compass_heading_deg,
+    counters_markdown,
+    heading_text,
+    md_code,
+    md_text,
+    result_markdown,
+)
 from app.console.tokens import INSTRUCTOR_TOKEN_ENV
 from app.console.viewer_replay import ViewerReplay
 from control.config import ALLOCATIONS, MODES, Gains
@@ -87,10 +96,14 @@ __all__ = [
     "Session",
     "Snapshot",
     "ViewerReplay",
+    "alarm_meaning",
+    "alarm_title",
     "allowed_hosts",
     "attachment_point_n",
     "commands",
+    "compass_heading_deg",
     "counters_markdown",
+    "heading_text",
     "initial_run",
     "is_loopback",
     "list_recordings",

@@ -3,9 +3,8 @@
 
 from __future__ import annotations
 
-from app.console import MODES, Console, Gains, Snapshot
+from app.console import MODES, Console, Gains, Snapshot, compass_heading_deg
 from app.console import commands as cmd
-from app.console.texts import compass_heading_deg
 from web.widgets import Operator
 
 TERMS = ("kp", "ki", "kd")

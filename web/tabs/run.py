@@ -5,9 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from app.console import Console, Snapshot, station_keeping_mission
+from app.console import Console, Snapshot, compass_heading_deg, station_keeping_mission
 from app.console import commands as cmd
-from app.console.pilot import compass_heading_deg
 from web.tabs.mission import start_mission
 from web.widgets import Operator
 
