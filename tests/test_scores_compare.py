@@ -4,6 +4,7 @@ and the API's scores, comparison and debrief, and the page's scores text."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import sqlite3
@@ -230,3 +231,18 @@ def test_the_faults_a_mission_met_are_stored_with_its_score(tmp_path: Path) -> N
     db = tmp_path / "s.sqlite"
     scores.record(db, "Anna", result, "run")
     assert scores.history(db)[0].faults == "dvl lost from 2 s for 3 s"
+
+
+def test_the_pages_scores_say_why_a_landed_run_failed(tmp_path: Path, log_rows: LogRows) -> None:
+    """Issue 47 item 21, the page's side: a run that landed but failed a criterion, with an
+    instructor's fault, reads as a failure with its reasons, not "pass, landed"."""
+    db = tmp_path / "s.sqlite"
+    scores.record(db, "Anna", flown(log_rows, 100, 0.1), "console", "a.mcap")
+    (row,) = scores.history(db, "Anna")
+    bad = dataclasses.replace(
+        row, criteria_failed="time saturated 122.0 s > 30 s", faults="compass freeze"
+    )
+    text = scores_markdown([bad], "http://127.0.0.1:8000", "Anna")
+    # as page text: Markdown's dot and '>' escaped
+    assert "FAIL, faulted, landed: time saturated 122\\.0 s &gt; 30 s" in text
+    assert "| pass" not in text

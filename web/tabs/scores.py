@@ -34,10 +34,13 @@ def _cell(v: float | None, fmt: str) -> str:
 
 
 def _verdict(s: store.Score) -> str:
-    text = "pass" if s.passed else "FAIL"
+    """The run's verdict as the scores store gives it (pass or FAIL, faulted, the criteria
+    it failed with their values and limits) and whether it landed, as page text."""
+    head, sep, why = s.verdict.partition(": ")
+    text = "pass" if head.startswith("pass") else "FAIL" + head.removeprefix("fail")
     if s.landed is not None:
         text += ", landed" if s.landed else ", not landed"
-    return text
+    return md_text(text + (f": {why}" if sep else ""))
 
 
 def scores_markdown(
