@@ -14,8 +14,8 @@ stamp=".venv/.installed$(echo "$extras" | tr -d '[]')"
 want="$(sha256sum pyproject.toml | cut -c1-16)"
 if [[ ! -f "$stamp" || "$(cat "$stamp")" != "$want" ]]; then
   echo "setup: installing rov-console$extras and its packages into .venv" >&2
-  # uv (from PyPI, into the venv) resolves and installs in parallel: some 15 s where pip took
-  # a minute or more on a new machine; pip itself if uv cannot be had
+  # uv (from PyPI, into the venv) resolves and installs in parallel, much faster than pip on
+  # a new machine (docs/performance.md); pip itself if uv cannot be had
   if .venv/bin/python -m pip install --quiet --disable-pip-version-check uv >&2; then
     .venv/bin/uv pip install --quiet --python .venv/bin/python -e ".$extras" >&2
   else

@@ -18,8 +18,8 @@ if [[ -f tests/js/package.json && ! -d tests/js/node_modules ]]; then
   echo "test: installing the JavaScript test packages" >&2
   (cd tests/js && npm ci --no-audit --no-fund --loglevel=error >&2)
 fi
-# the numeric core's kernels into numba's cache (a minute or two after a change of the core,
-# nothing otherwise), beside the static checks, so the tests load them instead of compiling
+# the numeric core's kernels into numba's cache (after a change of the core; nothing
+# otherwise), beside the static checks, so the tests load them instead of compiling
 # them inside a console's paced loop
 echo "test: compiling the numeric core in the background (python -m app.precompile)" >&2
 .venv/bin/python -m app.precompile >&2 &
