@@ -87,23 +87,13 @@ class ControlTab:
             )
         with gui.add_folder("Vessel (crane tip)"):
             ct = snap.crane_tip_n
-            self.vessel_n = op.live_input(
-                "vessel",
-                op.bounded(
+            lim = cmd.VESSEL_RANGE_M
+            self.vessel_n, self.vessel_e = (
+                op.live_input("vessel", op.bounded(number, -lim, lim, "m"))
+                for number in (
                     gui.add_number("North m", round(ct[0], 2), step=0.1),
-                    -cmd.VESSEL_RANGE_M,
-                    cmd.VESSEL_RANGE_M,
-                    "m",
-                ),
-            )
-            self.vessel_e = op.live_input(
-                "vessel",
-                op.bounded(
                     gui.add_number("East m", round(ct[1], 2), step=0.1),
-                    -cmd.VESSEL_RANGE_M,
-                    cmd.VESSEL_RANGE_M,
-                    "m",
-                ),
+                )
             )
             op.action(
                 op.guard(gui.add_button("Move vessel")),
