@@ -1,6 +1,6 @@
 """What a first user waits for: a fresh clone of this repository, timed as they would use it.
 
-    .venv/bin/python benchmarks/fresh_clone.py [--what start,run,test] [--json]
+    .venv/bin/python benchmarks/fresh_clone.py [--what start,run,test,edit] [--json]
 
 Each measurement clones the repository's committed HEAD into a new folder (nothing of this
 checkout's ``.venv`` or ``.numba-cache`` comes along) and times, from the clone:
@@ -9,7 +9,12 @@ checkout's ``.venv`` or ``.numba-cache`` comes along) and times, from the clone:
   simulation stepping (its simulated time moving);
 - ``run``: ``./scripts/setup.sh`` then ``rov-console run full-docking-current-0.3``, the first
   docking with its compile, and the same run again (loaded from the cache);
-- ``test``: ``./scripts/test.sh`` whole (set-up, static checks, the default test run).
+- ``test``: ``./scripts/test.sh`` whole (set-up, static checks, the default test run);
+- ``edit``: what a developer waits for after an edit of the core: set-up, the docking run
+  once (the cache filled), then after an edit of a comment, of the wire's force in
+  ``sim/plant.py`` and of the tree controller in ``control/pid.py`` (each a formula made to
+  give the same numbers, ``* 1.0``), the same run again, and after the plant's edit
+  undone, ``rov-console serve`` until it steps.
 
 pip's download cache is kept off (``PIP_NO_CACHE_DIR``), so the packages come from the
 registry as on a new machine; Debian's chromium and the JavaScript test packages are whatever
@@ -110,6 +115,44 @@ def time_run(repo: Path) -> dict:
     }
 
 
+EDITS = {
+    "comment": (
+        "sim/plant.py",
+        "    if env[E_WEXT] > 0.0:\n",
+        "    # a comment\n    if env[E_WEXT] > 0.0:\n",
+    ),
+    "plant": (
+        "sim/plant.py",
+        "    d = np.sqrt(dx * dx + dy * dy + dz * dz)\n",
+        "    d = np.sqrt(dx * dx + dy * dy + dz * dz) * 1.0\n",
+    ),
+    "pid": ("control/pid.py", "    i_b[2] = i_n[2]\n", "    i_b[2] = i_n[2] * 1.0\n"),
+}
+"""The edits ``edit`` makes: (file, old text, new text), each once in its file."""
+
+
+def _edit(repo: Path, name: str, undo: bool = False) -> None:
+    file, old, new = EDITS[name]
+    if undo:
+        old, new = new, old
+    path = repo / file
+    text = path.read_text()
+    if text.count(old) != 1:
+        raise RuntimeError(f"{file}: the edit {name!r} expects {old!r} once")
+    path.write_text(text.replace(old, new))
+
+
+def time_edit(repo: Path) -> dict:
+    res = time_run(repo)
+    run = [".venv/bin/rov-console", "run", MISSION]
+    for name in EDITS:
+        _edit(repo, name)
+        res[f"after_{name}_edit_s"] = _timed(run, repo)
+    _edit(repo, "plant", undo=True)
+    res["serve_after_plant_edit_s"] = time_start(repo)["serving_s"]
+    return res
+
+
 def time_test(repo: Path) -> dict:
     """The whole test script, timed whether it passes or not (its exit status kept)."""
     t0 = time.perf_counter()
@@ -119,14 +162,16 @@ def time_test(repo: Path) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--what", default="start,run", help="start, run, test (comma-separated)")
+    parser.add_argument(
+        "--what", default="start,run", help="start, run, test, edit (comma-separated)"
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object at the end")
     args = parser.parse_args()
     wanted = [w.strip() for w in args.what.split(",") if w.strip()]
-    unknown = sorted(set(wanted) - {"start", "run", "test"})
+    steps = {"start": time_start, "run": time_run, "test": time_test, "edit": time_edit}
+    unknown = sorted(set(wanted) - set(steps))
     if unknown:
-        parser.error(f"--what takes start, run, test; got {', '.join(unknown)}")
-    steps = {"start": time_start, "run": time_run, "test": time_test}
+        parser.error(f"--what takes {', '.join(steps)}; got {', '.join(unknown)}")
     res: dict = {
         "commit": subprocess.run(
             ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True

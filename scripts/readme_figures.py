@@ -568,14 +568,16 @@ def render_log_size(res: Results) -> str:
 
 
 def compute_fresh_clone() -> Results:
-    """A fresh clone of HEAD: to a stepping console and to a first docking (the tests' whole
-    run, ``--what test``, takes ten minutes more: run it by hand)."""
-    return _benchmark_json("benchmarks/fresh_clone.py", "--what", "start,run")
+    """A fresh clone of HEAD: to a stepping console, to a first docking, and after edits of
+    the core (the tests' whole run, ``--what test``, takes ten minutes more: run it by
+    hand)."""
+    return _benchmark_json("benchmarks/fresh_clone.py", "--what", "start,run,edit")
 
 
 def render_fresh_clone(res: Results) -> str:
     start, run, test = res.get("start"), res.get("run"), res.get("test")
-    what = ",".join(k for k in ("start", "run", "test") if k in res)
+    edit = res.get("edit")
+    what = ",".join(k for k in ("start", "run", "edit", "test") if k in res)
     rows = [
         para(
             f"`.venv/bin/python benchmarks/fresh_clone.py --what {what}`: each from a new clone "
@@ -596,6 +598,17 @@ def render_fresh_clone(res: Results) -> str:
             f"| then the first `rov-console run {MISSION_OF_RUN}`, its compile included "
             f"| {run['first_run_s']:.0f} |",
             f"| the same run again, from the cache | {run['second_run_s']:.1f} |",
+        ]
+    if edit:
+        rows += [
+            f"| the same run after a comment edit in `sim/plant.py` "
+            f"| {edit['after_comment_edit_s']:.1f} |",
+            f"| after a formula edit in `sim/plant.py` (the wire's force) "
+            f"| {edit['after_plant_edit_s']:.0f} |",
+            f"| after a formula edit in `control/pid.py` (the tree's controller) "
+            f"| {edit['after_pid_edit_s']:.0f} |",
+            f"| `./scripts/start.sh` after the plant's edit undone, until it steps "
+            f"| {edit['serve_after_plant_edit_s']:.0f} |",
         ]
     if test:
         rows.append(

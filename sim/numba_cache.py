@@ -11,26 +11,33 @@ names the cache file after the line the function starts on. Both are wrong for t
 
 So the kernels of ``sim`` and ``control`` use ``CoreLocator``: their cache lives in
 ``.numba-cache/`` beside the packages (or under ``NUMBA_CACHE_DIR`` when the user sets it),
-one index per kernel named after the kernel alone, and a kernel's stamp is a digest of the
-code of its module and of every module of the core it imports, directly or through
-others, each read as its syntax tree without docstrings (comments are not in the tree).
-numba adds the kernel's own bytecode to each entry's key. An edit of a comment or a
-docstring therefore recompiles nothing; an edit of code recompiles, when they are next
-called, the kernels of that module and of the modules that import it, and no others.
+one index per kernel named after the kernel alone, and a kernel's stamp is a digest of what
+it reaches (``kernel_stamp``): its own code, the code of every function and kernel of the
+core it calls, directly or through others, and the values of the names they read (a module
+constant is frozen into the machine code). Code is read as its bytecode, names and
+constants, without line numbers or docstrings. An edit of a comment or a docstring therefore
+recompiles nothing; an edit of a formula recompiles, when they are next called, the kernels
+that reach it, and no others: an edit of the wire force recompiles the plant's step and the
+chunk kernels that call it, not the controller's step.
 """
 
 from __future__ import annotations
 
-import ast
+import enum
 import functools
 import hashlib
 import logging
 import os
+import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
+from types import CodeType, FunctionType, ModuleType
 from typing import Any
 
+import numpy as np
 from numba.core import caching, event
+from numba.core.dispatcher import Dispatcher
 
 PACKAGES = ("sim", "control")
 """The packages whose kernels this locator caches (every numba kernel is in one of them)."""
@@ -46,86 +53,147 @@ def cache_root() -> Path:
     return Path(chosen) if chosen else ROOT / FOLDER
 
 
-def _without_docstrings(tree: ast.AST) -> ast.AST:
-    """``tree`` with the docstring of the module and of every class and function removed."""
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef):
-            body = node.body
-            first = body[0] if body else None
-            if (
-                isinstance(first, ast.Expr)
-                and isinstance(first.value, ast.Constant)
-                and isinstance(first.value.value, str)
-            ):
-                node.body = body[1:] or [ast.Pass()]
-    return tree
+def _code_parts(code: CodeType, function: bool) -> Iterator[str]:
+    """What ``code`` does, as text: its bytecode, names and constants, its nested code
+    objects' too; not its line numbers, and not a function's docstring (the first constant
+    of a function's code, or None when it has none)."""
+    yield code.co_code.hex()
+    yield repr((code.co_names, code.co_varnames, code.co_freevars, code.co_cellvars))
+    yield repr((code.co_argcount, code.co_posonlyargcount, code.co_kwonlyargcount))
+    for i, const in enumerate(code.co_consts):
+        if isinstance(const, CodeType):
+            yield from _code_parts(const, not const.co_name.startswith("<"))
+        elif not (function and i == 0 and isinstance(const, str)):
+            yield repr(const)
+
+
+def _names(code: CodeType) -> set[str]:
+    """The global and attribute names ``code`` and its nested code read."""
+    names = set(code.co_names)
+    for const in code.co_consts:
+        if isinstance(const, CodeType):
+            names |= _names(const)
+    return names
+
+
+def _in_core(module_name: str | None) -> bool:
+    return bool(module_name) and str(module_name).split(".")[0] in PACKAGES
+
+
+def _value_text(value: object, functions: list[FunctionType]) -> str:
+    """A value a kernel reads, as text that changes when the value does (a constant is frozen
+    into the machine code); the core's functions and kernels it holds go into
+    ``functions``, to be followed."""
+    if isinstance(value, Dispatcher):
+        value = value.py_func
+    if isinstance(value, FunctionType):
+        if _in_core(value.__module__):
+            functions.append(value)
+        return f"function {value.__module__}.{value.__qualname__}"
+    if isinstance(value, type):
+        if not _in_core(value.__module__):
+            return f"type {value.__module__}.{value.__qualname__}"
+        fields = getattr(value, "_fields", None)
+        annotations = getattr(value, "__annotations__", {})
+        defaults = getattr(value, "_field_defaults", {})
+        return f"class {value.__qualname__} {fields!r} {annotations!r} {defaults!r}"
+    if isinstance(value, np.ndarray):
+        digest = hashlib.sha256(np.ascontiguousarray(value).tobytes()).hexdigest()
+        return f"array {value.dtype.str} {value.shape} {digest}"
+    if isinstance(value, tuple | list):
+        return repr(type(value)) + "(" + ",".join(_value_text(v, functions) for v in value) + ")"
+    if value is None or isinstance(value, bool | int | float | complex | str | bytes | np.generic):
+        return repr(value)
+    if isinstance(value, enum.Enum):
+        return repr(value)
+    return f"object {type(value).__module__}.{type(value).__qualname__}"
 
 
 @functools.cache
-def code_digest(path: Path) -> str:
-    """A digest of the code in ``path``: its syntax tree without docstrings or positions, so
-    comments, docstrings, blank lines and line breaks do not change it."""
-    tree = _without_docstrings(ast.parse(path.read_bytes(), filename=str(path)))
-    return hashlib.sha256(ast.dump(tree, include_attributes=False).encode()).hexdigest()
+def _function_part(func: FunctionType) -> tuple[str, tuple[FunctionType, ...]]:
+    """One function's share of a stamp: its code and the values of the names it reads (the
+    core's modules opened at those names), and the core's functions it reaches directly."""
+    code = func.__code__
+    names = _names(code)
+    parts = [f"{func.__module__}.{func.__qualname__}", *_code_parts(code, True)]
+    functions: list[FunctionType] = []
+    values: list[tuple[str, object]] = []
+    for name in sorted(names):
+        if name in func.__globals__:
+            values.append((name, func.__globals__[name]))
+    cells = func.__closure__ or ()
+    values += [
+        (name, cell.cell_contents) for name, cell in zip(code.co_freevars, cells, strict=True)
+    ]
+    values += [(f"default {i}", v) for i, v in enumerate(func.__defaults__ or ())]
+    while values:
+        name, value = values.pop(0)
+        if isinstance(value, ModuleType):
+            # ``plant.rk4_step_into``: the module's members the code names, followed in turn
+            if _in_core(value.__name__):
+                values += [
+                    (f"{name}.{n}", getattr(value, n)) for n in sorted(names) if hasattr(value, n)
+                ]
+            continue
+        parts.append(f"{name} = {_value_text(value, functions)}")
+    return "\n".join(parts), tuple(functions)
 
 
-def _module_file(root: Path, dotted: str) -> Path | None:
-    """The source file of module ``dotted`` under ``root`` (a package's ``__init__.py``),
-    None when it is not one of the core's."""
-    parts = dotted.split(".")
-    if parts[0] not in PACKAGES:
-        return None
-    base = root.joinpath(*parts)
-    for candidate in (base.with_suffix(".py"), base / "__init__.py"):
-        if candidate.is_file():
-            return candidate
-    return None
-
-
-@functools.cache
-def core_imports(path: Path, root: Path = ROOT) -> frozenset[Path]:
-    """The core's modules that ``path`` imports itself (``import sim.x``, ``from sim import
-    x``, ``from sim.x import y``), as files under ``root``: for ``from package import name``
-    the module ``name`` if it is one, else the package."""
-    found: set[Path | None] = set()
-    for node in ast.walk(ast.parse(path.read_bytes(), filename=str(path))):
-        if isinstance(node, ast.Import):
-            found.update(_module_file(root, alias.name) for alias in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            for alias in node.names:
-                # ``from sim import plant`` depends on sim/plant.py, not on sim/__init__.py;
-                # ``from sim.gnc import mv3_into`` on sim/gnc.py
-                sub = _module_file(root, f"{node.module}.{alias.name}")
-                found.add(sub if sub is not None else _module_file(root, node.module))
-    return frozenset(f for f in found if f is not None and f != path)
-
-
-def dependencies(path: Path, root: Path = ROOT) -> list[Path]:
-    """``path`` and every module of the core it imports, directly or through others, sorted."""
-    seen = {path}
-    todo = [path]
+def kernel_stamp(func: FunctionType) -> str:
+    """The cache stamp of the kernel whose Python function is ``func``: a digest of its code
+    and of everything of the core it reaches, followed through the kernels and functions it
+    calls (their machine code is linked into its own) and the constants it reads."""
+    seen: dict[str, str] = {}
+    todo = [func]
     while todo:
-        for dep in core_imports(todo.pop(), root):
-            if dep not in seen:
-                seen.add(dep)
-                todo.append(dep)
-    return sorted(seen)
-
-
-def stamp(path: Path, root: Path = ROOT) -> str:
-    """The cache stamp of the kernels in ``path``: the code digests of the module and of all
-    it depends on, with their paths relative to ``root``."""
-    h = hashlib.sha256()
-    for dep in dependencies(path, root):
-        h.update(dep.relative_to(root).as_posix().encode() + b"\0")
-        h.update(code_digest(dep).encode() + b"\0")
+        f = todo.pop()
+        key = f"{f.__module__}.{f.__qualname__}"
+        if key in seen:
+            continue
+        seen[key], reached = _function_part(f)
+        todo += reached
+    h = hashlib.sha256(f"python {sys.version_info[:2]}".encode())
+    for key in sorted(seen):
+        h.update(seen[key].encode() + b"\0")
     return h.hexdigest()[:32]
+
+
+class KernelStamp:
+    """A kernel's stamp, worked out when numba first compares or saves it. numba asks for the
+    stamp when the kernel is decorated, while its module is still being imported and the
+    names it reads further down are not yet defined; it only compares it with the index's
+    stamp (a str) and pickles it."""
+
+    def __init__(self, func: FunctionType) -> None:
+        self._func = func
+        self._value: str | None = None
+
+    @property
+    def value(self) -> str:
+        if self._value is None:
+            self._value = kernel_stamp(self._func)
+        return self._value
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, KernelStamp):
+            return self.value == other.value
+        return self.value == other if isinstance(other, str) else NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(self.value)
+
+    def __reduce__(self) -> tuple[type[str], tuple[str]]:
+        return (str, (self.value,))  # saved in the index as the plain digest
+
+    def __repr__(self) -> str:
+        return f"KernelStamp({self.value})"
 
 
 class CoreLocator(caching._CacheLocator):
     """numba's cache locator for the kernels of ``PACKAGES`` (see the module's docstring)."""
 
-    def __init__(self, py_file: Path) -> None:
+    def __init__(self, py_func: FunctionType, py_file: Path) -> None:
+        self._py_func = py_func
         self._py_file = py_file
         relative = py_file.parent.relative_to(ROOT)
         self._cache_path = str(cache_root().joinpath(relative))
@@ -133,8 +201,8 @@ class CoreLocator(caching._CacheLocator):
     def get_cache_path(self) -> str:
         return self._cache_path
 
-    def get_source_stamp(self) -> str:
-        return stamp(self._py_file)
+    def get_source_stamp(self) -> Any:
+        return KernelStamp(self._py_func)
 
     def get_disambiguator(self) -> str:
         return "core"  # not the line number: the entry survives lines moving above it
@@ -146,7 +214,7 @@ class CoreLocator(caching._CacheLocator):
             return None
         if path.relative_to(ROOT).parts[0] not in PACKAGES:
             return None
-        self = cls(path)
+        self = cls(py_func, path)  # type: ignore[arg-type]
         try:
             self.ensure_cache_path()
         except OSError:  # not writable (an installed copy): numba's own locators decide

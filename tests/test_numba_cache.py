@@ -2,12 +2,13 @@
 
 Defects it guards against: numba, left to itself, checks a cached kernel against its own file
 only, so the chunk kernels of control/loop.py went on running the old plant after only
-sim/plant.py was edited; and it names a cache entry after the function's line, so an edit of
-a docstring or a comment cost the compile of every kernel below it (with the whole core's
-digest as the cache's folder, ten minutes of compile for any edit of sim/ or control/)."""
+sim/plant.py was edited; it names a cache entry after the function's line, so an edit of
+a docstring or a comment cost the compile of every kernel below it; and with a stamp per
+module, an edit of the plant's wire force recompiled the controller's step too."""
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
@@ -30,53 +31,91 @@ def _edit(path: Path, old: str, new: str) -> None:
     path.write_text(text.replace(old, new, 1))
 
 
+_STAMPS = """
+import json
+from sim import gnc, plant, site
+from sim.numba_cache import kernel_stamp
+from control import loop, refkernel
+kernels = {
+    "plant.rk4_step_into": plant.rk4_step_into,
+    "plant.hold_needed_xyn": plant.hold_needed_xyn,
+    "gnc.ssa": gnc.ssa,
+    "site.chunk_rows_into": site.chunk_rows_into,
+    "loop.run_chunk": loop.run_chunk,
+    "loop.control_step_into": loop.control_step_into,
+    "loop.observe_into": loop.observe_into,
+    "refkernel.polls_still_away": refkernel.polls_still_away,
+}
+print(json.dumps({name: kernel_stamp(k.py_func) for name, k in kernels.items()}))
+"""
+
+
+def _stamps(root: Path) -> dict[str, str]:
+    """The stamps of a few kernels of the core copied under ``root``, worked out in a fresh
+    interpreter (nothing compiled)."""
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    proc = subprocess.run(
+        [sys.executable, "-c", _STAMPS], cwd=root, env=env, capture_output=True, text=True
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return json.loads(proc.stdout)
+
+
+def _changed(before: dict[str, str], after: dict[str, str]) -> list[str]:
+    return sorted(name for name in before if after[name] != before[name])
+
+
 def test_comments_and_docstrings_leave_every_stamp_as_it_was(tmp_path: Path) -> None:
     _copy_sources(tmp_path)
-    plant, loop = tmp_path / "sim" / "plant.py", tmp_path / "control" / "loop.py"
-    before = {p: numba_cache.stamp(p, tmp_path) for p in (plant, loop)}
-    _edit(plant, '"""Everything the compiled plant needs', '"""All the compiled plant needs')
+    before = _stamps(tmp_path)
+    plant = tmp_path / "sim" / "plant.py"
+    _edit(plant, '"""Force of the wire on the tree', '"""The force of the wire on the tree')
     _edit(plant, "\nclass PlantArrays(", "\n# a new comment\n\n\nclass PlantArrays(")
-    numba_cache.code_digest.cache_clear()
-    assert {p: numba_cache.stamp(p, tmp_path) for p in (plant, loop)} == before
+    _edit(
+        plant, "    if env[E_WEXT] > 0.0:", "    # a comment in the code\n    if env[E_WEXT] > 0.0:"
+    )
+    assert _stamps(tmp_path) == before
 
 
-def test_a_code_edit_changes_the_stamps_of_its_module_and_its_importers_only(
+def test_a_formula_edit_changes_the_stamps_of_the_kernels_that_reach_it_only(
     tmp_path: Path,
 ) -> None:
+    """The wire force is in the plant's step, the log row's tension and the landing planner's
+    holding force: those kernels and the chunk kernels recompile; the controller's step, the
+    angle helper, the reference model's poll and the environment rows do not."""
     _copy_sources(tmp_path)
-    files = {
-        name: tmp_path / name
-        for name in ("sim/plant.py", "control/loop.py", "control/pid.py", "sim/gnc.py")
-    }
-    before = {name: numba_cache.stamp(p, tmp_path) for name, p in files.items()}
-    _edit(files["control/pid.py"], "    return out\n", "    return out * 1.0\n")
-    numba_cache.code_digest.cache_clear()
-    after = {name: numba_cache.stamp(p, tmp_path) for name, p in files.items()}
-    changed = sorted(name for name in files if after[name] != before[name])
-    # loop.py imports pid.py; the plant and gnc do not
-    assert changed == ["control/loop.py", "control/pid.py"]
+    before = _stamps(tmp_path)
+    _edit(
+        tmp_path / "sim" / "plant.py",
+        "    d = np.sqrt(dx * dx + dy * dy + dz * dz)\n",
+        "    d = np.sqrt(dx * dx + dy * dy + dz * dz) * 1.0\n",
+    )
+    assert _changed(before, _stamps(tmp_path)) == [
+        "loop.observe_into",
+        "loop.run_chunk",
+        "plant.hold_needed_xyn",
+        "plant.rk4_step_into",
+    ]
 
 
-def test_a_constant_edit_reaches_the_kernels_of_the_modules_that_import_it(
-    tmp_path: Path,
-) -> None:
+def test_a_controller_edit_leaves_the_plants_kernels_alone(tmp_path: Path) -> None:
+    _copy_sources(tmp_path)
+    before = _stamps(tmp_path)
+    _edit(tmp_path / "control" / "pid.py", "    i_b[2] = i_n[2]\n", "    i_b[2] = i_n[2] * 1.0\n")
+    changed = _changed(before, _stamps(tmp_path))
+    assert "loop.run_chunk" in changed and "loop.control_step_into" in changed
+    assert not {"plant.rk4_step_into", "gnc.ssa", "site.chunk_rows_into"} & set(changed)
+
+
+def test_a_constant_edit_reaches_the_kernels_that_read_it(tmp_path: Path) -> None:
     """A module constant is frozen into the kernels that read it, while their own bytecode
-    stays the same: the stamp must change for them."""
+    stays the same: the stamp must change for them, and only for them."""
     _copy_sources(tmp_path)
-    plant, loop = tmp_path / "sim" / "plant.py", tmp_path / "control" / "loop.py"
-    before = numba_cache.stamp(loop, tmp_path)
-    _edit(plant, "E_GRIP = 17", "E_GRIP = 18")
-    numba_cache.code_digest.cache_clear()
-    assert numba_cache.stamp(loop, tmp_path) != before
-
-
-def test_dependencies_follow_imports_through_other_modules() -> None:
-    deps = {
-        p.relative_to(ROOT).as_posix() for p in numba_cache.dependencies(ROOT / "control/loop.py")
-    }
-    # loop imports sim.plant, which imports sim.gnc: both reach the loop's kernels
-    assert {"control/loop.py", "sim/plant.py", "sim/gnc.py", "control/ekf.py"} <= deps
-    assert "app/cli.py" not in deps and "control/simulation.py" not in deps
+    before = _stamps(tmp_path)
+    _edit(tmp_path / "sim" / "plant.py", "E_GRIP = 17", "E_GRIP = 18")
+    changed = _changed(before, _stamps(tmp_path))
+    assert "loop.run_chunk" in changed and "plant.rk4_step_into" in changed
+    assert "gnc.ssa" not in changed
 
 
 _RUN = """
@@ -110,12 +149,27 @@ def test_the_core_is_cached_beside_the_packages_and_a_docstring_edit_reloads_it(
     _edit(gnc, "def ssa(angle", "# a comment above ssa\n\n\ndef ssa(angle")
     assert run() == (False, True), "a comment moved the lines: loaded all the same"
     _edit(gnc, "import numpy as np\n", "import numpy as np\n\nUNUSED_CONSTANT = 1.0\n")
-    assert run() == (True, False), "the module's code changed: compiled again"
+    assert run() == (False, True), "code ssa does not reach changed: loaded all the same"
+    _edit(
+        gnc,
+        "    wrapped = (angle + np.pi) % (2.0 * np.pi)\n",
+        "    wrapped = (angle + np.pi) % (2.0 * np.pi * 1.0)\n",
+    )
+    assert run() == (True, False), "ssa's own code changed: compiled again"
 
 
 def test_the_cache_machinery_itself_is_no_kernels_dependency() -> None:
-    """``from sim import plant`` depends on sim/plant.py, not on sim/__init__.py (which
-    imports this module): an edit of the cache's own code must not recompile the core."""
-    for kernels in ("sim/plant.py", "control/loop.py", "control/ekf.py"):
-        deps = {p.relative_to(ROOT).as_posix() for p in numba_cache.dependencies(ROOT / kernels)}
-        assert "sim/numba_cache.py" not in deps and "sim/__init__.py" not in deps, kernels
+    """A kernel reaches the core's functions it calls, not the cache's own code (which
+    ``sim/__init__.py`` runs): an edit of it must not recompile the core."""
+    from control import loop
+
+    seen: set[str] = set()
+    todo = [loop.run_chunk.py_func]
+    while todo:
+        func = todo.pop()
+        name = f"{func.__module__}.{func.__qualname__}"
+        if name not in seen:
+            seen.add(name)
+            todo += numba_cache._function_part(func)[1]
+    assert "sim.plant.rk4_step_into" in seen and "control.ekf.correct_into" in seen
+    assert not any(name.startswith(("sim.numba_cache", "sim.__init__")) for name in seen)
