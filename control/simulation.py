@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from control import allocation as alloc
-from control import loop, model, pid, quality, refkernel
+from control import loop, model, quality, refkernel
 from control.columns import LAYOUT, N_LOG, Layout, LogRows
 from control.config import (
     ALLOCATIONS,
@@ -48,6 +48,7 @@ from control.config import (
     pilot_capacity,
     system_thruster_config,
 )
+from control.controller_state import ControllerState
 from control.faults import THRUSTER_KINDS, Fault
 from control.jobs import ClosedChunk, run_closed_chunk
 from control.startup import StartupReport, check_mount_vector
@@ -265,10 +266,9 @@ class Simulation:
             c, s = math.cos(self.x[5]), math.sin(self.x[5])
             self.x[12:15] += np.array([-3.0 * c, -3.0 * s, -1.0])
             self.held_y = sensors.true_outputs(self.x)
-        self.cs = np.zeros(loop.N_CS)
-        self.cs[loop.CS_MODE] = loop.MODE_TREE if start_gripping else loop.MODE_FREE
-        self.cs[loop.CS_LAST_MODE] = -1.0  # first step initialises the reference bumplessly
-        self.cs[loop.CS_HOLD : loop.CS_HOLD + 2] = 1.0  # the pilot's holds start on
+        self.controller_state = ControllerState.start(
+            loop.MODE_TREE if start_gripping else loop.MODE_FREE
+        )
         self.pilot_capacity = pilot_capacity(ps)
         """Full stick on [surge, sway, heave, yaw], (2, 4): backwards, forwards [N, N m]."""
         self.xhat, self.P_cov = self._initial_estimate()
@@ -435,11 +435,16 @@ class Simulation:
     @property
     def reference(self) -> FloatArray:
         """The reference model's state: pose (3), rate (3), acceleration (3) [NED, m, rad]."""
-        return self.cs[loop.CS_REF : loop.CS_REF + 9].copy()
+        return self.controller_state.reference.copy()
+
+    @property
+    def cs(self) -> FloatArray:
+        """The controller's state vector as the kernels take it (named: ``controller_state``)."""
+        return self.controller_state.vector
 
     @property
     def mode(self) -> Mode:
-        return MODES[int(self.cs[loop.CS_MODE])]
+        return MODES[self.controller_state.mode]
 
     @property
     def quality_counters(self) -> NDArray[np.int64]:
@@ -484,15 +489,13 @@ class Simulation:
         the closed-loop kernel steps it, and nothing but the target and the mode moves it).
         0 when nothing can be said: open loop (no reference is stepped), or a switch into
         tree mode not yet taken (its first step resets the reference to the estimate)."""
-        cs = self.cs
-        if not self.control_on or max_polls <= 0 or poll_steps <= 0:
-            return 0
-        if int(cs[loop.CS_MODE]) == loop.MODE_TREE and int(cs[loop.CS_LAST_MODE]) != loop.MODE_TREE:
+        cs = self.controller_state
+        if not self.control_on or max_polls <= 0 or poll_steps <= 0 or cs.tree_mode_pending:
             return 0
         return int(
             refkernel.polls_still_away(
                 int(self.C.ref_kind),
-                cs[loop.CS_REF : loop.CS_REF + 9],
+                cs.reference,
                 np.ascontiguousarray(self.target, dtype=float),
                 float(self.dt_s),
                 self.C.ref_params,
@@ -546,7 +549,7 @@ class Simulation:
     @property
     def free_setpoint_n(self) -> FloatArray:
         """The free-flying ROV's set point [north, east, down, psi] (a copy)."""
-        return self.cs[loop.CS_FSP : loop.CS_FSP + 4].copy()
+        return self.controller_state.free_setpoint_n.copy()
 
     def check_mount(self) -> StartupReport:
         """The start-up check of the mount vector against the measured geometry."""
@@ -587,7 +590,7 @@ class Simulation:
         rows = LogRows(row[None, :])
         rows["eta_ref_n"][0] = self.target
         rows["eta_hat_n"][0] = self.eta_estimate
-        rows["mode"][0] = self.cs[loop.CS_MODE]
+        rows["mode"][0] = self.controller_state.mode
         return row
 
     # ------------------------------------------------------------------ control commands
@@ -604,9 +607,8 @@ class Simulation:
             raise ValueError(
                 f"heading_mode must be one of {', '.join(HEADING_MODES)}, got {heading_mode!r}"
             )
-        psi_ref = (
-            self.cs[loop.CS_REF + 2] if self.cs[loop.CS_LAST_MODE] >= 0 else self.eta_estimate[2]
-        )
+        cs = self.controller_state
+        psi_ref = cs.reference[2] if cs.stepped else self.eta_estimate[2]
         psi = psi_ref + ssa(psi_rad - psi_ref) if heading_mode == "shortest" else psi_rad
         self.target = np.array([north_m, east_m, psi])
 
@@ -614,15 +616,7 @@ class Simulation:
         """New tree-controller gains, bumpless: the jump of the P and D terms at this instant
         is moved into the integral, so the commanded force does not change."""
         new_kp, new_kd = np.array(gains.kp), np.array(gains.kd)
-        self.cs[loop.CS_I : loop.CS_I + 3] = pid.retuned_tree_integral(
-            self.cs[loop.CS_I : loop.CS_I + 3],
-            self.cs[loop.CS_E : loop.CS_E + 3],
-            self.cs[loop.CS_DE : loop.CS_DE + 3],
-            self.C.Kp,
-            self.C.Kd,
-            new_kp,
-            new_kd,
-        )
+        self.controller_state.retune_tree(self.C.Kp, self.C.Kd, new_kp, new_kd)
         self.gains = gains
         self.C = self.C._replace(Kp=new_kp, Ki=np.array(gains.ki), Kd=new_kd)
 
@@ -632,7 +626,7 @@ class Simulation:
         thrust (no jump)."""
         if mode not in MODES:
             raise ValueError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
-        self.cs[loop.CS_MODE] = MODES.index(mode)
+        self.controller_state.mode = MODES.index(mode)
 
     def set_pilot_demand(self, surge: float, sway: float, heave: float, yaw: float) -> None:
         """The pilot's stick in the ROV's own axes, each a fraction in [-1, 1] of that axis's
@@ -645,12 +639,12 @@ class Simulation:
             values.append(_in_range(f"pilot {name}", float(v), -1.0, 1.0, "(fraction of full)"))
         frac = np.array(values)
         full = np.where(frac >= 0.0, self.pilot_capacity[1], self.pilot_capacity[0])
-        self.cs[loop.CS_PILOT : loop.CS_PILOT + 4] = frac * full
+        self.controller_state.pilot_demand[:] = frac * full
 
     @property
     def pilot_demand(self) -> FloatArray:
         """The pilot's demand as fractions [surge, sway, heave, yaw] (a copy)."""
-        d = self.cs[loop.CS_PILOT : loop.CS_PILOT + 4]
+        d = self.controller_state.pilot_demand
         return d / np.where(d >= 0.0, self.pilot_capacity[1], self.pilot_capacity[0])
 
     def set_pilot_holds(self, heading: bool, depth: bool) -> None:
@@ -659,13 +653,13 @@ class Simulation:
         for name, v in (("heading hold", heading), ("depth hold", depth)):
             if not isinstance(v, bool | np.bool_):
                 raise ValueError(f"{name} must be true or false, got {v!r}")
-        self.cs[loop.CS_HOLD] = 1.0 if heading else 0.0
-        self.cs[loop.CS_HOLD + 1] = 1.0 if depth else 0.0
+        self.controller_state.heading_hold = bool(heading)
+        self.controller_state.depth_hold = bool(depth)
 
     @property
     def pilot_holds(self) -> tuple[bool, bool]:
         """(auto-heading, auto-depth)."""
-        return bool(self.cs[loop.CS_HOLD] > 0.5), bool(self.cs[loop.CS_HOLD + 1] > 0.5)
+        return self.controller_state.heading_hold, self.controller_state.depth_hold
 
     def set_grip(self, gripping: bool) -> None:
         """Physically grip (True) or release (False) the tree."""
@@ -714,7 +708,7 @@ class Simulation:
         that switches to free mode holds the ROV where it is (bumpless), so a set point for
         the free ROV is given after that step."""
         values = finite_vector("free-ROV set point", [north_m, east_m, down_m, psi_rad], 4)
-        self.cs[loop.CS_FSP : loop.CS_FSP + 4] = values
+        self.controller_state.free_setpoint_n[:] = values
 
     def reset_observer(self) -> None:
         """Restart the EKF at hook-up from the ROV's own measurements moved to the tree with
@@ -1164,14 +1158,16 @@ class Simulation:
                 x, held, ok = loop.run_open_chunk_into(*args, out)
                 log = out
         elif self.C.alloc_kind == loop.ALLOC_EXTERNAL:
-            x, held, self.xhat, self.P_cov, self.cs, log, ok = self._chunk_qp(env, noise)
+            x, held, self.xhat, self.P_cov, cs, log, ok = self._chunk_qp(env, noise)
+            self.controller_state.vector = cs
         else:
             chunk = ClosedChunk(
                 self.step_index, self.x, self.held_y, self.xhat, self.P_cov, self.cs,
                 self.target, env, noise.noise, noise.fresh, self.arrays, self.C, self.Q,
                 self.dt_s, self.log_keep, self._spring_rows, out,
             )  # fmt: skip
-            x, held, self.xhat, self.P_cov, self.cs, log, ok = run_closed_chunk(chunk)
+            x, held, self.xhat, self.P_cov, cs, log, ok = run_closed_chunk(chunk)
+            self.controller_state.vector = cs
         if not whole and log.shape[1] == N_LOG:
             log = log[:, self.log_keep]
         if self.control_on:

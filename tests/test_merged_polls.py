@@ -197,9 +197,9 @@ def test_the_simulations_predictions_hold_in_its_closed_loop_and_stop_when_they_
     tol = np.full(6, 1e-3)
     sim.set_target(5.0, 5.0, 0.0, heading_mode="absolute")
     sim.set_mode("tree")
-    sim.cs[loop.CS_LAST_MODE] = loop.MODE_FREE
+    sim.controller_state.last_mode = loop.MODE_FREE
     assert sim.reference_polls_away(goal, tol, POLL, 600) == 0
-    sim.cs[loop.CS_LAST_MODE] = loop.MODE_TREE
+    sim.controller_state.last_mode = loop.MODE_TREE
     away = sim.reference_polls_away(goal, tol, POLL, 600)
     # the reference cannot get there faster than its speed limit allows (an independent bound)
     v_max = sim.C.ref_params[3, 0:2]
