@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import Annotated
@@ -527,22 +528,91 @@ def report(
     out: Annotated[
         Path, typer.Option("-o", "--out", help="HTML file to write (its folder is made)")
     ] = Path("report.html"),
+    compare_with: Annotated[
+        Path | None,
+        typer.Option("--compare", help="another session log: add a comparison with it"),
+    ] = None,
+    align: Annotated[
+        str, typer.Option(help="with --compare: mission | contact | start | event:WORDS")
+    ] = "mission",
 ) -> None:
     """Write a self-contained debrief of a recorded session: scores per leg, landings, pose
     against reference, the track over the docking frame, forces and thrusters, and every event
-    with who did it."""
-    if not log.is_file():  # before the report's imports (the simulation's, 1.4 s)
-        _fail(f"no log file {log}")
+    with who did it; with --compare, the run beside another."""
+    for path in (log, compare_with):
+        if path is not None and not path.is_file():  # before the imports (1.4 s)
+            _fail(f"no log file {path}")
     from app.report import write_report
 
     try:
-        d = write_report(log, out)
+        if compare_with is None:
+            d = write_report(log, out)
+        else:
+            from app.compare import compare, comparison_html, plot_comparison
+
+            c = compare(log, compare_with, align)
+            with tempfile.TemporaryDirectory() as tmp:
+                plot = plot_comparison(c, Path(tmp) / "comparison.png")
+                d = write_report(log, out, c.a, comparison_html(c, plot))
     except ValueError as err:
         _fail(str(err))
     typer.echo(
         f"{out}: debrief of {d.name} ({d.duration_s:.0f} s, {len(d.result.legs)} legs, "
         f"{len(d.events)} events)"
     )
+
+
+@app.command("compare")
+def compare_runs(
+    a: Annotated[Path, typer.Argument(help="the first session log (.mcap): run A")],
+    b: Annotated[Path, typer.Argument(help="the second session log (.mcap): run B")],
+    align: Annotated[
+        str,
+        typer.Option(
+            help="where to align the runs: mission (its start) | contact (first touch of "
+            "the frame) | start (the recordings') | event:WORDS (first event with WORDS)"
+        ),
+    ] = "mission",
+    plot: Annotated[
+        Path | None, typer.Option(help="also draw both runs on one time axis into this PNG")
+    ] = None,
+    json_out: Annotated[bool, typer.Option("--json", help="one JSON object")] = False,
+) -> None:
+    """Compare two recorded runs: what differs in their set-ups, and figure by figure (RMS
+    errors per leg, time saturated, thrust, alarms, the landing) which did better."""
+    for path in (a, b):
+        if not path.is_file():
+            _fail(f"no log file {path}")
+    from app.compare import compare, plot_comparison, table_rows
+
+    try:
+        c = compare(a, b, align)
+        if plot is not None:
+            plot.parent.mkdir(parents=True, exist_ok=True)
+            plot_comparison(c, plot)
+    except ValueError as err:
+        _fail(str(err))
+    if json_out:
+        typer.echo(json.dumps(c.as_dict()))
+        return
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    typer.echo(f"A: {c.a.name} ({a})\nB: {c.b.name} ({b})")
+    typer.echo(
+        f"aligned at {c.aligned.at}: A's {c.aligned.a_s:.1f} s with B's {c.aligned.b_s:.1f} s"
+    )
+    if c.differs:
+        typer.echo("not like for like, the set-ups differ:")
+        for line in c.differs:
+            typer.echo(f"  {line}")
+    table = Table("figure", "A", "B", "better")
+    for row in table_rows(c):
+        table.add_row(*(escape(cell) for cell in row))
+    Console(width=110).print(table)
+    if plot is not None:
+        typer.echo(f"plot: {plot}")
 
 
 @app.command()

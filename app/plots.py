@@ -179,6 +179,37 @@ def wire_figure(rows: LogRows, events: list[dict], path: Path, title: str) -> Pa
     return path
 
 
+def comparison_figure(
+    series: list[tuple[NDArray[np.float64], ...]],
+    labels: tuple[str, str],
+    aligned_at: str,
+    path: Path,
+) -> Path:
+    """Two runs on one time axis, seconds from the moment they are aligned at: north, east
+    and heading errors of the tree against its reference, and the largest thruster use.
+    ``series``: per run (t from the alignment, north error, east error, heading error in
+    degrees, largest thruster use)."""
+    fig, axes = plt.subplots(4, 1, figsize=(10, 9), sharex=True)
+    names = ("north error [m]", "east error [m]", "heading error [deg]", "largest thruster use")
+    colours = ("tab:blue", "tab:orange")
+    for run, label, colour in zip(series, labels, colours, strict=True):
+        t = run[0]
+        for ax, values in zip(axes, run[1:], strict=True):
+            ax.plot(t, values, color=colour, lw=1.0, label=label)
+    for ax, name in zip(axes, names, strict=True):
+        ax.axvline(0.0, color="0.4", lw=0.8, ls=":")
+        ax.axhline(0.0, color="0.8", lw=0.6)
+        _robust_limits(ax, *(ax_line.get_ydata() for ax_line in ax.get_lines()[:2]))
+        ax.set_ylabel(name)
+    axes[0].legend(loc="best", fontsize=8)
+    axes[0].set_title(f"two runs, aligned at {aligned_at} (dotted line)")
+    axes[-1].set_xlabel("time from the alignment [s]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
 def mission_figures(result, out_dir: Path, crane_tip_n=None, docking=None) -> list[Path]:
     """All three figures of a mission result into ``out_dir``, and the wire's tension when the
     mission logged slack wire or snap loads (``wire`` events, elastic wire)."""

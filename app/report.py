@@ -15,7 +15,7 @@ import html
 import math
 import tempfile
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -64,6 +64,15 @@ class Debrief:
     landings: list[str]
     events: list[dict]
     docking: tuple[DockingFrame, DockingLayout] | None
+    setup: dict = field(default_factory=dict)
+    """The debriefed run's set-up record (mission, parameter set, seed, ...)."""
+    log: LogRows | None = field(default=None, repr=False)
+    """The debriefed run's rows."""
+
+    @property
+    def t_s(self) -> np.ndarray:
+        """Recording time of the debriefed run's rows [s]."""
+        return self.log.t_s if self.log is not None else np.zeros(0)
 
 
 def leg_spans(
@@ -213,6 +222,8 @@ def debrief(path: str | Path) -> Debrief:
         landings=landings,
         events=events,
         docking=docking,
+        setup=dict(run),
+        log=rows,
     )
 
 
@@ -233,12 +244,12 @@ def _docking(
     return frame, ps.spec.docking.to_numeric()
 
 
-def _png(path: Path) -> str:
+def png_html(path: Path) -> str:
     data = base64.b64encode(path.read_bytes()).decode("ascii")
     return f'<img alt="{html.escape(path.stem)}" src="data:image/png;base64,{data}">'
 
 
-def _table(header: tuple[str, ...], rows: Sequence[tuple[str, ...]]) -> str:
+def table_html(header: tuple[str, ...], rows: Sequence[tuple[str, ...]]) -> str:
     head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
     body = "".join(
         "<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in rows
@@ -257,8 +268,9 @@ def _runs_html(runs: list[str]) -> str:
     )
 
 
-def render_html(d: Debrief) -> str:
-    """The report as one HTML page (figures inline)."""
+def render_html(d: Debrief, comparison: str = "") -> str:
+    """The report as one HTML page (figures inline); ``comparison``, a section of HTML
+    comparing the run with another (``app.compare.comparison_html``), after the scores."""
     r = d.result
     summary = r.summary()
     with tempfile.TemporaryDirectory() as tmp:
@@ -271,7 +283,7 @@ def render_html(d: Debrief) -> str:
             ),
             plots.forces_figure(r.log, r.legs, out / "forces.png", f"{d.name}: forces"),
         ]
-        images = "".join(f"<figure>{_png(p)}</figure>" for p in figures)
+        images = "".join(f"<figure>{png_html(p)}</figure>" for p in figures)
     events = [
         (
             f"{e.get('t_s', math.nan):.2f}",
@@ -304,21 +316,25 @@ img {{ max-width: 100%; }}
 {datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")}.</p>
 {_runs_html(d.runs)}
 <h2>Scores</h2>
-{_table(LEG_TABLE_COLUMNS, leg_table_rows(summary))}
-{_table(("figure", "value"), figures_rows)}
+{table_html(LEG_TABLE_COLUMNS, leg_table_rows(summary))}
+{table_html(("figure", "value"), figures_rows)}
 <h2>Landings</h2><ul>{landings}</ul>
+{comparison}
 <h2>Figures</h2>
 {images}
 <h2>Events</h2>
-{_table(("t [s]", "kind", "who", "what"), events)}
+{table_html(("t [s]", "kind", "who", "what"), events)}
 </body></html>
 """
 
 
-def write_report(log_path: str | Path, out_path: str | Path) -> Debrief:
-    """Debrief ``log_path`` into ``out_path`` (its folder is made when missing)."""
-    d = debrief(log_path)
+def write_report(
+    log_path: str | Path, out_path: str | Path, d: Debrief | None = None, comparison: str = ""
+) -> Debrief:
+    """Debrief ``log_path`` (or write ``d``, its debrief already made) into ``out_path`` (its
+    folder is made when missing), with a comparison section when given."""
+    d = d if d is not None else debrief(log_path)
     out = Path(out_path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(render_html(d), encoding="utf-8")
+    out.write_text(render_html(d, comparison), encoding="utf-8")
     return d
