@@ -4,11 +4,12 @@ entered with the wrong sign, the winch that slipped and dropped the tree, a curr
 changes, a vessel that drifts off).
 
 A fault has a kind, a start and a duration in simulation time, and one value whose meaning
-depends on the kind (``FAULT_KINDS``). ``Simulation`` applies the faults whose window covers a
-step when it makes that chunk's inputs (``Simulation._chunk_inputs``): sensor faults change the
-sensor samples and noise, environment faults the water and the crane tip, the winch slip pays
-the wire out at once, and the mount-sign fault hands the control system the mirrored mounting
-vector. The control system is not told: it sees only the effects, through its own checks.
+depends on the kind (``FAULT_KINDS``). ``control.fault_injection.FaultInjector`` applies the
+faults whose window covers a step when the simulation makes that chunk's inputs
+(``Simulation._chunk_inputs``): sensor faults change the sensor samples and noise, environment
+faults the water and the crane tip, the winch slip pays the wire out at once, and the
+mount-sign fault hands the control system the mirrored mounting vector. The control system is
+not told: it sees only the effects, through its own checks.
 """
 
 from __future__ import annotations

@@ -3,7 +3,8 @@
 ``Simulation`` hands the kernel a ``ClosedChunk`` (its state, configuration and the chunk's
 own inputs, made from the run's own seed) and takes back a ``ChunkResult``; the chunk knows
 nothing of the simulation it came from. ``run_closed_chunk`` runs it with
-``loop.run_chunk`` (or ``run_chunk_into`` when its rows go into a caller's array).
+``loop.run_chunk`` (or ``run_chunk_into`` when its rows go into a caller's array);
+``run_qp_chunk`` runs it step by step with the QP allocation (not compiled) in the middle.
 """
 
 from __future__ import annotations
@@ -14,8 +15,14 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from control import allocation as alloc
 from control import loop
 from control.columns import N_LOG
+from sim import plant, sensors
+
+
+class SimulationDiverged(RuntimeError):
+    """The plant state (or the MoorDyn wire beside it) stopped being finite."""
 
 
 class ChunkResult(NamedTuple):
@@ -142,3 +149,27 @@ def _run_piece(c: ClosedChunk, C: Any) -> ChunkResult:
         return ChunkResult(*loop.run_chunk(*args))
     x, held_y, xhat, P_cov, cs, n_done = loop.run_chunk_into(*args, c.out)
     return ChunkResult(x, held_y, xhat, P_cov, cs, c.out, n_done)
+
+
+def run_qp_chunk(chunk: ClosedChunk, thrusters: alloc.ThrusterConfig) -> ChunkResult:
+    """Run ``chunk`` a step at a time: the compiled step's body with the QP allocation on
+    ``thrusters`` (not compiled) in the middle. Its rows are whole (N_LOG) and new; its
+    spring and ``out`` are left to the caller."""
+    c = chunk
+    x, held, xhat, pc, cs = c.x.copy(), c.held_y, c.xhat, c.P_cov, c.cs
+    n = c.n
+    log = np.zeros((n, N_LOG))
+    work = plant.make_work(c.arrays.thr_T.shape[1])  # x is advanced in place
+    for j in range(n):
+        k = c.k0 + j
+        held = sensors.sample(x, held, c.noise[j], c.fresh[j], sensors.Y_SENSOR)
+        tau6, xhat, pc, cs = loop.control_step(
+            k * c.dt_s, x, held, c.fresh[j], xhat, pc, cs, c.target, c.C, c.Q, c.dt_s, log[j]
+        )
+        f = np.asarray(alloc.allocate_qp(thrusters, tau6).force_newton)
+        xhat, pc = loop.finish_step(
+            x, f, c.env[j], xhat, pc, c.C, c.arrays, c.dt_s, (k + 1) * c.dt_s, held, log[j], work
+        )
+        if not np.all(np.isfinite(x)):
+            return ChunkResult(x, held, xhat, pc, cs, log, j)
+    return ChunkResult(x, held, xhat, pc, cs, log, n)

@@ -11,6 +11,9 @@ tree where it hangs, the sign is almost certainly wrong, and the operator is tol
 controller is trusted. The check needs |r| large enough to tell the two apart from the fix's
 noise; with a short r it says it cannot decide. A configured r that puts the tree outside the
 plausible hang area is reported in any case.
+
+The observer's start is here too: at the run's start (``initial_estimate``) and at the grip
+(``hookup_estimate``), from the ROV's measurements moved to the tree through r.
 """
 
 from __future__ import annotations
@@ -21,9 +24,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from control import loop
 from sim import site
 from sim import wire as wm
 from sim.params import ParameterSet
+
+FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -87,3 +93,64 @@ def check_mount_vector(
             f"(tolerance {tol:.2f} m): check the mount vector and the crane-tip position"
         )
     return StartupReport(checked, residual, flipped, warnings)
+
+
+def initial_estimate(
+    held_y: FloatArray, C: loop.ControlArrays, ps: ParameterSet
+) -> tuple[FloatArray, FloatArray]:
+    """EKF start, (x0 (9,), P0 (9, 9)): the first measurements ``held_y`` moved to the tree
+    origin, at rest, no bias."""
+    ne, psi, _, _ = loop.tree_measurements(held_y, held_y[4] - C.psi_rel, C)
+    x0 = np.zeros(9)
+    x0[0:2] = ne
+    x0[2] = psi
+    p0 = np.diag(
+        [
+            1.0,
+            1.0,
+            0.01,
+            0.01,
+            0.01,
+            1e-4,
+            *(np.asarray(ps.spec.observer.process_force_std) ** 2),
+        ]
+    )
+    return x0, p0
+
+
+def hookup_estimate(
+    held_y: FloatArray, C: loop.ControlArrays, ps: ParameterSet, t_s: float, last_fix_s: float
+) -> tuple[FloatArray, FloatArray]:
+    """EKF start at the grip at ``t_s``, (x0 (9,), P0 (9, 9)): the tree's pose and velocity
+    are the ROV's, moved to the tree's origin through r (eq. 3.4-3.6), each with the variance
+    of the sensor it comes from; the bias starts at zero with its configured spread.
+
+    The held position fix, taken at ``last_fix_s`` (< 0: none yet), can be up to one fix
+    interval old: it is carried forward over its age with the DVL's velocity, and its
+    variance grows by the DVL's over that age. A start with loose pose variances but the
+    gyro's tight rate variance is what made the filter run away at the grip: the wire spring
+    couples the position to the yaw acceleration (the tree and ROV's mass matrix has sway-yaw
+    terms), so after a few steps the gyro's corrections moved the east estimate by metres."""
+    psi_hat = held_y[4] - C.psi_rel
+    ne, psi, uv, rate = loop.tree_measurements(held_y, psi_hat, C)
+    c, s = math.cos(psi), math.sin(psi)
+    vel_n = np.array([c * uv[0] - s * uv[1], s * uv[0] + c * uv[1]])
+    age_s = max(t_s - last_fix_s, 0.0) if last_fix_s >= 0.0 else 0.0
+    x0 = np.zeros(9)
+    x0[0:2] = ne + age_s * vel_n
+    x0[2] = psi
+    x0[3:5] = uv
+    x0[5] = rate
+    pos_var = C.r_pos + age_s**2 * C.r_dvl
+    p0 = np.diag(
+        [
+            pos_var,
+            pos_var,
+            C.r_psi,
+            C.r_dvl,
+            C.r_dvl,
+            C.r_gyro,
+            *(np.asarray(ps.spec.observer.process_force_std) ** 2),
+        ]
+    )
+    return x0, p0

@@ -242,11 +242,11 @@ def test_the_slow_parts_refresh_on_whole_seconds_and_hold_between() -> None:
     sim = _full_scale(True)
     sim.winch_to(sim.wire_length_m + 5.0, 0.5)
     sim.step(50)
-    held_start, k_h_start = sim._wire_held.copy(), sim.C.k_h
+    held_start, k_h_start = sim.site.wire_held.copy(), sim.C.k_h
     sim.step(50)  # 0.5 -> 1.0 s: inside the second
-    assert np.array_equal(sim._wire_held, held_start) and sim.C.k_h == k_h_start
+    assert np.array_equal(sim.site.wire_held, held_start) and sim.C.k_h == k_h_start
     sim.step(1)  # starts on t = 1 s
-    assert not np.array_equal(sim._wire_held, held_start)
+    assert not np.array_equal(sim.site.wire_held, held_start)
     assert sim.C.k_h < k_h_start  # 0.5 m more wire: a softer pendulum
 
 
@@ -261,7 +261,7 @@ def test_the_elastic_wires_top_moves_at_the_winchs_rate() -> None:
     sim.winch_to(sim.wire_length_m + 10.0, 0.5)
     sim.move_vessel(sim.crane_tip_n + np.array([10.0, 0.0, 0.0]), 0.2)
     env, _ = sim._chunk_inputs(60)
-    site_w = sim._wire_site
+    site_w = sim.site.wire_site
     payout = sim.wire_length_m - 0.5 * 0.01 * np.arange(59, -1, -1)  # after each row's step
     expected_down = 0.5 * (1.0 + site_w.w * payout / site_w.EA)
     vel = env[:, plant.E_VPIV : plant.E_VPIV + 3]

@@ -54,11 +54,12 @@ def test_tree_hangs_still_on_the_moordyn_wire_at_100_m():
     qs = _tree_only("quasi-static")
     rows = md.run_for(20.0)
     qs.run_for(20.0)
-    assert md.mdwire is not None
+    wire = md.site.mdwire
+    assert wire is not None
     assert np.max(np.abs(rows["tree_eta_n"][:, 2] - qs.x[2])) < 3e-3  # tree depth, log column
     assert np.linalg.norm(md.x[0:3] - qs.x[0:3]) < 3e-3
     assert md.wire_tension_newton() == pytest.approx(W0, rel=0.02)
-    assert md.mdwire.top_tension_newton() == pytest.approx(W0 + W_WIRE * md.wire_length_m, rel=0.02)
+    assert wire.top_tension_newton() == pytest.approx(W0 + W_WIRE * md.wire_length_m, rel=0.02)
 
 
 def test_steady_push_gives_the_quasi_static_offset_at_100_m():
@@ -80,8 +81,9 @@ def test_steady_push_gives_the_quasi_static_offset_at_100_m():
         pitch = math.atan(push / W0)
         sim.x[4] = pitch
         sim.x[0] += offset + FULL.tree.attachment_height_m * math.sin(pitch)
-        if sim.mdwire is not None:
-            sim._init_moordyn_wire()  # MoorDyn's line from the crane tip to the moved tree
+        if sim.site.mdwire is not None:
+            # MoorDyn's line from the crane tip to the moved tree
+            sim.site.start_moordyn_wire(sim.x, sim.arrays.tree_r_att)
         x0 = sim.x[0:3].copy()
         sim.set_push(np.array([push, 0.0, 0.0]))
         rows = sim.run_for(30.0)
@@ -120,8 +122,9 @@ def test_tree_stays_at_the_quasi_static_current_offset_at_100_m():
         assert offset == pytest.approx(0.496, abs=0.001)
         sim.x[4] = math.atan(site.tree_drag_force(FULL, CURRENT_MPS) / W0)
         sim.x[0] += offset
-        if sim.mdwire is not None:
-            sim._init_moordyn_wire()  # MoorDyn's line from the crane tip to the moved tree
+        if sim.site.mdwire is not None:
+            # MoorDyn's line from the crane tip to the moved tree
+            sim.site.start_moordyn_wire(sim.x, sim.arrays.tree_r_att)
         rows = sim.run_for(30.0)
         north = rows["tree_eta_n"][:, 0] - offset
         assert np.max(np.abs(north)) < 2.0 * 0.02 * offset, model
@@ -207,7 +210,7 @@ def test_coupled_steps_print_nothing(capfd, monkeypatch):
     sim.run_for(0.05)
     monkeypatch.undo()
     assert redirections == []
-    md = sim.mdwire
+    md = sim.site.mdwire
     assert md is not None
     end = moordyn.GetPointPos(moordyn.GetPoint(md.system, 2))  # the attachment point
     x = dw.ned_to_moordyn(sim.crane_tip_n) + list(end)

@@ -120,10 +120,10 @@ type = "hold"
 duration_s = 1.0
 """
     sim = setup.build_simulation(schema.parse_text(text, "v.toml"))
-    assert sim.vessel_motion is not None
-    assert sim.vessel_motion.heading_rad == pytest.approx(math.radians(210.0))
-    assert sim.vessel_motion.heave_compensation
-    assert sim.vessel_motion.heave_compensation_efficiency == 0.8
+    assert sim.site.vessel_motion is not None
+    assert sim.site.vessel_motion.heading_rad == pytest.approx(math.radians(210.0))
+    assert sim.site.vessel_motion.heave_compensation
+    assert sim.site.vessel_motion.heave_compensation_efficiency == 0.8
 
 
 @pytest.mark.parametrize(
@@ -180,7 +180,7 @@ def _hovering(ramp: bool) -> Simulation:
         wire="elastic",
     )
     if not ramp:
-        sim.vessel_ramp_s = 0.0
+        sim.site.vessel_ramp_s = 0.0
     return sim
 
 

@@ -220,7 +220,7 @@ duration_s = 1.0
     mission = schema.parse_text(text, "w.toml")
     sim = setup.build_simulation(mission)
     assert sim.wave_field is not None and sim.wave_field.water_depth_m == 80.0
-    assert sim.wave_load == "drag"
+    assert sim.site.wave_load == "drag"
 
 
 def test_drag_load_gives_the_thesis_short_sea_and_morison_does_not():
