@@ -173,9 +173,18 @@ class Thrusters:
         return float(res.x[-1]) if res.status == 0 else 0.0
 
 
-def _environment(sim: Simulation, depth_m: float, speed: float, direction: float) -> FloatArray:
+def _environment(
+    sim: Simulation,
+    depth_m: float,
+    speed: float,
+    direction: float,
+    crane_tip_n: FloatArray | None = None,
+) -> FloatArray:
+    """The plant's environment vector with the tree hung at ``depth_m`` from ``crane_tip_n``
+    (default: where the crane tip is now) in a steady current."""
     length = sim.wire_length_for_depth(depth_m)
-    env = site.wire_environment(sim.plant_ps, length, sim.crane_tip_n, speed, direction)
+    tip = sim.crane_tip_n if crane_tip_n is None else crane_tip_n
+    env = site.wire_environment(sim.plant_ps, length, tip, speed, direction)
     env[plant.E_VC] = speed * math.cos(direction)
     env[plant.E_VC + 1] = speed * math.sin(direction)
     return env
@@ -213,9 +222,12 @@ def pose_loads(
     ]
 
 
-def plan_landing(sim: Simulation, frame: DockingFrame, target_n: FloatArray, depth_m: float):
+def plan_landing(
+    sim: Simulation, frame: DockingFrame, target_n: FloatArray, depth_m: float
+) -> LandingPlan:
     """Check the pose over ``frame`` in the present current and choose the approach from the
-    present target (north, east, heading)."""
+    present target (north, east, heading), with the vessel where it stands
+    (``missions.assist.plan_vessel`` moves it)."""
     thrusters = Thrusters(sim)
     speed, direction = sim.current_speed_mps, sim.current_direction_rad
     env = _environment(sim, depth_m, speed, direction)

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from control.columns import LAYOUT, Layout, LogRows
 from control.config import Gains
 from control.simulation import Simulation
-from missions import landing, schema
+from missions import assist, landing, schema
 from missions.scoring import LandingResult
 from sim import docking
 from sim.docking import DockingFrame, DockingLayout
@@ -353,6 +353,112 @@ def _first_contact(rows: LogRows, post_top: float, half_h: float) -> int | None:
     return int(hits[0]) if hits.size else None
 
 
+class _VesselLoop:
+    """The slow outer loop of a landing with ``vessel = "auto"`` or ``"advise"``: every
+    ``assist.REPLAN_S`` it checks, in the present current, what holding the tree over the
+    frame needs with the crane tip where the vessel is going, and when that is more than
+    ``assist.ASSIST_UTILISATION`` of the thrust it plans the vessel's place again and moves
+    the vessel there (or advises the operator to, not twice to the same place). Checks
+    skipped by a prediction (``MissionContext.polls``) are capped at the loop's period."""
+
+    def __init__(self, ctx: MissionContext, frame: DockingFrame, depth_m: float, mode: str) -> None:
+        self.ctx, self.frame, self.depth_m, self.mode = ctx, frame, depth_m, mode
+        self.next_s = ctx.sim.t_s + assist.REPLAN_S
+        self.advised: FloatArray | None = None
+
+    def check(self) -> None:
+        sim = self.ctx.sim
+        if sim.t_s < self.next_s:
+            return
+        self.next_s = sim.t_s + assist.REPLAN_S
+        going = np.asarray(sim.crane_target_n, float)
+        thrusters = landing.Thrusters(sim)
+        now = assist.frame_utilisation(sim, thrusters, self.frame, self.depth_m, going)
+        if now.utilisation <= assist.ASSIST_UTILISATION:
+            return
+        plan = assist.plan_vessel(sim, self.frame, self.ctx.target, self.depth_m)
+        if plan.distance_m == 0.0:
+            return
+        if self.mode == "advise":
+            told = self.advised
+            if told is not None and np.hypot(*(plan.crane_tip_n - told)[0:2]) <= (
+                assist.REPLAN_MOVE_M
+            ):
+                return
+            self.advised = plan.crane_tip_n
+        speed, direction = sim.current_speed_mps, sim.current_direction_rad
+        now_in = f"in {speed:.3f} m/s towards {math.degrees(direction) % 360:.0f} deg now: "
+        _send_vessel(self.ctx, plan, self.mode, now_in)
+
+    def away(self, inner: Away) -> Away:
+        def capped(poll_steps: int, max_polls: int) -> int:
+            # skip no poll at or after the loop's next check: the polls before it only
+            sim = self.ctx.sim
+            ahead = (self.next_s - sim.t_s) / (poll_steps * sim.dt_s)
+            left = math.ceil(ahead - 1e-9) - 1
+            return inner(poll_steps, max(0, min(max_polls, left)))
+
+        return capped
+
+
+def _send_vessel(ctx: MissionContext, plan: assist.VesselPlan, mode: str, why: str = "") -> None:
+    """Move the vessel to the plan's place (auto) or tell the operator where (advise)."""
+    u = plan.at_frame.utilisation
+    data = {
+        "distance_m": round(plan.distance_m, 3),
+        "bearing_deg": round(plan.bearing_deg, 1),
+        "crane_tip_ne_m": [round(float(x), 3) for x in plan.crane_tip_n[0:2]],
+        "utilisation": u,
+        "mode": mode,
+    }
+    if mode == "auto":
+        ctx.sim.move_vessel(plan.crane_tip_n, assist.VESSEL_SPEED_MPS)
+        text = (
+            f"{why}moving the vessel {plan.distance_m:.1f} m towards "
+            f"{plan.bearing_deg:03.0f} deg at {assist.VESSEL_SPEED_MPS:g} m/s "
+            f"(then {100 * u:.0f} % of the thrust over the frame)"
+        )
+    else:
+        text = f"{why}{plan.advice()} (then {100 * u:.0f} % of the thrust over the frame)"
+    ctx.event("vessel", text, **data)
+
+
+def _with_vessel(
+    ctx: MissionContext,
+    plan: assist.VesselPlan,
+    mode: str,
+    frame: DockingFrame,
+    depth_m: float,
+    deadline: float,
+) -> LegRun:
+    """Move the vessel to the plan's place (auto), or advise it and wait for the operator
+    (advise), while the tree follows from where it is to over the frame in step with the
+    crane tip, so the wire's pull on it stays what it was."""
+    sim = ctx.sim
+    start = ctx.target.copy()
+    centre = np.asarray(frame.center_n[0:2], float)
+    tip0, tip1 = plan.from_n[0:2], plan.crane_tip_n[0:2]
+    span = tip1 - tip0
+    thrusters = landing.Thrusters(sim)
+    _send_vessel(ctx, plan, mode)
+
+    def follow() -> bool:
+        tip = sim.crane_tip_n[0:2]
+        s = float(np.clip(np.dot(tip - tip0, span) / np.dot(span, span), 0.0, 1.0))
+        ne = start[0:2] + s * (centre - start[0:2])
+        if s > 0.0:
+            ctx.set_target(ne[0], ne[1], start[2])
+        if mode == "auto":
+            return sim.vessel_at(plan.crane_tip_n)
+        if not sim.vessel_at(sim.crane_target_n):
+            return False  # the vessel is still moving
+        near = float(np.hypot(*(tip - tip1))) <= assist.ADVISE_TOL_M
+        load = assist.frame_utilisation(sim, thrusters, frame, depth_m, sim.crane_tip_n)
+        return near or load.utilisation <= assist.ASSIST_UTILISATION
+
+    return (yield from ctx.run_until(follow, deadline))
+
+
 def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
     cl = ctx.sim
     frame = ctx.charted_frame  # where the operator believes it is
@@ -364,49 +470,43 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
     post_top = frame.post_top_depth_m(layout)
     hover_depth = post_top - leg.hover_m - half_h
     plan = landing.plan_landing(cl, frame, ctx.target, hover_depth)
-    if not plan.feasible:
+    assisted: assist.VesselPlan | None = None
+    if leg.vessel != "fixed" and plan.at_frame.utilisation > assist.ASSIST_UTILISATION:
+        assisted = assist.plan_vessel(cl, frame, ctx.target, hover_depth)
+        if not assisted.feasible and not plan.feasible:
+            ctx.event("landing", assisted.reason)
+            raise ValueError(assisted.reason)
+        if not assisted.feasible or assisted.distance_m == 0.0:
+            assisted = None  # no move helps: fly it from where the vessel stands
+    if not plan.feasible and assisted is None:
         ctx.event("landing", plan.reason)
         raise ValueError(plan.reason)
-    way = "where it is, then over the frame" if plan.turn_first else "over the frame"
-    ctx.event(
-        "dock",
-        f"{plan.reason}; turning {math.degrees(plan.turn_rad):+.0f} deg {way} "
-        f"(at most {100 * plan.worst_utilisation:.0f} % of the thrust on the way)",
-        utilisation=plan.at_frame.utilisation,
-        turn_deg=math.degrees(plan.turn_rad),
-        turn_first=plan.turn_first,
-    )
+    outer = None if leg.vessel == "fixed" else _VesselLoop(ctx, frame, hover_depth, leg.vessel)
     cl.winch_to(cl.wire_length_for_depth(hover_depth), 0.1)
-    psi = ctx.target[2] + plan.turn_rad
-    if plan.turn_first:
-        t = ctx.target
-        ok = yield from ctx.go_and_settle(t[0], t[1], psi, 0.0, deadline)
-        if ok:
-            ok = yield from ctx.go_and_settle(
-                frame.center_n[0], frame.center_n[1], psi, 0.0, deadline
-            )
+    if assisted is None:
+        why = yield from _approach(ctx, plan, frame, deadline)
     else:
-        t = ctx.target
-        ok = yield from ctx.go_and_settle(frame.center_n[0], frame.center_n[1], t[2], 0.0, deadline)
-        if ok:
-            ok = yield from ctx.go_and_settle(
-                frame.center_n[0], frame.center_n[1], psi, 0.0, deadline
-            )
-    if ok:
-        ok = yield from ctx.run_until(
-            lambda: cl.winch_idle and _aligned(cl, frame, layout, leg), deadline, ctx.winch_away
+        why = yield from _assisted_approach(ctx, assisted, leg.vessel, frame, hover_depth, deadline)
+    if not why:
+        aligned = yield from ctx.run_until(
+            lambda: _outer_check(outer) and cl.winch_idle and _aligned(cl, frame, layout, leg),
+            deadline,
+            ctx.winch_away if outer is None else outer.away(ctx.winch_away),
         )
-    if not ok:
-        ctx.event("landing", "landing abandoned: not aligned over the frame in time")
+        why = "" if aligned else NOT_ALIGNED
+    if why:
+        ctx.event("landing", f"landing abandoned: {why}")
         return False
     ctx.event("dock", "aligned over the frame: lowering")
     cl.winch_to(cl.wire_length_for_depth(frame.landing_depth_m - half_h) + 0.3, leg.lower_rate_mps)
     contact: tuple[int, FloatArray, FloatArray] | None = None
     contact_layout = LAYOUT  # the layout of the contact's rows (a lean log's, in a campaign)
+    lower_away = ctx.winch_away if outer is None else outer.away(ctx.winch_away)
     while not cl.winch_idle:
         if cl.t_s >= deadline:
             return False
-        yield ctx.polls(0.5, deadline, ctx.winch_away)
+        _outer_check(outer)
+        yield ctx.polls(0.5, deadline, lower_away)
         rows = ctx.last_log  # (the first contact in them is the first of the polls')
         k = _first_contact(rows, post_top, half_h) if contact is None else None
         if k is not None:
@@ -426,6 +526,83 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
         **vars(result),
     )
     return True
+
+
+def _outer_check(outer: _VesselLoop | None) -> bool:
+    """Run the outer loop's check (if any); always True, to sit in a condition."""
+    if outer is not None:
+        outer.check()
+    return True
+
+
+NOT_ALIGNED = "not aligned over the frame in time"
+ApproachRun = Generator[float, None, str]
+"""An approach in progress: yields seconds to run next, returns '' when over the frame, else
+why the landing is abandoned."""
+
+
+def _approach(
+    ctx: MissionContext, plan: landing.LandingPlan, frame: DockingFrame, deadline: float
+) -> ApproachRun:
+    """Fly over the frame with the vessel where it stands: turn where the tree is and then
+    move, or move and then turn over the frame, as the plan says."""
+    way = "where it is, then over the frame" if plan.turn_first else "over the frame"
+    ctx.event(
+        "dock",
+        f"{plan.reason}; turning {math.degrees(plan.turn_rad):+.0f} deg {way} "
+        f"(at most {100 * plan.worst_utilisation:.0f} % of the thrust on the way)",
+        utilisation=plan.at_frame.utilisation,
+        turn_deg=math.degrees(plan.turn_rad),
+        turn_first=plan.turn_first,
+    )
+    psi = ctx.target[2] + plan.turn_rad
+    t = ctx.target
+    if plan.turn_first:
+        ok = yield from ctx.go_and_settle(t[0], t[1], psi, 0.0, deadline)
+        if ok:
+            ok = yield from ctx.go_and_settle(
+                frame.center_n[0], frame.center_n[1], psi, 0.0, deadline
+            )
+    else:
+        ok = yield from ctx.go_and_settle(frame.center_n[0], frame.center_n[1], t[2], 0.0, deadline)
+        if ok:
+            ok = yield from ctx.go_and_settle(
+                frame.center_n[0], frame.center_n[1], psi, 0.0, deadline
+            )
+    return "" if ok else NOT_ALIGNED
+
+
+def _assisted_approach(
+    ctx: MissionContext,
+    plan: assist.VesselPlan,
+    mode: str,
+    frame: DockingFrame,
+    depth_m: float,
+    deadline: float,
+) -> ApproachRun:
+    """Fly over the frame with the vessel's help: turn where the tree is (if the plan says
+    so), move the vessel with the tree following over the frame, then turn there (if not
+    turned yet)."""
+    way = "where it is, then over the frame" if plan.turn_first else "over the frame"
+    ctx.event(
+        "dock",
+        f"{plan.reason}; turning {math.degrees(plan.turn_rad):+.0f} deg {way} "
+        f"(at most {100 * plan.worst_utilisation:.0f} % of the thrust on the way)",
+        utilisation=plan.at_frame.utilisation,
+        turn_deg=math.degrees(plan.turn_rad),
+        turn_first=plan.turn_first,
+    )
+    psi = ctx.target[2] + plan.turn_rad
+    centre = np.asarray(frame.center_n[0:2], float)
+    if plan.turn_first:
+        t = ctx.target
+        if not (yield from ctx.go_and_settle(t[0], t[1], psi, 0.0, deadline)):
+            return NOT_ALIGNED
+    if not (yield from _with_vessel(ctx, plan, mode, frame, depth_m, deadline)):
+        told = "as advised" if mode == "advise" else "as planned"
+        return f"the vessel was not moved {told} in time"
+    ok = yield from ctx.go_and_settle(centre[0], centre[1], psi, 0.0, deadline)
+    return "" if ok else NOT_ALIGNED
 
 
 def _landing_result(

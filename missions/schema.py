@@ -37,6 +37,10 @@ from sim.params import KdVector, KiVector, KpVector
 
 WaveLoad = Literal["drag", "morison"]
 """sim.environment.WAVE_LOADS, as a type for the file's validation."""
+VesselMode = Literal["auto", "advise", "fixed"]
+"""A dock leg's vessel: moved by the leg to where the ROV holds the tree with thrust to spare
+(``missions.assist``), advised to the operator, or left where it is."""
+VESSEL_MODES: tuple[str, ...] = typing.get_args(VesselMode)
 
 FORMAT_VERSION = 1
 LIBRARY_DIR = Path(__file__).with_name("library")
@@ -385,6 +389,13 @@ class DockLeg(_Leg):
     )
     align_tolerance_deg: float = Field(default=1.0, gt=0.0, le=30.0)
     settle_s: float = Field(default=30.0, ge=0.0, le=3600.0)
+    vessel: VesselMode = Field(
+        default="auto",
+        description=(
+            "auto: the leg moves the vessel where the ROV can hold the tree over the frame; "
+            "advise: it tells the operator where and waits; fixed: the vessel stays"
+        ),
+    )
 
 
 class LiftLeg(_Leg):

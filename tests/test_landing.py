@@ -17,9 +17,15 @@ def docking_variant(
     speed_mps: float | None = None,
     direction_deg: float | None = None,
     center_ne_m: tuple[float, float] | None = None,
+    vessel: str = "fixed",
 ) -> schema.Mission:
-    """full-docking-current-0.3 with another frame heading or current."""
+    """full-docking-current-0.3 with another frame heading or current; the vessel fixed, as
+    when these landings were first reported (``vessel = "auto"``, the default, moves it:
+    ``tests/test_vessel_assist.py``)."""
     m = schema.load_mission("full-docking-current-0.3").model_dump(mode="json")
+    for leg in m["legs"]:
+        if leg["type"] == "dock":
+            leg["vessel"] = vessel
     if heading_deg is not None:
         m["setup"]["docking_frame"]["heading_deg"] = heading_deg
     if center_ne_m is not None:
