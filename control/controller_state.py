@@ -86,6 +86,25 @@ class ControllerState:
         return self._part(loop.CS_PILOT, 4)
 
     @property
+    def hand_over_wrench(self) -> FloatArray:
+        """The fading wrench (3,) of a hand-over between the tree controller and the pilot's
+        hold of the gripped tree, tree axes [N, N, N m] (``loop._hand_over_into``)."""
+        return self._part(loop.CS_HANDOVER, 3)
+
+    @property
+    def pilot_flown(self) -> FloatArray:
+        """Where the pilot flew the gripped tree at the last step (2,): 1.0 for the
+        horizontal position, then the heading; the hand-over to the tree controller carries
+        no old thrust on those (``loop._hand_over_into``)."""
+        return self._part(loop.CS_FLOWN, 2)
+
+    @property
+    def gripping(self) -> bool:
+        """The ROV gripped the tree at the last step (the kernel copies it from the step's
+        environment row)."""
+        return bool(self.vector[loop.CS_GRIP] > 0.5)
+
+    @property
     def mode(self) -> int:
         """The supervisor's mode (``loop.MODE_*``)."""
         return int(self.vector[loop.CS_MODE])

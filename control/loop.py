@@ -5,7 +5,8 @@ mission's target held; Python handles commands (targets, gains, modes) between c
 loop stays fast and commands are applied only between steps. The fixed order within a step is
 
     sensors -> quality checks -> observer (EKF) -> reference model -> controller (supervisor:
-    tree PID, free-ROV PID or the pilot's demand) -> thrust allocation -> thrusters -> plant (RK4)
+    tree PID, free-ROV PID or the pilot's demand with the holds) -> thrust allocation ->
+    thrusters -> plant (RK4)
 
 Every step writes one row of the log (see the ``L_*`` column indices).
 """
@@ -92,7 +93,16 @@ CS_LAST_MODE = 33
 CS_ALLOC_F = 34  # 34:34+M_MAX externally allocated thruster forces (ALLOC_EXTERNAL)
 CS_PILOT = CS_ALLOC_F + M_MAX  # 4: the pilot's demand [X, Y, Z, N] in the ROV's axes [N, N m]
 CS_HOLD = CS_PILOT + 4  # 2: the pilot's holds (1.0 on): auto-heading, auto-depth
-N_CS = CS_HOLD + 2
+CS_GRIP = CS_HOLD + 2  # 1.0 while the ROV grips the tree: the step's plant.E_GRIP
+CS_LAST_GRIP = CS_GRIP + 1  # CS_GRIP at the last step
+CS_HANDOVER = CS_LAST_GRIP + 1  # 3: the hand-over's fading wrench, tree axes [N, N, N m]
+CS_FLOWN = CS_HANDOVER + 3  # 2: 1.0 where the pilot flew the gripped tree: [north-east, psi]
+N_CS = CS_FLOWN + 2
+HANDOVER_FADE_S = 1.0
+"""Time constant [s] of the wrench a hand-over between the tree controller and the pilot's
+hold adds so the thrust does not jump: long against a step (0.01 s), short against the tree's
+swing on its wire (periods of 15 to 45 s), so little of the old thrust (a moving tree's
+braking, say) is carried over."""
 
 
 class ControlArrays(NamedTuple):
@@ -379,7 +389,8 @@ def manual_step_into(
     tau: np.ndarray, x: np.ndarray, y: np.ndarray, cs: np.ndarray, C: ControlArrays, dt: float,
     W: ControlWork,
 ) -> None:  # fmt: skip
-    """Flown by hand: the pilot's demand (``cs[CS_PILOT:+4]``, ROV axes [X, Y, Z, N]) on the
+    """Flown by hand with the ROV free of the tree (``manual_tree_step_into`` while it grips
+    it): the pilot's demand (``cs[CS_PILOT:+4]``, ROV axes [X, Y, Z, N]) on the
     axes the pilot is using; the free-ROV station keeping on the others, with its set point at
     the pose where the pilot let go (horizontal position always; heading and depth only with
     the auto-heading and auto-depth holds on, else a released stick is zero thrust). While an
@@ -390,7 +401,7 @@ def manual_step_into(
     eta4 = W.vec[W_ETA4, 0:4]
     deta4 = W.vec[W_DETA4, 0:4]
     _rov_pose_into(eta4, deta4, x, y, not C.feedback_ekf)
-    if int(cs[CS_LAST_MODE]) != MODE_MANUAL:
+    if int(cs[CS_LAST_MODE]) != MODE_MANUAL or cs[CS_LAST_GRIP] > 0.5:
         for k in range(4):
             cs[CS_FSP + k] = eta4[k]
         pid.bumpless_free_integral_into(
@@ -440,6 +451,177 @@ def manual_step_into(
         fi[3] = cs[CS_FI + 3]
     for k in range(4):
         cs[CS_FI + k] = fi[k]
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def manual_tree_step_into(
+    tau6: np.ndarray, eta: np.ndarray, deta: np.ndarray, x: np.ndarray, y: np.ndarray,
+    cs: np.ndarray, C: ControlArrays, dt: float, log_row: np.ndarray, W: ControlWork,
+) -> None:  # fmt: skip
+    """Flown by hand while the ROV grips the tree: the pilot's demand on the axes in use;
+    the others held by the tree controller, the autopilot's own law (``pid.tree_pid_into``
+    on the tree's pose, with its gains, integral and anti-windup), its reference
+    (``cs[CS_REF:+9]``) at rest at the pose where the pilot let go: the horizontal position
+    always, the heading with auto-heading on. Heave is the autopilot's constant heave force
+    with auto-depth on, else the stick. While an axis is flown its reference follows the tree
+    and its integral is frozen.
+
+    The hold takes the feedforward whatever the autopilot's law: with its reference at rest
+    that is the wire's spring at the hold, the pull of a tree let go away from where the wire
+    hangs, which the thesis law (eq. 3.9 alone) leaves to the integral, and the integral's
+    anti-windup stops at 90 % of the weaker direction's thrust (at model scale 179 N, the
+    spring's pull 7.7 m off). Hand-overs move that share between the integral and the
+    feedforward (``_spring_into_integral``), so it is never counted twice.
+
+    The pilot's [X, Y, N] (ROV axes) is moved to the tree's origin (``A_inv``) and replaces
+    the law's output on the flown axes there, so the heading hold also takes the moment of
+    the pilot's sway about the tree. Entering from the tree controller the law goes on and
+    the hand-over's fading wrench (``_hand_over_into``) takes the difference; from anything
+    else its integral is set from the last thrust, as the tree controller's start. Writes
+    ``tau6`` (the tree-origin wrench the allocation takes), the row's wrench and term columns
+    and ``cs``, with the free set point ``cs[CS_FSP:+4]`` where the ROV sits when the tree
+    is at its hold (the position alarm's set point in this mode)."""
+    last = int(cs[CS_LAST_MODE])
+    ref = cs[CS_REF : CS_REF + 9]
+    if not (last == MODE_MANUAL and cs[CS_LAST_GRIP] > 0.5):
+        for i in range(9):
+            ref[i] = eta[i] if i < 3 else 0.0
+        if last != MODE_TREE:
+            _bumpless_tree_start(cs, eta, deta, True, C, W)
+        elif not C.use_ff:  # the tree controller's integral carried the spring
+            _spring_into_integral(cs, ref, -1.0, C)
+    d = cs[CS_PILOT : CS_PILOT + 4]
+    flown_ne = d[0] != 0.0 or d[1] != 0.0
+    flown_down = d[2] != 0.0 or cs[CS_HOLD + 1] < 0.5
+    flown_psi = d[3] != 0.0 or cs[CS_HOLD] < 0.5
+    if flown_ne:
+        ref[0], ref[1] = eta[0], eta[1]
+    if flown_psi:
+        ref[2] = eta[2]
+    cs[CS_FLOWN] = 1.0 if flown_ne else 0.0
+    cs[CS_FLOWN + 1] = 1.0 if flown_psi else 0.0
+    tau_tree = W.vec[W_TAU_TREE, 0:3]
+    i_next = W.vec[W_I_NEXT, 0:3]
+    e = W.vec[W_E, 0:3]
+    de = W.vec[W_DE, 0:3]
+    pid.tree_pid_into(
+        tau_tree, i_next, W.terms, e, de, eta, deta, ref[0:3], ref[3:6], ref[6:9],
+        cs[CS_I : CS_I + 3], C.Kp, C.Ki, C.Kd, True, C.M, C.D_l, C.D_nl, C.k_h, C.p_eq,
+        EYE3, EYE3, C.i_limit, dt, W.pid,
+    )  # fmt: skip
+    for k in range(3):
+        if not (flown_psi if k == 2 else flown_ne):
+            cs[CS_I + k] = i_next[k]
+        cs[CS_E + k] = e[k]
+        cs[CS_DE + k] = de[k]
+    _hand_over_into(tau_tree, W.terms, cs, C, last == MODE_TREE, dt, W)
+    if flown_ne or flown_psi:
+        stick = W.vec[W_E4, 0:3]
+        stick[0], stick[1], stick[2] = d[0], d[1], d[3]
+        at_tree = W.vec[W_FI, 0:3]
+        mv3_into(at_tree, C.A_inv, stick)
+        if flown_ne:
+            tau_tree[0], tau_tree[1] = at_tree[0], at_tree[1]
+        if flown_psi:
+            tau_tree[2] = at_tree[2]
+    heave = d[2] if flown_down else C.heave_newton
+    _tree_wrench_out(tau6, tau_tree, heave, C, log_row, W)
+    eta4 = W.vec[W_ETA4, 0:4]
+    _rov_pose_into(eta4, W.vec[W_DETA4, 0:4], x, y, not C.feedback_ekf)
+    c, s = np.cos(ref[2]), np.sin(ref[2])
+    r = C.r_mount
+    cs[CS_FSP] = ref[0] + (c * r[0] - s * r[1])
+    cs[CS_FSP + 1] = ref[1] + (s * r[0] + c * r[1])
+    cs[CS_FSP + 2] = eta4[2]
+    cs[CS_FSP + 3] = ref[2] + C.psi_rel
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _spring_into_integral(cs: np.ndarray, ref: np.ndarray, sign: float, C: ControlArrays) -> None:
+    """Add ``sign`` times the wire's spring at the reference ``ref`` (NED, k_h (ref - p_eq))
+    to the tree controller's integral (NED): +1 when the feedforward that carried it stops
+    (the pilot's hold handing over to the thesis law), -1 when it starts."""
+    for k in range(2):
+        cs[CS_I + k] += sign * (C.k_h * (ref[k] - C.p_eq[k]))
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _bumpless_tree_start(
+    cs: np.ndarray, eta: np.ndarray, deta: np.ndarray, use_ff: bool, C: ControlArrays,
+    W: ControlWork,
+) -> None:  # fmt: skip
+    """The tree controller's integral set so that, with its reference at rest at ``eta``
+    (and the feedforward with ``use_ff``), it commands the last ROV wrench
+    (``cs[CS_TAU:+6]``): the start of the tree law when it was not running (a hand-over's
+    fading wrench left from before is dropped)."""
+    for k in range(3):
+        cs[CS_HANDOVER + k] = 0.0
+    tau_rov3 = W.vec[W_BTAU, 0:3]
+    tau_rov3[0], tau_rov3[1], tau_rov3[2] = cs[CS_TAU], cs[CS_TAU + 1], cs[CS_TAU + 5]
+    zero = W.vec[W_ZERO, 0:3]
+    zero[0] = zero[1] = zero[2] = 0.0
+    pid.bumpless_tree_integral_into(
+        cs[CS_I : CS_I + 3], tau_rov3, eta, deta, eta, zero, zero, C.Kp, C.Kd, use_ff, C.M,
+        C.D_l, C.D_nl, C.k_h, C.p_eq, C.A_inv, W.bump,
+    )  # fmt: skip
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _hand_over_into(
+    tau_tree: np.ndarray, terms: np.ndarray, cs: np.ndarray, C: ControlArrays, start: bool,
+    dt: float, W: ControlWork,
+) -> None:  # fmt: skip
+    """The hand-over's fading wrench (``cs[CS_HANDOVER:+3]``, tree axes) between the tree
+    controller and the pilot's hold: at a hand-over (``start``) it is set to the last
+    commanded wrench less the law's ``tau_tree``, so this step commands the last one, on the
+    axes the law held at the last step; on those the pilot flew (``cs[CS_FLOWN:+2]``) it
+    is zero, as when the stick is let go. Each step adds it to ``tau_tree`` (and to the
+    integral's part of ``terms``, so the parts still add up) and fades it by
+    exp(-dt / HANDOVER_FADE_S). The law's own integral is left as it was: a moving tree's
+    braking, which an integral set from the last thrust would keep, is carried only while
+    the wrench fades. Zero, it changes nothing."""
+    b = cs[CS_HANDOVER : CS_HANDOVER + 3]
+    if start:
+        last = W.vec[W_BTAU, 0:3]
+        last[0], last[1], last[2] = cs[CS_TAU], cs[CS_TAU + 1], cs[CS_TAU + 5]
+        last_tree = W.vec[W_ZERO, 0:3]
+        mv3_into(last_tree, C.A_inv, last)
+        for k in range(3):
+            flown = cs[CS_FLOWN + (1 if k == 2 else 0)] > 0.5
+            b[k] = 0.0 if flown else last_tree[k] - tau_tree[k]
+    if b[0] != 0.0 or b[1] != 0.0 or b[2] != 0.0:
+        fade = np.exp(-dt / HANDOVER_FADE_S)
+        for k in range(3):
+            tau_tree[k] += b[k]
+            terms[1, k] += b[k]
+            b[k] *= fade
+
+
+@njit(inline="always", **JIT_NOALLOC)
+def _tree_wrench_out(
+    tau6: np.ndarray, tau_tree: np.ndarray, heave: float, C: ControlArrays,
+    log_row: np.ndarray, W: ControlWork,
+) -> None:  # fmt: skip
+    """The tree controller's wrench ``tau_tree`` (tree axes) and the ROV's ``heave`` into the
+    allocation's ``tau6`` (the tree's origin) and the row's ROV wrench (``A tau_tree``), tree
+    wrench and term columns (``W.terms``)."""
+    tau6[0] = tau_tree[0]
+    tau6[1] = tau_tree[1]
+    tau6[2] = heave
+    tau6[5] = tau_tree[2]
+    tau3 = W.vec[W_TAU3, 0:3]
+    _matvec_into(tau3, C.A, tau_tree)
+    log_row[L_TAU_ROV] = tau3[0]
+    log_row[L_TAU_ROV + 1] = tau3[1]
+    log_row[L_TAU_ROV + 2] = heave
+    log_row[L_TAU_ROV + 3] = 0.0
+    log_row[L_TAU_ROV + 4] = 0.0
+    log_row[L_TAU_ROV + 5] = tau3[2]
+    for k in range(3):
+        log_row[L_TAU_TREE + k] = tau_tree[k]
+    for j in range(4):
+        for k in range(3):
+            log_row[L_TERMS + 3 * j + k] = W.terms[j, k]
 
 
 @njit(**JIT)
@@ -520,38 +702,22 @@ def control_law_into(
     else:
         _truth_tree_into(eta, deta, x)
     mode = int(cs[CS_MODE])
+    # the pilot's hold of the gripped tree was running: the tree controller goes on from it
+    from_hold = int(cs[CS_LAST_MODE]) == MODE_MANUAL and cs[CS_LAST_GRIP] > 0.5
     ref = W.vec[W_REF, 0:9]
     for i in range(9):
         ref[i] = cs[CS_REF + i]
     if mode == MODE_TREE and int(cs[CS_LAST_MODE]) != MODE_TREE:
         for i in range(9):
             ref[i] = eta[i] if i < 3 else 0.0
-        tau_rov3 = W.vec[W_BTAU, 0:3]
-        tau_rov3[0], tau_rov3[1], tau_rov3[2] = cs[CS_TAU], cs[CS_TAU + 1], cs[CS_TAU + 5]
-        zero = W.vec[W_ZERO, 0:3]
-        zero[0] = zero[1] = zero[2] = 0.0
-        pid.bumpless_tree_integral_into(
-            cs[CS_I : CS_I + 3],
-            tau_rov3,
-            eta,
-            deta,
-            eta,
-            zero,
-            zero,
-            C.Kp,
-            C.Kd,
-            C.use_ff,
-            C.M,
-            C.D_l,
-            C.D_nl,
-            C.k_h,
-            C.p_eq,
-            C.A_inv,
-            W.bump,
+        if not from_hold:
+            _bumpless_tree_start(cs, eta, deta, C.use_ff, C, W)
+        elif not C.use_ff:  # the hold's feedforward carried the spring at its reference
+            _spring_into_integral(cs, cs[CS_REF : CS_REF + 3], 1.0, C)
+    if not (mode == MODE_MANUAL and cs[CS_GRIP] > 0.5):  # the hold sets its own reference
+        refkernel.reference_step_into(
+            cs[CS_REF : CS_REF + 9], C.ref_kind, ref, target, dt, C.ref_params
         )
-    refkernel.reference_step_into(
-        cs[CS_REF : CS_REF + 9], C.ref_kind, ref, target, dt, C.ref_params
-    )
     ref = cs[CS_REF : CS_REF + 9]
     for i in range(6):
         tau6[i] = 0.0
@@ -592,24 +758,11 @@ def control_law_into(
             cs[CS_I + k] = i_next[k]
             cs[CS_E + k] = e[k]
             cs[CS_DE + k] = de[k]
+        _hand_over_into(tau_tree, terms, cs, C, from_hold, dt, W)
         # allocation works on the tree's origin (see closed_loop.system_thruster_config)
-        tau6[0] = tau_tree[0]
-        tau6[1] = tau_tree[1]
-        tau6[2] = C.heave_newton
-        tau6[5] = tau_tree[2]
-        tau3 = W.vec[W_TAU3, 0:3]
-        _matvec_into(tau3, C.A, tau_tree)
-        log_row[L_TAU_ROV] = tau3[0]
-        log_row[L_TAU_ROV + 1] = tau3[1]
-        log_row[L_TAU_ROV + 2] = C.heave_newton
-        log_row[L_TAU_ROV + 3] = 0.0
-        log_row[L_TAU_ROV + 4] = 0.0
-        log_row[L_TAU_ROV + 5] = tau3[2]
-        for k in range(3):
-            log_row[L_TAU_TREE + k] = tau_tree[k]
-        for j in range(4):
-            for k in range(3):
-                log_row[L_TERMS + 3 * j + k] = terms[j, k]
+        _tree_wrench_out(tau6, tau_tree, C.heave_newton, C, log_row, W)
+    elif mode == MODE_MANUAL and cs[CS_GRIP] > 0.5:
+        manual_tree_step_into(tau6, eta, deta, x, y, cs, C, dt, log_row, W)
     elif mode == MODE_MANUAL:
         tau_rov6 = W.vec[W_TAU_ROV, 0:6]
         manual_step_into(tau_rov6, x, y, cs, C, dt, W)
@@ -653,6 +806,7 @@ def control_law_into(
             log_row[L_TAU_ROV + k] = tau_rov6[k]
         _matvec_into(tau6, C.rov_to_tree, tau_rov6)
     cs[CS_LAST_MODE] = mode
+    cs[CS_LAST_GRIP] = cs[CS_GRIP]
     for k in range(6):
         cs[CS_TAU + k] = log_row[L_TAU_ROV + k]
     for k in range(3):
@@ -932,6 +1086,7 @@ def _closed_steps(
         t = (k0 + j) * dt
         row = log[j]
         sensors.sample_into(held_y, x, held_y, noise[j], fresh[j], sensors.Y_SENSOR)
+        cs[CS_GRIP] = env[j, plant.E_GRIP]  # the controller knows whether the ROV grips
         control_step_into(tau6, t, x, held_y, fresh[j], xhat, Pc, cs, target, C, Q, dt, row, W)
         allocate_into(f, tau6, C, W)
         # ``finish_step_into`` with the plant's step inlined

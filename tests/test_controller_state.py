@@ -16,18 +16,22 @@ PARTS = (
     "free_setpoint_n",
     "allocated_force_newton",
     "pilot_demand",
+    "hand_over_wrench",
+    "pilot_flown",
 )
 
 
 def test_named_parts_tile_the_vector():
-    """Each entry of cs belongs to one named part (the two modes and the two holds are
-    scalars): writing every part's position into it gives back 0..N_CS-1, once each."""
+    """Each entry of cs belongs to one named part (the two modes, the two holds and the grip
+    now and at the last step are scalars): writing every part's position into it gives back
+    0..N_CS-1, once each."""
     state = ControllerState(np.full(loop.N_CS, -1.0))
     for name in PARTS:
         view = getattr(state, name)
         assert np.all(view == -1.0), f"{name} overlaps another part"
         view[:] = np.flatnonzero(state.vector == -1.0)[: view.shape[0]]
     scalars = [loop.CS_MODE, loop.CS_LAST_MODE, loop.CS_HOLD, loop.CS_HOLD + 1]
+    scalars += [loop.CS_GRIP, loop.CS_LAST_GRIP]
     assert np.array_equal(np.flatnonzero(state.vector == -1.0), sorted(scalars))
 
 
