@@ -6,9 +6,15 @@ Five alarms, each with a limit taken from the parameter set where the thesis giv
   ``saturation_s`` seconds without a break.
 - ``position_error``: the tree is further from the reference than the funnels' capture
   tolerance (``DockingLayout.tolerance_m``), or its heading is off by more than
-  ``heading_error_deg``.
-- ``position_error`` in free mode (the ROV flying on its own): the ROV against its free-flying
-  set point, with the same limits.
+  ``heading_error_deg``. It is armed once the run has settled: from the first row within
+  those limits, or ``position_arm_s`` after the run's first row. A run starts with the current
+  already flowing against a controller that has not learnt it (its integral and the
+  observer's bias start at zero, the reference at the hook-up estimate), so the tree is
+  blown off and brought back: 0.45 m at model scale in the first 16 s of the calm observer
+  hold (model-square-ekf-400), back within 0.10 m by 40 s; that is the start, not an error.
+- ``position_error`` in free mode and flown by hand (the ROV flying on its own, or the pilot's
+  holds): the ROV against its set point (``Simulation.free_setpoint_n``; while the ROV grips
+  the tree, where the ROV sits with the tree at its hold), with the same limits.
 - ``wire_slack``: the wire tension has dropped below ``slack_fraction`` of the tree's
   submerged weight W0 (the wire only pulls, eq. 2.28: a slack wire no longer carries the tree),
   while the tree hangs; a tree whose bottom is down at the post tops or deeper rests on the
@@ -57,6 +63,9 @@ ALARM_NAMES = (
     "dropout",
     "mount_vector",
 )
+SETTLE_S = 60.0
+"""How long a run may take to settle from its start before the position alarm is armed
+regardless [s]: the library missions' first leg holds 60 s for that."""
 MOUNT_SAMPLE_S = 0.1
 """The mount check keeps one row in this many seconds."""
 
@@ -73,6 +82,9 @@ class AlarmLimits:
     """Continuous saturation of one thruster before the alarm [s] (the issue: 2 s)."""
     heading_error_deg: float = 10.0
     """Heading error against the reference [deg]."""
+    position_arm_s: float = 0.0
+    """Longest the position alarm waits, from the run's first row, for the run to settle
+    before it is armed [s]; the console's (``for_params``) is ``SETTLE_S``."""
     slack_fraction: float = 0.1
     """Tension below this fraction of W0 counts as slack [-]."""
     nis_limit: float = 4.0
@@ -100,7 +112,11 @@ class AlarmLimits:
         layout = ps.spec.docking.to_numeric()
         spec = ps.spec.sensors
         periods = tuple(1.0 / getattr(spec, name).rate_hz for name in SENSOR_NAMES)
-        return AlarmLimits(position_error_m=float(layout.tolerance_m), sample_period_s=periods)
+        return AlarmLimits(
+            position_error_m=float(layout.tolerance_m),
+            sample_period_s=periods,
+            position_arm_s=SETTLE_S,
+        )
 
 
 @dataclass(frozen=True)
@@ -134,6 +150,8 @@ class AlarmMonitor:
     _mount_last_k: float = field(init=False, default=-1.0)
     _mount_alarm: Alarm = field(init=False)
     _t_s: float = field(init=False, default=0.0)
+    _t_first_s: float = field(init=False, default=math.nan)
+    _position_armed: bool = field(init=False, default=False)
     state: tuple[Alarm, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -158,6 +176,8 @@ class AlarmMonitor:
         if len(rows) == 0:
             return self.state
         self._t_s = float(rows.t_s[-1])
+        if math.isnan(self._t_first_s):
+            self._t_first_s = float(rows.t_s[0])
         self.state = (
             self._saturation(rows),
             self._position(rows, free_setpoint_n),
@@ -249,7 +269,12 @@ class AlarmMonitor:
             what = "the reference"
         err_m = math.hypot(pose[0] - ref[0], pose[1] - ref[1])
         err_deg = abs(math.degrees(ssa(float(pose[5] - ref[2]))))
-        if err_m > self.limits.position_error_m or err_deg > self.limits.heading_error_deg:
+        off = err_m > self.limits.position_error_m or err_deg > self.limits.heading_error_deg
+        if not self._position_armed:
+            # armed once settled (see the module's notes)
+            waited_s = self._t_s - self._t_first_s
+            self._position_armed = not off or waited_s >= self.limits.position_arm_s
+        if off and self._position_armed:
             return Alarm(
                 "position_error", True, f"{who} {err_m:.2f} m / {err_deg:.1f} deg off {what}"
             )
