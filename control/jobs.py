@@ -156,13 +156,14 @@ def run_qp_chunk(chunk: ClosedChunk, thrusters: alloc.ThrusterConfig) -> ChunkRe
     ``thrusters`` (not compiled) in the middle. Its rows are whole (N_LOG) and new; its
     spring and ``out`` are left to the caller."""
     c = chunk
-    x, held, xhat, pc, cs = c.x.copy(), c.held_y, c.xhat, c.P_cov, c.cs
+    x, held, xhat, pc, cs = c.x.copy(), c.held_y, c.xhat, c.P_cov, c.cs.copy()
     n = c.n
     log = np.zeros((n, N_LOG))
     work = plant.make_work(c.arrays.thr_T.shape[1])  # x is advanced in place
     for j in range(n):
         k = c.k0 + j
         held = sensors.sample(x, held, c.noise[j], c.fresh[j], sensors.Y_SENSOR)
+        cs[loop.CS_GRIP] = c.env[j, plant.E_GRIP]  # as the compiled steps (loop._closed_steps)
         tau6, xhat, pc, cs = loop.control_step(
             k * c.dt_s, x, held, c.fresh[j], xhat, pc, cs, c.target, c.C, c.Q, c.dt_s, log[j]
         )

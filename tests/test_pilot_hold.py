@@ -168,3 +168,20 @@ def test_hand_over_to_the_hold_and_back_is_bumpless_while_the_tree_moves():
         if pilot:
             tree = rows["tree_eta_n"][-1]
             assert math.hypot(tree[0] - taken[0], tree[1] - taken[1]) < 0.25
+
+
+def test_the_qp_allocation_holds_the_gripped_tree_with_the_tree_controller_too():
+    """The QP allocation's steps run in Python (``control.jobs.run_qp_chunk``): they too tell
+    the controller that the ROV grips the tree, so its hold is the tree controller's (which
+    logs the tree's wrench; the free-ROV law leaves that column at zero)."""
+    sim = build_simulation(station_keeping_mission("model-scale", 400.0), allocation="qp")
+    sim.run_for(1.0)
+    loop = _Loop(sim)
+    take_over(loop, True)
+    stick(loop, surge=1.0)
+    sim.run_for(0.5)
+    stick(loop)
+    rows = sim.run_for(0.5)
+    assert sim.controller_state.gripping
+    assert np.all(rows["mode"] == 2)
+    assert np.all(np.abs(rows["tau_tree_cmd"][:, 0]) > 0.0)
