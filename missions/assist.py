@@ -14,11 +14,13 @@ by direction, minimises the share of the thrust needed (``missions.landing.pose_
 utilisation) around that point. The approach flies the tree from where it hangs to the frame
 while the vessel moves, tree and crane tip in step, so the wire's pull stays what it was at
 the start; the turn to the frame's heading is made either before the move (vessel where it
-stands) or over the frame (vessel moved), either way round, whichever needs least.
+stands), or over the frame (vessel moved), or where the tree hangs from the vessel as it
+stands (reached first, the wire's pull let go), either way round, whichever needs least.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -78,8 +80,12 @@ class VesselPlan:
     """Holding the tree over the frame with the crane tip there."""
     turn_rad: float
     """Signed turn from the present heading to the frame's [rad]."""
-    turn_first: bool
-    """Turn where the tree is before the move (else over the frame after it)."""
+    turn_at: str
+    """Where the tree turns to the frame's heading: "start", where it is held, before the
+    move; "frame", over the frame after it; "rest", where it hangs from the vessel as the
+    vessel stands (the wire pulls nothing there), reached before the turn and the move."""
+    rest_ne: FloatArray
+    """Where the tree hangs from the vessel as it stands (north, east) [m]."""
     worst: landing.PoseLoad
     """The pose along the approach that needs the largest share of the thrust."""
 
@@ -177,12 +183,14 @@ def _path_worst(
     psi: float,
     tip_start: FloatArray,
     tip_end: FloatArray,
+    skip_first: bool = False,
 ) -> landing.PoseLoad:
     """The pose needing most along a straight move of the tree at heading ``psi`` while the
-    crane tip moves in step from ``tip_start`` to ``tip_end``."""
+    crane tip moves in step from ``tip_start`` to ``tip_end`` (``skip_first``: from just
+    after the start)."""
     loads = []
     speed, direction = sim.current_speed_mps, sim.current_direction_rad
-    for s in np.linspace(0.0, 1.0, PATH_SAMPLES):
+    for s in np.linspace(0.0, 1.0, PATH_SAMPLES)[1 if skip_first else 0 :]:
         tip = tip_start + s * (tip_end - tip_start)
         ne = start_ne + s * (end_ne - start_ne)
         env = landing._environment(sim, depth_m, speed, direction, tip)
@@ -203,9 +211,11 @@ def _turn_worst(
     turn: float,
     tip: FloatArray,
 ) -> landing.PoseLoad:
-    """The pose needing most while turning by ``turn`` at (north, east) ``ne``."""
+    """The pose needing most while turning by ``turn`` at (north, east) ``ne`` (the first
+    heading left out: the turn starts from a pose the way has already reached)."""
     steps = max(2, int(abs(turn) / landing.TURN_STEP_RAD) + 1)
-    headings = psi0 + np.linspace(0.0, turn, steps)
+    headings = psi0 + np.linspace(0.0, turn, steps)[1:]
+    steps -= 1
     poses = np.column_stack([np.full(steps, ne[0]), np.full(steps, ne[1]), headings])
     env = landing._environment(sim, depth_m, sim.current_speed_mps, sim.current_direction_rad, tip)
     return _most(landing.pose_loads(sim, thrusters, poses, env, depth_m))
@@ -227,29 +237,49 @@ def plan_vessel(
         at_frame = frame_utilisation(sim, thrusters, frame, depth_m, tip)
     start = np.asarray(target_n[0:2], float)
     centre = np.asarray(frame.center_n[0:2], float)
-    psi0 = float(target_n[2])
-    short = float(ssa(frame.heading_rad - psi0))
-    move_at_start_heading = _path_worst(sim, thrusters, depth_m, start, centre, psi0, tip0, tip)
-    move_at_frame_heading = _path_worst(
-        sim, thrusters, depth_m, start, centre, frame.heading_rad, tip0, tip
-    )
+    # where the tree hangs from the vessel as it stands: the rest point moves with the tip
+    rest = centre - (tip - tip0)[0:2]
+    psi0, psi1 = float(target_n[2]), frame.heading_rad
+    short = float(ssa(psi1 - psi0))
+
+    def path(
+        a: FloatArray,
+        b: FloatArray,
+        psi: float,
+        t0: FloatArray,
+        t1: FloatArray,
+        skip_first: bool = False,
+    ) -> landing.PoseLoad:
+        return _path_worst(sim, thrusters, depth_m, a, b, psi, t0, t1, skip_first)
+
+    def turning(ne: FloatArray, turn: float, at_tip: FloatArray) -> landing.PoseLoad:
+        return _turn_worst(sim, thrusters, depth_m, ne, psi0, turn, at_tip)
+
+    # the pose the tree is held at now is no part of the way: it is where the way starts
+    in_step_turned = path(start, centre, psi1, tip0, tip)
+    in_step_unturned = path(start, centre, psi0, tip0, tip, skip_first=True)
+    to_rest = path(start, rest, psi0, tip0, tip0, skip_first=True)
+    from_rest = path(rest, centre, psi1, tip0, tip)
     options = []
     for turn in (short, short - math.copysign(2.0 * math.pi, short)):
-        first = _turn_worst(sim, thrusters, depth_m, start, psi0, turn, tip0)
-        worst = _most([first, move_at_frame_heading])
-        options.append((worst.utilisation, abs(turn), turn, True, worst))
-        over = _turn_worst(sim, thrusters, depth_m, centre, psi0, turn, tip)
-        worst = _most([move_at_start_heading, over])
-        options.append((worst.utilisation, abs(turn), turn, False, worst))
-    _, _, turn, turn_first, worst = min(options, key=lambda o: o[0:2])
+        # in order of preference: the vessel sets off at once, the tree turns once there
+        ways = {
+            "frame": [in_step_unturned, turning(centre, turn, tip)],
+            "start": [turning(start, turn, tip0), in_step_turned],
+            "rest": [to_rest, turning(rest, turn, tip0), from_rest],
+        }
+        for rank, (turn_at, loads) in enumerate(ways.items()):
+            worst = _most(loads)
+            # any way within the share that asks for the vessel is as good as any other
+            good = max(worst.utilisation, ASSIST_UTILISATION)
+            options.append(((good, abs(turn), rank), turn, turn_at, worst))
+    _, turn, turn_at, worst = min(options, key=lambda o: o[0])
     feasible = (
         at_frame.utilisation <= landing.FEASIBLE_UTILISATION
         and worst.utilisation <= APPROACH_UTILISATION
     )
-    plan = VesselPlan(feasible, "", tip0, tip, at_frame, turn, turn_first, worst)
-    return VesselPlan(
-        feasible, _reason(sim, frame, plan), tip0, tip, at_frame, turn, turn_first, worst
-    )
+    plan = VesselPlan(feasible, "", tip0, tip, at_frame, turn, turn_at, rest, worst)
+    return dataclasses.replace(plan, reason=_reason(sim, frame, plan))
 
 
 def _reason(sim: Simulation, frame: DockingFrame, plan: VesselPlan) -> str:
@@ -272,7 +302,7 @@ def _reason(sim: Simulation, frame: DockingFrame, plan: VesselPlan) -> str:
             f"landing not feasible in {current} with the frame at {frame_deg} wherever the "
             f"vessel stands: {where}, holding the tree over the frame would be within the "
             f"{limit} allowed, but the least the way there asks (from where the tree is held, "
-            f"turning to {frame_deg} either way, before or after the move) is "
+            f"turning to {frame_deg} either way, there, where it hangs or over the frame) is "
             f"{plan.worst.words()}, more than the thrusters have"
         )
     return (

@@ -536,6 +536,12 @@ def _outer_check(outer: _VesselLoop | None) -> bool:
 
 
 NOT_ALIGNED = "not aligned over the frame in time"
+TURN_WAYS = {
+    "start": "where it is, then over the frame",
+    "rest": "where it hangs from the vessel as it stands, then over the frame",
+    "frame": "over the frame",
+}
+"""Where a vessel-assisted approach turns (``assist.VesselPlan.turn_at``), in words."""
 ApproachRun = Generator[float, None, str]
 """An approach in progress: yields seconds to run next, returns '' when over the frame, else
 why the landing is abandoned."""
@@ -580,23 +586,25 @@ def _assisted_approach(
     depth_m: float,
     deadline: float,
 ) -> ApproachRun:
-    """Fly over the frame with the vessel's help: turn where the tree is (if the plan says
-    so), move the vessel with the tree following over the frame, then turn there (if not
-    turned yet)."""
-    way = "where it is, then over the frame" if plan.turn_first else "over the frame"
+    """Fly over the frame with the vessel's help: turn where the plan says (where the tree
+    is, or where it hangs from the vessel as it stands, reached first), move the vessel with
+    the tree following over the frame, then turn there if not turned yet."""
+    way = TURN_WAYS[plan.turn_at]
     ctx.event(
         "dock",
         f"{plan.reason}; turning {math.degrees(plan.turn_rad):+.0f} deg {way} "
         f"(at most {100 * plan.worst_utilisation:.0f} % of the thrust on the way)",
         utilisation=plan.at_frame.utilisation,
         turn_deg=math.degrees(plan.turn_rad),
-        turn_first=plan.turn_first,
+        turn_first=plan.turn_at != "frame",
+        turn_at=plan.turn_at,
     )
     psi = ctx.target[2] + plan.turn_rad
     centre = np.asarray(frame.center_n[0:2], float)
-    if plan.turn_first:
-        t = ctx.target
-        if not (yield from ctx.go_and_settle(t[0], t[1], psi, 0.0, deadline)):
+    t = ctx.target
+    stops = {"start": [(t[0], t[1], psi)], "rest": [(*plan.rest_ne, t[2]), (*plan.rest_ne, psi)]}
+    for north, east, heading in stops.get(plan.turn_at, []):
+        if not (yield from ctx.go_and_settle(north, east, heading, 0.0, deadline)):
             return NOT_ALIGNED
     if not (yield from _with_vessel(ctx, plan, mode, frame, depth_m, deadline)):
         told = "as advised" if mode == "advise" else "as planned"

@@ -205,7 +205,8 @@ def test_a_small_random_set_of_landings_lands_where_it_is_accepted():
 def test_random_cases_name_an_unknown_scale():
     from missions import landing_study
 
-    with pytest.raises(ValueError, match="scale must be one of full, model, got 'huge'"):
+    known = "full, model, installation"
+    with pytest.raises(ValueError, match=f"scale must be one of {known}, got 'huge'"):
         landing_study.random_cases(1, "huge", 0)
 
 
