@@ -814,12 +814,13 @@ def wait_for(condition: Callable[[], bool], timeout_s: float = 10.0) -> bool:
 def test_the_callers_thread_encodes_and_writes_nothing(tmp_path, monkeypatch):
     """``write_log`` and ``event`` only queue: every message is encoded and handed to mcap on
     the recorder's own thread (the console's loop is not held by encoding or the disk)."""
+    from app.recording import stream as stream_mod
     from app.recording import writer as writer_mod
 
     writers: set[int] = set()
     encoders: set[int] = set()
     add_message = writer_mod.Writer.add_message
-    tf = writer_mod.tf_message
+    tf = stream_mod.tf_message
 
     def noting_add(self, *args, **kwargs):
         writers.add(threading.get_ident())
@@ -830,7 +831,7 @@ def test_the_callers_thread_encodes_and_writes_nothing(tmp_path, monkeypatch):
         return tf(*args, **kwargs)
 
     monkeypatch.setattr(writer_mod.Writer, "add_message", noting_add)
-    monkeypatch.setattr(writer_mod, "tf_message", noting_tf)
+    monkeypatch.setattr(stream_mod, "tf_message", noting_tf)
     ps = params.load("model-scale")
     sim = Simulation(ps, tree_depth_m=100.0)
     with recording.SessionRecorder(

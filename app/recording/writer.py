@@ -1,4 +1,5 @@
-"""Writing a session: ``SessionRecorder`` (one MCAP file) and ``Decimator``.
+"""Writing a session: ``SessionRecorder`` (one MCAP file; what it writes on each channel is
+``stream.SessionStream``'s, shared with the live feed for Foxglove).
 
 Decimation
     Log rows (one per plant step) are decimated by their *simulation* time, never by wall time,
@@ -57,40 +58,22 @@ import numpy as np
 from mcap.writer import CompressionType, Writer
 from numpy.typing import NDArray
 
-from app.recording import schemas
 from app.recording.channels import (
     COLUMNS,
-    EVENTS_TOPIC,
     FORMAT_VERSION,
-    LOG_TOPIC,
     RESERVED_SETUP_KEYS,
     RUN_RECORD_PREFIX,
-    SCENE_TOPIC,
-    SESSION_TOPIC,
     SETUP_RECORD,
-    TF_TOPIC,
-    WIRE_TOPIC,
-    carried_columns,
-    plot_channels,
-    session_columns,
 )
-from app.recording.encoding import T_S, RowEncoder
-from app.recording.messages import (
-    event_message,
-    json_bytes,
-    log_message,
-    scene_geometry,
-    scene_message,
-    tf_message,
-)
+from app.recording.messages import json_bytes
+from app.recording.stream import Decimator as Decimator  # re-exported
+from app.recording.stream import RowBatch, SessionStream
 from control.columns import COLUMN_NAMES, LAYOUT, M_MAX, N_LOG, LogRows
 from sim.docking import DockingFrame
 from sim.params import ParameterSet
 
 FloatArray = NDArray[np.float64]
 
-GRID_EPS = 1e-9
-"""Slack when putting a row time on the decimation grid (times are sums of 0.01 s steps)."""
 MAX_QUEUED = 64
 """Batches (one ``write_log`` or ``event`` call each) waiting for the writer thread at most;
 ``write_log`` waits for room beyond (the console hands over 0.5 s of simulation a batch)."""
@@ -101,23 +84,6 @@ batch, so that a row's messages are always in one chunk (a cut file holds whole 
 
 class RecordingError(RuntimeError):
     """The recorder was used wrongly (closed, bad input)."""
-
-
-@dataclass
-class Decimator:
-    """Keeps the first row at or after each multiple of 1/rate_hz of simulation time."""
-
-    rate_hz: float
-    last_slot: float = -math.inf
-
-    def select(self, t_s: FloatArray) -> NDArray[np.bool_]:
-        """Mask of the rows to keep (rows in time order); remembers the last slot taken."""
-        slots = np.floor(t_s * self.rate_hz + GRID_EPS)
-        previous = np.concatenate(([self.last_slot], slots[:-1]))
-        keep = slots > np.maximum.accumulate(previous)
-        if len(slots):
-            self.last_slot = max(self.last_slot, float(slots.max()))
-        return keep
 
 
 def software_version() -> str:
@@ -210,26 +176,11 @@ def _check_rates(**rates: float) -> None:
 
 
 @dataclass(frozen=True)
-class _Rows:
-    """The kept rows of one ``write_log`` call, with the drawing state they go with."""
-
-    rows: FloatArray
-    numeric: NDArray[np.bool_]
-    """Rows of the numeric rate (the plot channels, ``/session/log``, ``/tf``, ``/wire``)."""
-    scene: NDArray[np.bool_]
-    """Rows of the scene rate (``/scene``)."""
-    crane_tip_n: FloatArray | None
-    wire_length_m: float
-    docking: DockingFrame | None
-
-
-@dataclass(frozen=True)
 class _Event:
-    """An event's two messages, encoded by the caller (which checks they can be)."""
+    """An event's messages (topic, log time, bytes), encoded by the caller (which checks
+    they can be)."""
 
-    t_ns: int
-    event: bytes
-    log: bytes
+    messages: list[tuple[str, int, bytes]]
 
 
 @dataclass(frozen=True)
@@ -285,14 +236,9 @@ class SessionRecorder:
             int(time_origin_ns) if time_origin_ns is not None else time_origin_of(metadata)
         )
         setup = _setup_record(metadata, params, n_thrusters, rates, self._origin_ns)
-        self._plots = plot_channels(n_thrusters)
-        session_at = np.array(
-            [COLUMN_NAMES.index(c) for c in session_columns(n_thrusters)], dtype=np.intp
+        self._stream = SessionStream(
+            params, n_thrusters, numeric_rate_hz, scene_rate_hz, self._origin_ns
         )
-        self._encoder = RowEncoder(self._plots, session_at)
-        self._carried = carried_columns(n_thrusters)
-        self._session_columns = session_columns(n_thrusters)
-        self._geo = scene_geometry(params)
         self.path = Path(path)
         self._file: BinaryIO = open(self.path, "wb" if overwrite else "xb")
         try:
@@ -302,7 +248,7 @@ class SessionRecorder:
                 self._file, chunk_size=sys.maxsize, compression=CompressionType.ZSTD
             )
             self._writer.start(profile="", library=f"rov-console {software_version()}")
-            self._start_file(setup, numeric_rate_hz, scene_rate_hz)
+            self._start_file(setup)
         except BaseException:  # e.g. the disk is full: leave no empty or headless file
             self._file.close()
             self.path.unlink(missing_ok=True)
@@ -326,12 +272,8 @@ class SessionRecorder:
         self._thread = threading.Thread(target=self._write_loop, name="mcap-writer", daemon=True)
         self._thread.start()
 
-    def _start_file(
-        self, setup: dict[str, str], numeric_rate_hz: float, scene_rate_hz: float
-    ) -> None:
+    def _start_file(self, setup: dict[str, str]) -> None:
         """Schemas, channels and the setup record, handed to the operating system."""
-        self._numeric = Decimator(numeric_rate_hz)
-        self._scene = Decimator(scene_rate_hz)
         self._channels = self._register_channels()
         self._sequence = dict.fromkeys(self._channels, 0)
         self._writer.add_metadata(SETUP_RECORD, setup)
@@ -340,28 +282,10 @@ class SessionRecorder:
     # ------------------------------------------------------------------ set-up
     def _register_channels(self) -> dict[str, int]:
         w = self._writer
-
-        def add(topic: str, schema: dict, meta: dict[str, str] | None = None) -> None:
-            sid = w.register_schema(schema["title"], "jsonschema", json_bytes(schema))
-            channels[topic] = w.register_channel(topic, "json", sid, meta or {})
-
         channels: dict[str, int] = {}
-        add(
-            SESSION_TOPIC,
-            schemas.session_log_schema(),
-            {
-                "kind": "table",
-                "columns": json.dumps(self._session_columns),
-                "carried": json.dumps(self._carried),
-            },
-        )
-        add(TF_TOPIC, schemas.frame_transforms_schema())
-        add(SCENE_TOPIC, schemas.scene_update_schema())
-        for ch in self._plots:
-            add(ch.topic, schemas.plot_schema(ch), {"kind": "numeric"})
-        add(WIRE_TOPIC, schemas.wire_schema(), {"kind": "numeric"})
-        add(EVENTS_TOPIC, schemas.event_schema(), {"kind": "events"})
-        add(LOG_TOPIC, schemas.log_schema())
+        for spec in self._stream.channels():
+            sid = w.register_schema(spec.schema["title"], "jsonschema", json_bytes(spec.schema))
+            channels[spec.topic] = w.register_channel(spec.topic, "json", sid, spec.metadata)
         return channels
 
     # ------------------------------------------------------------------ the caller's side
@@ -401,35 +325,19 @@ class SessionRecorder:
             if docking is not None:
                 self._docking = docking
             self._last_t_s = float(t[-1]) if len(t) else self._last_t_s
-            numeric = self._numeric.select(t)
-            scene = self._scene.select(t)
-            keep = numeric | scene
-            if np.any(keep):
-                batch = _Rows(
-                    rows[keep],
-                    numeric[keep],
-                    scene[keep],
-                    self._crane_tip_n,
-                    self._wire_length_m,
-                    self._docking,
-                )
+            batch = self._stream.keep(
+                rows, t, self._crane_tip_n, self._wire_length_m, self._docking
+            )
+            if batch is not None:
                 self._put(batch)
 
     def event(self, t_s: float, kind: str, text: str, data: dict | None = None) -> None:
         """Record an event at simulation time ``t_s`` on ``/events`` (and ``/log`` for
         Foxglove's Log panel). ``kind``: e.g. leg, alarm, gains, landing."""
-        if not math.isfinite(t_s) or t_s < 0.0:
-            raise ValueError(f"event time must be a finite number of seconds >= 0, got {t_s}")
-        if not kind:
-            raise ValueError("event kind must not be empty")
-        try:
-            event = json_bytes(event_message(t_s, kind, text, data))
-        except (TypeError, ValueError) as err:
-            raise ValueError(f"event data cannot be written as JSON: {err}") from None
-        t_ns = self._origin_ns + round(t_s * 1e9)
+        messages = self._stream.event_messages(t_s, kind, text, data)
         with self._lock:
             self._check_open()
-            self._put(_Event(t_ns, event, json_bytes(log_message(t_ns, kind, text))))
+            self._put(_Event(messages))
 
     def add_run(self, metadata: Mapping[str, Any]) -> str:
         """Record the set-up of a run started while recording (``session_metadata`` of the
@@ -522,12 +430,12 @@ class SessionRecorder:
 
     def _write_item(self, item: object) -> bool:
         """Write one queued item; True when it held messages."""
-        if isinstance(item, _Rows):
+        if isinstance(item, RowBatch):
             self._write_rows(item)
             return True
         if isinstance(item, _Event):
-            self._add(EVENTS_TOPIC, item.t_ns, item.event)
-            self._add(LOG_TOPIC, item.t_ns, item.log)
+            for topic, t_ns, data in item.messages:
+                self._add(topic, t_ns, data)
             return True
         if isinstance(item, _Record):
             self._close_chunk()  # the rows before the record stay before it in the file
@@ -535,31 +443,10 @@ class SessionRecorder:
             return True
         return False
 
-    def _write_rows(self, batch: _Rows) -> None:
+    def _write_rows(self, batch: RowBatch) -> None:
         """Every message of a batch's kept rows, row by row in channel order."""
-        rows = batch.rows
-        times_ns = [self._origin_ns + round(t_s * 1e9) for t_s in rows[:, T_S].tolist()]
-        numeric_rows = rows[batch.numeric]
-        session = self._encoder.session_messages(numeric_rows)
-        plots = self._encoder.plot_messages(numeric_rows)
-        wire = (
-            None
-            if batch.crane_tip_n is None
-            else self._encoder.wire_messages(numeric_rows, batch.crane_tip_n, batch.wire_length_m)
-        )
-        j = 0
-        for k, t_ns in enumerate(times_ns):
-            if batch.numeric[k]:
-                self._add(SESSION_TOPIC, t_ns, session[j])
-                self._add(TF_TOPIC, t_ns, json_bytes(tf_message(t_ns, rows[k])))
-                for ch, messages in zip(self._plots, plots, strict=True):
-                    self._add(ch.topic, t_ns, messages[j])
-                if wire is not None:
-                    self._add(WIRE_TOPIC, t_ns, wire[j])
-                j += 1
-            if batch.scene[k]:
-                scene = scene_message(t_ns, rows[k], self._geo, batch.crane_tip_n, batch.docking)
-                self._add(SCENE_TOPIC, t_ns, json_bytes(scene))
+        for topic, t_ns, data in self._stream.row_messages(batch):
+            self._add(topic, t_ns, data)
 
     def _add(self, topic: str, t_ns: int, data: bytes) -> None:
         self._chunk_bytes += len(data)

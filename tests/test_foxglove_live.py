@@ -1,0 +1,104 @@
+"""The live feed for Foxglove (``serve --foxglove-port``): the Foxglove SDK's server sends the
+channels a recording has, with the same schemas, and every message it sends is valid against
+its channel's schema; it offers no way to publish or change anything."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import struct
+import threading
+import time
+
+import jsonschema_rs
+import numpy as np
+import websockets
+
+from app.foxglove_live import LiveFeed
+from app.recording.stream import SessionStream
+from app.server import free_port
+from control.columns import N_LOG
+from sim import params
+
+SUBPROTOCOLS = ["foxglove.sdk.v1", "foxglove.websocket.v1"]
+
+
+async def _listen(port: int, seconds: float) -> tuple[dict, dict, dict[int, list[bytes]]]:
+    """Connect as Foxglove does, subscribe to every channel, and gather for ``seconds``:
+    (serverInfo, channels by id, payloads by channel id)."""
+    url = f"ws://127.0.0.1:{port}"
+    async with websockets.connect(url, subprotocols=SUBPROTOCOLS) as ws:
+        info: dict = {}
+        channels: dict[int, dict] = {}
+        got: dict[int, list[bytes]] = {}
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            try:
+                msg = await asyncio.wait_for(ws.recv(), 0.2)
+            except TimeoutError:
+                continue
+            if isinstance(msg, str):
+                m = json.loads(msg)
+                if m["op"] == "serverInfo":
+                    info = m
+                elif m["op"] == "advertise":
+                    channels.update({c["id"]: c for c in m["channels"]})
+                    subs = [{"id": c["id"], "channelId": c["id"]} for c in m["channels"]]
+                    await ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
+            elif msg[0] == 1:  # message data: opcode, subscription id, log time, payload
+                (sub,) = struct.unpack_from("<I", msg, 1)
+                got.setdefault(sub, []).append(bytes(msg[13:]))
+        return info, channels, got
+
+
+def _rows(t0_s: float, n: int) -> np.ndarray:
+    rows = np.zeros((n, N_LOG))
+    rows[:, 0] = t0_s + 0.01 * np.arange(1, n + 1)
+    return rows
+
+
+def test_a_viewer_gets_the_recordings_channels_and_valid_messages() -> None:
+    ps = params.load("model-scale")
+    feed = LiveFeed(ps, 4, 1_700_000_000_000_000_000, free_port())
+
+    def hand_over() -> None:
+        time.sleep(0.8)  # the viewer connects and subscribes first
+        for k in range(20):  # 20 s of simulation in 0.5 s ticks
+            feed.rows(_rows(0.5 * k, 50), np.array([1.0, 1.0, 0.0]), 100.0, None)
+            time.sleep(0.05)
+        feed.event(5.0, "note", "silt cloud, lost the view", {"who": "pilot"})
+
+    threading.Thread(target=hand_over, daemon=True).start()
+    try:
+        info, channels, got = asyncio.run(_listen(feed.port, 3.5))
+    finally:
+        feed.close()
+    recorded = [spec.topic for spec in SessionStream(ps, 4, 20.0, 5.0, 0).channels()]
+    assert sorted(c["topic"] for c in channels.values()) == sorted(recorded)
+    assert not {"clientPublish", "parameters", "services"} & set(info.get("capabilities", []))
+    by_topic = {channels[cid]["topic"]: (channels[cid], payloads) for cid, payloads in got.items()}
+    for topic, (channel, payloads) in by_topic.items():
+        validator = jsonschema_rs.validator_for(json.loads(channel["schema"]))
+        invalid = [p for p in payloads if not validator.is_valid(json.loads(p))]
+        assert not invalid, f"{topic}: {invalid[0][:200]!r}"
+    # 20 s of simulation handed over in about 1 s of wall time (20x): the recording's rates
+    # (20 Hz, 5 Hz of simulated time) thinned to at most 20 hand-overs a wall second, each of
+    # 0.5 s of simulation (10 rows at 20 Hz)
+    tf, scene = len(by_topic["/tf"][1]), len(by_topic["/scene"][1])
+    assert 10 <= tf <= 11 * (1 + 2.0 * 20) and tf < 400
+    assert 0 < scene < tf
+    (event,) = by_topic["/events"][1]
+    assert json.loads(event)["text"] == "silt cloud, lost the view"
+
+
+def test_nothing_is_encoded_while_nobody_watches() -> None:
+    ps = params.load("model-scale")
+    feed = LiveFeed(ps, 4, 0, free_port())
+    sent: list[object] = []
+    feed._stream.row_messages = lambda batch: sent.append(batch) or iter(())  # type: ignore[method-assign]
+    try:
+        feed.rows(_rows(0.0, 100), np.zeros(3), 100.0, None)
+        time.sleep(0.5)
+    finally:
+        feed.close()
+    assert sent == [] and feed.dropped == 0
