@@ -13,7 +13,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from app import headless
+from app import assessment_cli, headless
 from app.campaign.cli import campaign_app
 from app.log_cli import log_app
 
@@ -175,6 +175,7 @@ def simulation_summary(sim, rows, wall_s: float) -> dict:
 
 app.add_typer(log_app, name="log")
 app.add_typer(campaign_app, name="campaign")
+assessment_cli.register(app)  # logbook, trend, criteria
 
 LIST_HELP = "list the library's missions and exit"
 
@@ -273,9 +274,11 @@ def run(
         summary["plots"] = [str(p) for p in figures]
     if trainee is not None:
         from app import scores
+        from app.assessment import facts_of_run
 
         try:
-            summary["score_id"] = scores.record(scores_db, trainee, result, "run", log)
+            facts = facts_of_run(result, sim)
+            summary["score_id"] = scores.record(scores_db, trainee, result, "run", log, "", facts)
         except (ValueError, OSError) as err:
             _fail(f"--trainee: cannot store the scores in {scores_db}: {err}")
     if json_out:

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from app.assessment import Criteria, FrameLimits, RunFacts, assess, measure
 from missions.scoring import MissionResult
 
 SCHEMA = """
@@ -43,13 +44,15 @@ CREATE TABLE IF NOT EXISTS runs (
     faults TEXT NOT NULL DEFAULT '',
     manual_share REAL NOT NULL DEFAULT 0,
     flown_by TEXT NOT NULL DEFAULT 'autopilot',
-    criteria_failed TEXT NOT NULL DEFAULT ''
+    criteria_failed TEXT NOT NULL DEFAULT '',
+    assessment TEXT NOT NULL DEFAULT ''
 )
 """
 ADDED_COLUMNS = {
     "manual_share": "REAL NOT NULL DEFAULT 0",
     "flown_by": "TEXT NOT NULL DEFAULT 'autopilot'",
     "criteria_failed": "TEXT NOT NULL DEFAULT ''",
+    "assessment": "TEXT NOT NULL DEFAULT ''",
 }
 """Columns added since the first version: a database written before gets them on opening
 (its runs count as flown by the autopilot: there was no manual mode then)."""
@@ -83,6 +86,7 @@ COLUMNS = (
     "manual_share",
     "flown_by",
     "criteria_failed",
+    "assessment",
 )
 NAME_MAX = 60
 
@@ -116,6 +120,9 @@ class Score:
     """autopilot, hand or mixed (``flown_by``)."""
     criteria_failed: str = ""
     """The run's criteria (``CRITERIA``) it failed, in words ('; '-separated; '' none)."""
+    assessment: str = ""
+    """The assessment's measured values (``app.assessment.measure``) and the frame's limits,
+    as JSON (``assessment_values``); '' for runs stored before there was one."""
 
     @property
     def verdict(self) -> str:
@@ -238,9 +245,12 @@ def record(
     source: str,
     log_file: str | None = None,
     faults: str = "",
+    facts: RunFacts | None = None,
 ) -> int:
     """Store one finished mission; returns its row id. ``faults``: the faults that were
-    active, in words (default: those the mission's events record)."""
+    active, in words (default: those the mission's events record). ``facts``: what the
+    assessment reads besides the result (``app.assessment.facts_of_run``); without them only
+    the criteria the result alone tells are measured (landing, saturation, time to land)."""
     landing = result.landings[0] if result.landings else None
     share = manual_share(result)
     values = {
@@ -264,6 +274,7 @@ def record(
         "manual_share": share,
         "flown_by": flown_by(share),
         "criteria_failed": criteria_failed(result),
+        "assessment": _assessment_json(facts or RunFacts(result, result.events)),
     }
     db.parent.mkdir(parents=True, exist_ok=True)
     with closing(sqlite3.connect(db)) as con, con:
@@ -273,6 +284,71 @@ def record(
             tuple(values.values()),
         )
         return int(cur.lastrowid or 0)
+
+
+def _assessment_json(facts: RunFacts) -> str:
+    values = {
+        k: (None if v is None else (v if math.isfinite(v) else "inf"))
+        for k, v in measure(facts).items()
+    }
+    frame = FrameLimits.of(facts.layout)
+    return json.dumps({"values": values, "frame": None if frame is None else vars(frame)})
+
+
+def assessment_values(s: Score) -> tuple[dict[str, float | None], FrameLimits | None]:
+    """A stored run's measured values and frame limits. A run stored before the assessment
+    gets what its columns tell: the landing's miss and speed and the time saturated."""
+    if s.assessment:
+        data = json.loads(s.assessment)
+        values = {
+            k: (math.inf if v == "inf" else (None if v is None else float(v)))
+            for k, v in data.get("values", {}).items()
+        }
+        frame = data.get("frame")
+        return values, FrameLimits(**frame) if isinstance(frame, dict) else None
+    told: dict[str, float | None] = {"time_saturated": s.saturated_s}
+    if s.landed is not None:
+        told["landing_miss"] = s.miss_m if s.miss_m is not None else math.inf
+        told["contact_speed"] = (
+            abs(s.contact_speed_mps) if s.contact_speed_mps is not None else math.inf
+        )
+    return told, None
+
+
+@dataclass(frozen=True)
+class TrendPoint:
+    """One run of a trainee, scored with the criteria in force."""
+
+    id: int
+    utc: str
+    mission: str
+    flown_by: str
+    faults: str
+    total: float | None
+    scores: dict[str, float | None]
+
+
+def trend(
+    db: Path, trainee: str, criteria: Criteria, mission: str | None = None
+) -> list[TrendPoint]:
+    """A trainee's runs, oldest first, each assessed again with ``criteria`` (a change of the
+    criteria re-scores the whole history: the database keeps values, not scores)."""
+    out = []
+    for s in reversed(history(db, trainee, mission)):
+        values, frame = assessment_values(s)
+        a = assess(values, criteria, frame)
+        out.append(
+            TrendPoint(
+                s.id,
+                s.utc,
+                s.mission,
+                s.flown_by,
+                s.faults,
+                a.total,
+                {c.name: c.score for c in a.criteria},
+            )
+        )
+    return out
 
 
 def history(db: Path, trainee: str | None = None, mission: str | None = None) -> list[Score]:
