@@ -119,7 +119,7 @@ def entry_of(path: Path, criteria: Criteria, trainee: str | None = None) -> Entr
 
 def _trainee_of(path: Path) -> str | None:
     """Who flew the recording, from the scores database beside it (the console stores each
-    mission it ran with its recording's file name)."""
+    mission it ran with its recording's file name, ``run --trainee`` with its path)."""
     from app import scores as store
 
     db = path.parent / "scores.sqlite"
@@ -128,7 +128,7 @@ def _trainee_of(path: Path) -> str | None:
     except ValueError:
         return None
     for r in rows:
-        if r.log_file == path.name:
+        if r.log_file and Path(r.log_file).name == path.name:
             return r.trainee
     return None
 

@@ -26,6 +26,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from app.api import (
+    assessment,
     control,
     environment,
     faults,
@@ -67,6 +68,7 @@ ROUTERS = (
     replay.router,
     faults.router,
     scores.router,
+    assessment.router,
     pilot.router,
     plots.router,
 )
