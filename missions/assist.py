@@ -301,7 +301,7 @@ def _reason(sim: Simulation, frame: DockingFrame, plan: VesselPlan) -> str:
         return (
             f"landing not feasible in {current} with the frame at {frame_deg} wherever the "
             f"vessel stands: {where}, holding the tree over the frame would be within the "
-            f"{limit} allowed, but the least the way there asks (from where the tree is held, "
+            f"{limit} allowed, but the least the way there asks (from where the tree is, "
             f"turning to {frame_deg} either way, there, where it hangs or over the frame) is "
             f"{plan.worst.words()}, more than the thrusters have"
         )

@@ -471,8 +471,13 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
     hover_depth = post_top - leg.hover_m - half_h
     plan = landing.plan_landing(cl, frame, ctx.target, hover_depth)
     assisted: assist.VesselPlan | None = None
+    here = ctx.target
     if leg.vessel != "fixed" and plan.at_frame.utilisation > assist.ASSIST_UTILISATION:
-        assisted = assist.plan_vessel(cl, frame, ctx.target, hover_depth)
+        # from where the tree is (the estimate): not where it is held when the ROV cannot
+        # hold it there, as a strong current's pull off its rest can be beyond it
+        eta = cl.eta_estimate
+        here = np.array([eta[0], eta[1], ctx.target[2] + ssa(eta[2] - ctx.target[2])])
+        assisted = assist.plan_vessel(cl, frame, here, hover_depth)
         if not assisted.feasible and not plan.feasible:
             ctx.event("landing", assisted.reason)
             raise ValueError(assisted.reason)
@@ -486,6 +491,7 @@ def _dock(ctx: MissionContext, leg: schema.DockLeg, deadline: float) -> LegRun:
     if assisted is None:
         why = yield from _approach(ctx, plan, frame, deadline)
     else:
+        ctx.set_target(*here)
         why = yield from _assisted_approach(ctx, assisted, leg.vessel, frame, hover_depth, deadline)
     if not why:
         aligned = yield from ctx.run_until(

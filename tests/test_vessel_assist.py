@@ -184,10 +184,10 @@ def test_a_vessel_assisted_landing_is_the_same_with_checks_skipped():
 
 def test_refused_only_where_no_place_of_the_vessel_helps():
     """In 1.5 m/s (1.32 m/s when the leg starts) the vessel could put the tree's rest over the
-    frame (30 m upstream), but the way there cannot be flown: the tree, held under the crane
-    tip while the observer converged, is 30 m off its rest in that current, and whichever
-    way it goes the ROV would have to hold most of that pull for a while (21.9 kN, 186 % of
-    its thrust, a tenth of the way along). Refused at once, naming the place and the forces."""
+    frame (30 m upstream), but the way there cannot be flown: turning the 36 t tree across
+    such a current to the frame's heading takes 21.65 kN m of yaw moment, three times what
+    the ROV has, wherever the turn is made. Refused at once, naming the place and the
+    forces."""
     case = landing_study.Case("full", 1, 1.5, 0.0, 90.0, 2.0, 0.0)
     result = runner.run_mission(_mission(case, "auto"))
     assert result.failed and not result.landings
@@ -195,10 +195,10 @@ def test_refused_only_where_no_place_of_the_vessel_helps():
         "leg 2 (dock) failed: landing not feasible in 1.324 m/s towards 0 deg with the frame at "
         "90 deg wherever the vessel stands: with the vessel moved 30.0 m towards 180 deg, "
         "holding the tree over the frame would be within the 90 % allowed, but the least the "
-        "way there asks (from where the tree is held, turning to 90 deg either way, there, "
-        "where it hangs or over the frame) is 21.94 kN and 200 N m of yaw moment needed"
+        "way there asks (from where the tree is, turning to 90 deg either way, there, "
+        "where it hangs or over the frame) is 13.11 kN and 21.65 kN m of yaw moment needed"
     )
-    assert result.error.endswith("(186 % of the thrust), more than the thrusters have")
+    assert result.error.endswith("(295 % of the thrust), more than the thrusters have")
     assert result.legs[1].duration_s < 1.0
 
 
