@@ -970,6 +970,14 @@ def serve(
             "X-Forwarded-For (off: the header is ignored, whoever sends it)",
         ),
     ] = False,
+    foxglove_port: Annotated[
+        int | None,
+        typer.Option(
+            "--foxglove-port",
+            help="also serve the session live to Foxglove or Lichtblick on this port "
+            "(read-only, the recording's channels)",
+        ),
+    ] = None,
 ) -> None:
     """Serve the operator console: 3D view (viser), HTTP API and telemetry WebSocket."""
     from app.console import ConsoleSettings
@@ -990,6 +998,7 @@ def serve(
             paused=paused,
             speed=speed,
             behind_proxy=behind_proxy,
+            foxglove_port=foxglove_port,
         )
     except ValueError as err:
         raise typer.BadParameter(str(err)) from None

@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import asyncio
 import json
+import re
 import struct
 import threading
 import time
 
 import jsonschema_rs
 import numpy as np
+import pytest
 import websockets
 
 from app.foxglove_live import LiveFeed
@@ -102,3 +104,50 @@ def test_nothing_is_encoded_while_nobody_watches() -> None:
     finally:
         feed.close()
     assert sent == [] and feed.dropped == 0
+
+
+def test_serve_sends_the_running_session_and_its_events(tmp_path) -> None:
+    """``serve --foxglove-port``: the console's own run reaches a Foxglove client, and a
+    command's event (a pause through the API) arrives on /events as it is applied."""
+    import httpx
+
+    from app.console import ConsoleSettings
+    from app.server import serve_in_thread
+
+    port = free_port()
+    settings = ConsoleSettings(
+        port=0, view=False, recordings_dir=tmp_path, speed=5.0, foxglove_port=port
+    )
+    with serve_in_thread(settings) as srv:
+        assert srv.console.loop.session.live is not None
+
+        def pause_later() -> None:
+            time.sleep(1.5)
+            httpx.post(
+                f"{srv.base_url}/api/run/pause",
+                headers={"Authorization": f"Bearer {srv.token}"},
+                timeout=10.0,
+            )
+
+        threading.Thread(target=pause_later, daemon=True).start()
+        _, channels, got = asyncio.run(_listen(port, 3.0))
+    topics = {channels[cid]["topic"]: payloads for cid, payloads in got.items()}
+    poses = [json.loads(p) for p in topics["/tree/state"]]
+    assert len(poses) >= 5, "the live run's rows arrive"
+    validator = jsonschema_rs.validator_for(
+        json.loads(next(c for c in channels.values() if c["topic"] == "/tf")["schema"])
+    )
+    assert all(validator.is_valid(json.loads(p)) for p in topics["/tf"])
+    texts = [json.loads(p)["text"] for p in topics.get("/events", [])]
+    assert any("pause" in t.lower() for t in texts), texts
+
+
+@pytest.mark.parametrize(
+    "port, words",
+    [(0, "foxglove_port must be in [1, 65535], got 0"), (8000, "must differ from port")],
+)
+def test_a_bad_foxglove_port_is_refused_with_its_range(port: int, words: str) -> None:
+    from app.console import ConsoleSettings
+
+    with pytest.raises(ValueError, match=re.escape(words)):
+        ConsoleSettings(port=8000, view=False, foxglove_port=port)

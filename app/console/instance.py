@@ -15,6 +15,7 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
+from app.console.errors import ConsoleError
 from app.console.loop import PacedLoop
 from app.console.session import PreparedRun, Session, prepare_run, station_keeping_mission
 from app.console.settings import ConsoleSettings
@@ -47,6 +48,14 @@ class Console:
         """Build the first simulation (the given mission's set-up, or station keeping)."""
         run = initial_run(settings)
         session = Session(run, settings.recordings_dir)
+        if settings.foxglove_port is not None:
+            try:
+                session.start_live_feed(settings.foxglove_port, settings.host)
+            except Exception as err:  # the SDK's error (the port taken): one line, no trace
+                session.close()
+                raise ConsoleError(
+                    f"cannot serve Foxglove on port {settings.foxglove_port}: {err}"
+                ) from None
         loop = PacedLoop(session, speed=settings.speed, paused=settings.paused)
         token = settings.token or secrets.token_urlsafe(18)
         return Console(settings, loop, token)

@@ -44,6 +44,7 @@ from app.console.snapshot import (
 )
 from app.console.texts import alarm_title
 from app.console.viewer_replay import recording_scene
+from app.foxglove_live import LiveFeed
 from app.recording import (
     SessionData,
     SessionRecorder,
@@ -136,6 +137,8 @@ class Session:
         """Added to the simulation time in the recording: a run started while recording goes
         on in the same file after the one before."""
         self.replay: Replay | None = None
+        self.live: LiveFeed | None = None
+        """The live feed for Foxglove (``serve --foxglove-port``), when there is one."""
         self._trend_cache = frozen_copy(np.zeros((0, 7)))
         self._trend_wall = 0.0
         self._install(run)
@@ -146,6 +149,8 @@ class Session:
         """Who started this run (None: the console itself, at start-up)."""
         self.sim = run.sim
         self.mission = run.mission
+        if self.live is not None:
+            self.live.new_run(run.sim.ps, run.sim.n_thrusters, self._live_origin_ns())
         self.driver = MissionDriver(run.mission, run.sim) if run.run_legs else None
         if self.driver is not None:
             # live, an instructor's fault (a winch slip) or the pilot's changes can move what
@@ -332,6 +337,10 @@ class Session:
         self._note_faults()
         self.last_row = rows.last()
         self.trend.extend(rows)
+        if self.live is not None:
+            self.live.rows(
+                rows.data, self.sim.crane_tip_n, float(self.sim.wire_length_m), self.scene.frame
+            )
         self.tension_newton = self.sim.wire_tension_newton()
         before = {a.name: a.active for a in self.monitor.state}
         free_setpoint = self.sim.free_setpoint_n
@@ -430,6 +439,8 @@ class Session:
         self.notes_written += 1
         if self.actor is not None:
             data = {**data, "who": self.actor}
+        if self.live is not None:
+            self.live.event(self.sim.t_s, kind, text, data)
         if self.recorder is None:
             return
         self.flush_recording()
@@ -595,8 +606,22 @@ class Session:
             fault_log=tuple(sim.fault_events[-FAULT_LOG_KEEP:]),
         )
 
+    def start_live_feed(self, port: int, host: str) -> LiveFeed:
+        """Serve this session live over the Foxglove WebSocket protocol (read-only)."""
+        self.live = LiveFeed(
+            self.sim.ps, self.scene.n_thrusters, self._live_origin_ns(), port, host
+        )
+        return self.live
+
+    def _live_origin_ns(self) -> int:
+        """The live feed's time origin: now, less the simulated time (at 1x, log times are
+        the wall clock's)."""
+        return time.time_ns() - round(self.sim.t_s * 1e9)
+
     def close(self) -> None:
-        """Close the recording and the scoring worker (at shutdown)."""
+        """Close the recording, the live feed and the scoring worker (at shutdown)."""
+        if self.live is not None:
+            self.live.close()
         if self.recorder is not None:
             try:
                 self.stop_recording()

@@ -47,6 +47,9 @@ class ConsoleSettings:
     """Start speed (simulated s per wall-clock s)."""
     announce: bool = False
     """Print the addresses and the token once serving (the serve command)."""
+    foxglove_port: int | None = None
+    """Also serve the session live over the Foxglove WebSocket protocol on this port
+    (read-only; on ``host``, so loopback unless ``allow_remote``); None: not."""
     behind_proxy: bool = False
     """A reverse proxy on this machine stands in front of the console: its X-Forwarded-For
     and X-Forwarded-Proto headers are believed (the client address the token lockout counts
@@ -73,6 +76,13 @@ class ConsoleSettings:
                 raise ValueError(f"{name} must be in [0, 65535], got {value}")
         if self.view and self.port == self.viser_port and self.port != 0:
             raise ValueError(f"port and viser_port must differ, both are {self.port}")
+        if self.foxglove_port is not None:
+            if not 1 <= self.foxglove_port <= 65535:
+                raise ValueError(f"foxglove_port must be in [1, 65535], got {self.foxglove_port}")
+            if self.foxglove_port in (self.port, self.viser_port):
+                raise ValueError(
+                    f"foxglove_port must differ from port and viser_port, got {self.foxglove_port}"
+                )
         if self.token is not None and (
             len(self.token) < MIN_TOKEN_CHARS or not self.token.isprintable() or " " in self.token
         ):
