@@ -95,11 +95,20 @@ DEFINITIONS: tuple[Definition, ...] = (
     Definition("landing_miss", "landing miss", "m", FROM_FRAME, None, 3.0, 10.0, ".3f"),
     Definition("contact_speed", "contact speed", "m/s", FROM_FRAME, None, 2.0, 5.0, ".3f"),
     Definition(
-        "time_off_tolerance", "time off the funnels' tolerance", "s", 10.0, 120.0, 2.0, 3600.0
+        "time_off_tolerance",
+        "time off the funnels' tolerance",
+        "s",
+        10.0,
+        120.0,
+        2.0,
+        3600.0,
+        ".1f",
     ),
     Definition("time_saturated", "time saturated", "s", 30.0, 120.0, 1.0, 3600.0, ".1f"),
     Definition("slack_events", "slack-wire events", "-", 0.0, 3.0, 2.0, 100.0, ".0f"),
-    Definition("alarm_clear_s", "longest alarm before cleared", "s", 30.0, 180.0, 1.0, 3600.0),
+    Definition(
+        "alarm_clear_s", "longest alarm before cleared", "s", 30.0, 180.0, 1.0, 3600.0, ".1f"
+    ),
     Definition("time_to_land", "time to land", "s", 600.0, 2400.0, 1.0, 86400.0, ".0f"),
 )
 BY_NAME = {d.name: d for d in DEFINITIONS}
@@ -563,8 +572,10 @@ class CriterionResult:
         return f"{self.value:{d.fmt}}"
 
     def limit_text(self) -> str:
-        d = BY_NAME[self.name]
-        return "n/a" if self.limit is None else f"{self.limit:{d.fmt}}"
+        return "n/a" if self.limit is None else f"{self.limit:g}"
+
+    def zero_text(self) -> str:
+        return "n/a" if self.zero_at is None else f"{self.zero_at:g}"
 
 
 @dataclass(frozen=True)

@@ -63,7 +63,8 @@ def logbook(
     from app import logbook as lb
 
     try:
-        entry = lb.entry_of(recording, crit, trainee)
+        source = f"{criteria.name} (file)" if criteria is not None else "the built-in defaults"
+        entry = lb.entry_of(recording, crit, trainee, source)
     except ValueError as err:
         _fail(str(err))
         return

@@ -59,6 +59,8 @@ class Entry:
     faults: str
     """The instructor's faults that acted, in words ('' none)."""
     assessment: Assessment
+    criteria_source: str = "the built-in defaults"
+    """Where the criteria came from (a file's name, or the defaults)."""
 
 
 def facts_of(d: Debrief) -> RunFacts:
@@ -93,7 +95,12 @@ def _faults(events: list[dict]) -> str:
     )
 
 
-def entry_of(path: Path, criteria: Criteria, trainee: str | None = None) -> Entry:
+def entry_of(
+    path: Path,
+    criteria: Criteria,
+    trainee: str | None = None,
+    criteria_source: str = "the built-in defaults",
+) -> Entry:
     """The logbook entry of a recording (its last run that flew a mission's legs)."""
     d = debrief(path)
     facts = facts_of(d)
@@ -114,6 +121,7 @@ def entry_of(path: Path, criteria: Criteria, trainee: str | None = None) -> Entr
         verdict=verdict,
         faults=_faults(d.events),
         assessment=assess(values, criteria, facts.layout),
+        criteria_source=criteria_source,
     )
 
 
@@ -214,7 +222,7 @@ def pdf_bytes(entry: Entry) -> bytes:
         4,
         _latin1(
             "Each criterion scores 100 at or within its limit, falling linearly to 0 at "
-            "'zero at'; the total is the weighted mean of the criteria the run could be "
+            "'score 0 at'; the total is the weighted mean of the criteria the run could be "
             "judged on (n/a: not judged). Limits, sources and weights: docs/instructor.md."
         ),
         new_x="LMARGIN",
@@ -234,6 +242,7 @@ def _details(pdf, entry: Entry) -> None:
         ("Recording", entry.recording),
         ("Mission verdict", entry.verdict),
         ("Instructor's faults", entry.faults or "none"),
+        ("Criteria", entry.criteria_source),
     )
     for label, value in rows:
         pdf.set_font("Helvetica", "B", 10)
@@ -243,7 +252,7 @@ def _details(pdf, entry: Entry) -> None:
 
 
 TABLE_WIDTHS = (62, 16, 22, 20, 14, 26, 20)
-TABLE_HEAD = ("Criterion", "Unit", "Limit", "Zero at", "Weight", "Value", "Score")
+TABLE_HEAD = ("Criterion", "Unit", "Limit", "Score 0 at", "Weight", "Value", "Score")
 
 
 def _criteria_table(pdf, entry: Entry) -> None:
@@ -258,7 +267,7 @@ def _criteria_table(pdf, entry: Entry) -> None:
             c.title,
             c.unit,
             c.limit_text(),
-            "n/a" if c.zero_at is None else f"{c.zero_at:g}",
+            c.zero_text(),
             f"{c.weight:g}",
             c.value_text(),
             "n/a" if c.score is None else f"{c.score:.0f}",

@@ -173,7 +173,12 @@ def logbook(
             headers={"Retry-After": "10"},
         )
     try:
-        entry = lb.entry_of(path, criteria)
+        source = (
+            "the console's (set by the instructor)"
+            if criteria_path(console).exists()
+            else ("the built-in defaults")
+        )
+        entry = lb.entry_of(path, criteria, None, source)
     except ValueError as err:
         raise HTTPException(UNPROCESSABLE, f"{name}: {err}".replace(str(path), name)) from None
     finally:
