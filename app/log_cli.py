@@ -142,3 +142,48 @@ def recover(
             f"left out {done.dropped_bytes} bytes after the last whole record"
         )
     typer.echo(str(done.output))
+
+
+@log_app.command()
+def notes(
+    file: FileArg,
+    json_out: Annotated[bool, typer.Option("--json", help="a JSON list")] = False,
+    csv: Annotated[
+        Path | None, typer.Option("--csv", help="also write the notes to this CSV file")
+    ] = None,
+    add: Annotated[
+        str | None, typer.Option("--add", help="add a note (with --at and --author)")
+    ] = None,
+    at: Annotated[float | None, typer.Option("--at", help="the note's time [s]")] = None,
+    author: Annotated[str, typer.Option("--author", help="who writes the note")] = "",
+) -> None:
+    """List a recording's notes (made live, and added in review beside the file), or add one
+    in review (it goes into NAME.mcap.notes.jsonl; the recording is not changed)."""
+    from app.recording.notes import add_review_note, notes_csv, read_notes
+
+    try:
+        if add is not None:
+            if at is None:
+                raise ValueError("--add needs --at, the note's time in seconds")
+            from app.recording import load_session
+
+            t = load_session(file).log.t_s
+            add_review_note(file, at, author or "reviewer", add, float(t[-1]) if len(t) else 0.0)
+        found = read_notes(file)
+    except ValueError as err:
+        typer.echo(f"error: {err}", err=True)
+        raise typer.Exit(EXIT_UNREADABLE) from None
+    if csv is not None:
+        try:
+            csv.write_text(notes_csv(found), encoding="utf-8")
+        except OSError as err:
+            typer.echo(f"error: {csv}: {err.strerror or err}", err=True)
+            raise typer.Exit(EXIT_UNREADABLE) from None
+    if json_out:
+        typer.echo(json.dumps([n.as_dict() for n in found]))
+        return
+    if not found:
+        typer.echo(f"{file}: no notes")
+    for n in found:
+        by = f" ({n.author})" if n.author else ""
+        typer.echo(f"{n.t_s:9.2f} s{by}: {n.text}" + ("  [review]" if n.source == "review" else ""))

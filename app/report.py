@@ -28,6 +28,7 @@ from app.recording import (
     recorded_docking_frame,
     recorded_mission_name,
 )
+from app.recording.notes import notes_of
 from control.columns import LogRows
 from missions import schema
 from missions.scoring import (
@@ -196,10 +197,14 @@ def debrief(path: str | Path) -> Debrief:
     ps = _params(meta)
     docking = _docking(run, ps)
     tree_size = float(max(ps.tree.dimensions_m)) if ps is not None else 3.6
+    review_notes = [
+        {"t_s": n.t_s, "kind": "note", "text": n.text, "data": {"who": n.author, "in": "review"}}
+        for n in notes_of(Path(path), [])
+    ]
     events = sorted(
         (
             e
-            for e in data.events
+            for e in [*data.events, *review_notes]
             if isinstance(e.get("t_s"), int | float)
             and part.start_s - 1e-9 <= e["t_s"] < part.stop_s - 1e-9
         ),
@@ -288,7 +293,7 @@ def render_html(d: Debrief, comparison: str = "") -> str:
         (
             f"{e.get('t_s', math.nan):.2f}",
             str(e.get("kind", "")),
-            str((e.get("data") or {}).get("who", "")),
+            str((e.get("data") or {}).get("author") or (e.get("data") or {}).get("who", "")),
             str(e.get("text", "")),
         )
         for e in d.events
@@ -301,6 +306,17 @@ def render_html(d: Debrief, comparison: str = "") -> str:
         ("log", "complete" if d.complete else "cut off: read up to its last intact record"),
     ]
     landings = "".join(f"<li>{html.escape(x)}</li>" for x in d.landings) or "<li>none</li>"
+    notes = [
+        (
+            f"{e['t_s']:.2f}",
+            str((e.get("data") or {}).get("author") or (e.get("data") or {}).get("who", "")),
+            str(e.get("text", "")),
+            "in review" if (e.get("data") or {}).get("in") == "review" else "live",
+        )
+        for e in d.events
+        if e.get("kind") == "note"
+    ]
+    notes_html = table_html(("t [s]", "by", "note", "made"), notes) if notes else "<p>none</p>"
     return f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8">
 <title>Debrief: {html.escape(d.name)}</title>
@@ -319,6 +335,8 @@ img {{ max-width: 100%; }}
 {table_html(LEG_TABLE_COLUMNS, leg_table_rows(summary))}
 {table_html(("figure", "value"), figures_rows)}
 <h2>Landings</h2><ul>{landings}</ul>
+<h2>Notes</h2>
+{notes_html}
 {comparison}
 <h2>Figures</h2>
 {images}

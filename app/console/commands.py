@@ -17,6 +17,7 @@ import numpy as np
 from app.console.errors import ConsoleError
 from app.console.session import PreparedRun, Session
 from app.recording import SessionData
+from app.recording.notes import NOTE_KIND, note_author, note_text
 from control.config import Allocation, Gains, Mode
 
 SPEED_MIN, SPEED_MAX = 0.25, 50.0
@@ -344,3 +345,24 @@ class CloseReplay:
         loop.session.require_replay()
         loop.session.close_replay()
         return {"replay": None}
+
+
+@dataclass(frozen=True)
+class AddNote:
+    """A note at the present time of the live run: an event of kind ``note`` in the
+    recording (when one is being made), on the live feed's ``/events`` and in the operations
+    log, with its author (the sender's name when none is given)."""
+
+    text: str
+    author: str = ""
+
+    def __post_init__(self) -> None:
+        note_text(self.text)
+        if self.author:
+            note_author(self.author)
+
+    def apply(self, loop: LoopControls) -> object:
+        session = loop.session
+        author = note_author(self.author) if self.author else (session.actor or "operator")
+        session.note(NOTE_KIND, note_text(self.text), {"author": author})
+        return {"t_s": session.sim.t_s, "author": author, "recording": session.recording_name}
