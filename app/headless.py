@@ -76,8 +76,12 @@ def drive(
                 recording.events(driver)
 
 
-def open_recorder(path: str, spec: Mission, sim: Simulation, seed: int | None) -> SessionRecorder:
-    """A recorder for ``run --log``, with the setup metadata every recording has."""
+def open_recorder(
+    path: str, spec: Mission, sim: Simulation, seed: int | None, numeric_rate_hz: float = 20.0
+) -> SessionRecorder:
+    """A recorder for ``run --log``, with the setup metadata every recording has; its rows at
+    ``numeric_rate_hz`` (the plant's rate, 1 / dt, keeps every step: ``rov-console shadow``
+    then reproduces the run step for step)."""
     from app.recording import SessionRecorder, session_metadata
 
     metadata = session_metadata(sim, spec, seed=seed)  # seed None: the mission's
@@ -87,4 +91,5 @@ def open_recorder(path: str, spec: Mission, sim: Simulation, seed: int | None) -
         params=sim.ps,
         n_thrusters=sim.n_thrusters,
         docking=sim.docking_frame,
+        numeric_rate_hz=numeric_rate_hz,
     )
