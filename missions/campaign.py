@@ -45,6 +45,7 @@ from missions import schema
 from missions.driver import MissionDriver
 from missions.limits import MAX_RUNS_PER_TASK as MAX_RUNS_PER_TASK
 from missions.scoring import MissionResult
+from missions.seaway import SLACK_WIRES as SLACK_WIRES
 from missions.setup import build_simulation
 from sim import params as params_mod
 
@@ -667,6 +668,8 @@ OUTCOMES: dict[str, str] = {
     "max_thruster_utilisation": "float",
     "saturated_time_s": "float",
     "settling_time_s": "float",
+    "slack_events": "int",
+    "snap_ratio": "float",
     "diverged": "bool",
     "timed_out": "bool",
     "simulated_s": "float",
@@ -693,8 +696,36 @@ def same_figures(a: dict, b: dict) -> bool:
     return all(same_figure(a[k], b[k]) for k in FIGURES)
 
 
-def outcome_row(result: MissionResult, simulated_s: float, wall_s: float) -> dict:
-    """The outcome columns of one run, taken from its MissionResult."""
+def wire_before_contact(result: MissionResult, can_slack: bool = True) -> dict:
+    """``slack_events`` and ``snap_ratio`` of a run from its ``wire`` events (the mission
+    driver's ``missions.seaway.WireWatch``): the lift and the landing, up to the first contact
+    with the posts. After it the tree rests on the frame and a heaving crane tip slackens the
+    wire by design (the set-down), which is no slack of the lift. A snap counts when the slack
+    it follows began before the contact. ``can_slack`` False (the quasi-static wire, a spring
+    that pushes as well as pulls): None and NaN, no figures."""
+    if not can_slack:
+        return {"slack_events": None, "snap_ratio": math.nan}
+    contacts = [x.t_contact_s for x in result.landings if math.isfinite(x.t_contact_s)]
+    contact = min(contacts) if contacts else math.inf
+    slack = 0
+    snap_ratio = 0.0
+    counted = False
+    wire = [e for e in result.events if e.get("kind") == "wire"]
+    for e in sorted(wire, key=lambda e: e["t_s"]):
+        data = e.get("data", {})
+        if data.get("event") == "slack":
+            counted = e["t_s"] < contact
+            slack += counted
+        elif data.get("event") == "snap" and counted:
+            snap_ratio = max(snap_ratio, data["tension_newton"] / data["static_newton"])
+    return {"slack_events": slack, "snap_ratio": snap_ratio}
+
+
+def outcome_row(
+    result: MissionResult, simulated_s: float, wall_s: float, can_slack: bool = True
+) -> dict:
+    """The outcome columns of one run, taken from its MissionResult (``can_slack``: the
+    run's wire can go slack, ``wire_before_contact``)."""
     lands = list(result.landings)
 
     def worst(attr: str) -> float:
@@ -720,6 +751,7 @@ def outcome_row(result: MissionResult, simulated_s: float, wall_s: float) -> dic
         "max_thruster_utilisation": result.max_thruster_utilisation,
         "saturated_time_s": result.saturated_time_s,
         "settling_time_s": math.nan if result.settling_time_s is None else result.settling_time_s,
+        **wire_before_contact(result, can_slack),
         "diverged": result.diverged,
         "timed_out": any(leg.timed_out for leg in result.legs),
         "simulated_s": simulated_s,
@@ -764,7 +796,9 @@ def run_one(c: Campaign, base: schema.Mission, index: int) -> dict:
         result = MissionDriver(mission, sim, keep_log=False).run_to_end(log=False)
     except Exception as err:  # any failure of one run is that run's outcome
         return failed_row(inputs, f"{type(err).__name__}: {err}")
-    return {**input_row(inputs), **outcome_row(result, sim.t_s, time.perf_counter() - t0)}
+    wall_s = time.perf_counter() - t0
+    can_slack = sim.wire_model in SLACK_WIRES
+    return {**input_row(inputs), **outcome_row(result, sim.t_s, wall_s, can_slack)}
 
 
 def quick_look_runs(c: Campaign, limit: int | None) -> list[int]:

@@ -227,7 +227,8 @@ def rerun_command(
     finally:
         if recorder is not None:
             recorder.close()
-    figures = cm.outcome_row(result, sim.t_s, time.perf_counter() - t0)
+    can_slack = sim.wire_model in cm.SLACK_WIRES
+    figures = cm.outcome_row(result, sim.t_s, time.perf_counter() - t0, can_slack)
     compare = {
         k: (stored[k], figures[k], cm.same_figure(stored[k], figures[k])) for k in cm.FIGURES
     }

@@ -12,11 +12,12 @@ an error. The client keeps one row per run whatever happens (a late duplicate is
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import logging
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Collection, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -99,6 +100,18 @@ def _cluster_client(scheduler: str | None, workers: int | None) -> Any:
     return Client(cluster), cluster
 
 
+@contextlib.contextmanager
+def local_cluster(workers: int | None) -> Iterator[str]:
+    """An embedded cluster (``_cluster_client``'s) kept up across several ``run_campaign``
+    calls: yields its scheduler's address (the operability table runs two passes on it)."""
+    client, cluster = _cluster_client(None, workers)
+    try:
+        yield cluster.scheduler_address
+    finally:
+        client.close()
+        cluster.close()
+
+
 def task_key(text: str, index: int) -> str:
     """The Dask key of a run: the campaign text's digest and the run index."""
     digest = hashlib.sha1(text.encode()).hexdigest()[:12]
@@ -127,19 +140,21 @@ def run_campaign(
     flush_s: float = 5.0,
     per_task: int | None = None,
     limit: int | None = None,
+    only: Collection[int] | None = None,
 ) -> CampaignProgress:
     """Run every run of the campaign that has no row in ``out`` yet; rows go to Parquet parts
     as they finish. ``on_row(row, client)`` is called after each row (tests use it).
     ``per_task``: runs per task (None: ``runs_per_task`` for the cluster's workers).
     ``limit``: run at most this many runs for a quick look (``cm.quick_look_runs``: one of each
-    point first); ``resume`` later runs the rest."""
+    point first); ``resume`` later runs the rest. ``only``: run just these runs (the
+    operability table's second pass: more seeds where a cell is near a limit)."""
     from distributed import as_completed
 
     store.create(out, text, base, resume)
     done = store.done_runs(out)
-    chosen = cm.quick_look_runs(campaign, limit)
+    chosen = sorted(set(only)) if only is not None else cm.quick_look_runs(campaign, limit)
     todo = [i for i in chosen if i not in done]
-    total = campaign.runs if limit is None else len(set(chosen) | done)
+    total = campaign.runs if limit is None and only is None else len(set(chosen) | done)
     progress = CampaignProgress(total=total, done=len(done))
     if resume and done:
         prior = store.read_rows(out)
