@@ -13,7 +13,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from app import assessment_cli, headless
+from app import assessment_cli, headless, shadow_cli
 from app.campaign.cli import campaign_app
 from app.log_cli import log_app
 from app.planning_cli import operability, window
@@ -179,6 +179,7 @@ app.add_typer(campaign_app, name="campaign")
 app.command()(operability)
 app.command()(window)
 assessment_cli.register(app)  # logbook, trend, criteria
+app.command("shadow")(shadow_cli.shadow)
 
 LIST_HELP = "list the library's missions and exit"
 
@@ -198,6 +199,12 @@ def run(
     list_: Annotated[bool, typer.Option("--list", help=LIST_HELP)] = False,
     json_out: Annotated[bool, typer.Option("--json", help="one JSON object")] = False,
     log: Annotated[str | None, typer.Option(help="write the session to this MCAP file")] = None,
+    log_rate: Annotated[
+        float,
+        typer.Option(
+            min=0.1, help="rows a second in --log [Hz]; the plant's rate (100) keeps every step"
+        ),
+    ] = 20.0,
     plots: Annotated[str | None, typer.Option(help="write PNG figures into this folder")] = None,
     seed: Annotated[int | None, typer.Option(help="random seed (default: the file's)")] = None,
     allocation: Annotated[
@@ -250,7 +257,7 @@ def run(
     if log:
         try:
             Path(log).parent.mkdir(parents=True, exist_ok=True)
-            recorder = headless.open_recorder(log, spec, sim, seed)
+            recorder = headless.open_recorder(log, spec, sim, seed, numeric_rate_hz=log_rate)
         except OSError as err:
             _fail(f"--log {log}: cannot write: {err.strerror or err}")
             return
