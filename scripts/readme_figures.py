@@ -621,6 +621,45 @@ MISSION_OF_RUN = "full-docking-current-0.3"
 """The mission ``benchmarks/fresh_clone.py`` runs."""
 
 
+# ------------------------------------------------------------------------------ assessment
+
+
+def compute_assessment() -> Results:
+    """The assessment's validation: clean and faulted automatic landings, ranked by their
+    totals (``benchmarks/assessment_validation.py``; its figure into docs/figures/)."""
+    return _benchmark_json(
+        "benchmarks/assessment_validation.py",
+        "--cases",
+        "20",
+        "--plot",
+        "docs/figures/assessment-validation.png",
+    )
+
+
+def render_assessment(res: Results) -> str:
+    rows = [
+        para(
+            f"`.venv/bin/python benchmarks/assessment_validation.py --cases 20`: "
+            f"{res['clean']} automatic landings of {res['mission']} (each with its own seed and "
+            f"a current of 0.2-0.35 m/s) flown clean and {res['faulted']} with one instructor "
+            f"fault each, assessed with the default criteria. AUC {res['auc']:.3f} (the chance "
+            f"that a clean run scores above a faulted one, ties counted half); "
+            f"{res['pairs_ordered']:.0%} of the faulted runs score below their own case's clean "
+            f"run, {res['pairs_tied']:.0%} tie with it. Clean runs: mean total "
+            f"{res['clean_total_mean']:.1f}, lowest {res['clean_total_min']:.1f}; faulted: mean "
+            f"{res['faulted_total_mean']:.1f}."
+        ),
+        "",
+        "| fault | runs | mean total | points lost on (mean, of 100) |",
+        "|---|---|---|---|",
+    ]
+    for kind, mean in res["by_kind"].items():
+        lost = res["lost_by_kind"].get(kind, {})
+        words = ", ".join(f"{n} {v:.0f}" for n, v in lost.items()) or "none"
+        rows.append(f"| `{kind}` | {res['runs_by_kind'][kind]} | {mean:.1f} | {words} |")
+    return "\n".join(rows)
+
+
 # ------------------------------------------------------------------------------ the blocks
 
 
@@ -634,6 +673,7 @@ BLOCKS: dict[str, tuple[Callable[[], Results], Callable[[Results], str]]] = {
     "speed": (compute_speed, render_speed),
     "campaign": (compute_campaign, render_campaign),
     "fresh-clone": (compute_fresh_clone, render_fresh_clone),
+    "assessment": (compute_assessment, render_assessment),
 }
 
 
