@@ -238,23 +238,24 @@ def _read_table(path: Path, mapping: dict) -> dict[str, FloatArray]:
     return table
 
 
-def from_csv(path: Path, mapping_path: Path) -> ShadowSource:
-    """A trial's CSV export, its columns mapped by ``mapping_path`` (docs/formats.md)."""
+def _read_mapping(mapping_path: Path) -> dict:
+    """A mapping file's table: ``mission`` (a name or file) and ``[columns]``."""
     try:
         mapping = tomllib.loads(mapping_path.read_text())
     except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise ShadowError(f"{mapping_path}: not a readable mapping file: {err}") from err
     if not isinstance(mapping.get("mission"), str) or not isinstance(mapping.get("columns"), dict):
         raise ShadowError(f"{mapping_path}: needs mission = NAME and a [columns] table")
-    table = _read_table(path, mapping)
-    columns: dict[str, FloatArray] = {}
-    for name, spec in mapping["columns"].items():
+    for name in mapping["columns"]:
         if name not in MEASUREMENTS and name not in OPTIONAL and name != "time_s":
             raise ShadowError(f"{mapping_path}: unknown name {name!r} in [columns]")
-        column, scale, offset = _column_spec(name, spec)
-        if column not in table:
-            raise ShadowError(f"{path}: no numeric column {column!r} (mapped to {name})")
-        columns[name] = table[column] * scale + offset
+    return mapping
+
+
+def _mapped_source(
+    name: str, columns: dict[str, FloatArray], mapping: dict, mapping_path: Path
+) -> ShadowSource:
+    """The source of mapped columns, on the control system the mapping's mission builds."""
     for need in ("time_s", "pos_north_m", "pos_east_m", "heading_rad"):
         if need not in columns:
             raise ShadowError(f"{mapping_path}: [columns] must map {need}")
@@ -262,15 +263,97 @@ def from_csv(path: Path, mapping_path: Path) -> ShadowSource:
         _, sim = _build(mapping["mission"], None, None)
     except (ValueError, OSError) as err:
         raise ShadowError(f"{mapping_path}: mission {mapping['mission']!r}: {err}") from err
-    return _source_of_columns(str(path), columns, sim)
+    return _source_of_columns(name, columns, sim)
+
+
+def from_csv(path: Path, mapping_path: Path) -> ShadowSource:
+    """A trial's CSV export, its columns mapped by ``mapping_path`` (docs/formats.md)."""
+    mapping = _read_mapping(mapping_path)
+    table = _read_table(path, mapping)
+    columns: dict[str, FloatArray] = {}
+    for name, spec in mapping["columns"].items():
+        column, scale, offset = _column_spec(name, spec)
+        if column not in table:
+            raise ShadowError(f"{path}: no numeric column {column!r} (mapped to {name})")
+        columns[name] = table[column] * scale + offset
+    return _mapped_source(str(path), columns, mapping, mapping_path)
+
+
+def _field(message: object, path: str) -> float:
+    """The number at ``path`` (``pose.position.x``; ``data``) of a deserialised message."""
+    value = message
+    for part in path.split("."):
+        value = getattr(value, part)
+    return float(value)  # type: ignore[arg-type]
+
+
+def from_rosbag(path: Path, mapping_path: Path) -> ShadowSource:
+    """A ROS 2 bag (rosbag2, MCAP or SQLite storage; read with ``rosbags``), each of our
+    names mapped to a topic's field (docs/formats.md). Every message's log time is a row; each
+    name holds its topic's latest value there."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    mapping = _read_mapping(mapping_path)
+    specs: dict[str, tuple[str, str, float, float]] = {}
+    for name, spec in mapping["columns"].items():
+        if name == "time_s":
+            continue
+        if not isinstance(spec, dict) or not isinstance(spec.get("topic"), str):
+            raise ShadowError(f"{mapping_path}: {name} needs {{topic = ..., field = ...}}")
+        _, scale, offset = _column_spec(name, {**spec, "column": spec["topic"]})
+        specs[name] = (spec["topic"], str(spec.get("field", "data")), scale, offset)
+    series: dict[str, tuple[list[int], list[float]]] = {n: ([], []) for n in specs}
+    try:
+        typestore = get_typestore(Stores.ROS2_HUMBLE)
+        with AnyReader([path], default_typestore=typestore) as reader:
+            topics = {topic for topic, _, _, _ in specs.values()}
+            missing = topics - {c.topic for c in reader.connections}
+            if missing:
+                raise ShadowError(f"{path}: no topic {', '.join(sorted(missing))} in the bag")
+            wanted = [c for c in reader.connections if c.topic in topics]
+            for conn, t_ns, raw in reader.messages(connections=wanted):
+                msg = reader.deserialize(raw, conn.msgtype)
+                for name, (topic, field_path, scale, offset) in specs.items():
+                    if topic == conn.topic:
+                        series[name][0].append(t_ns)
+                        series[name][1].append(_field(msg, field_path) * scale + offset)
+    except ShadowError:
+        raise
+    except AttributeError as err:
+        raise ShadowError(f"{path}: a mapped field is not in its message: {err}") from err
+    except Exception as err:  # rosbags' reader errors have no common base beyond this
+        raise ShadowError(f"{path}: not a readable ROS 2 bag: {err}") from err
+    return _mapped_source(str(path), _held_columns(series), {**mapping}, mapping_path)
+
+
+def _held_columns(series: dict[str, tuple[list[int], list[float]]]) -> dict[str, FloatArray]:
+    """Series of their own times as columns on their times' union [s], each held from its last
+    message (its first value before it)."""
+    stamps = [np.asarray(t, dtype=np.int64) for t, _ in series.values() if t]
+    if not stamps:
+        return {}
+    t_all = np.unique(np.concatenate(stamps))
+    columns = {"time_s": (t_all - t_all[0]) * 1e-9}
+    for name, (t, v) in series.items():
+        if t:
+            at = np.searchsorted(np.asarray(t, dtype=np.int64), t_all, side="right") - 1
+            columns[name] = np.asarray(v)[np.maximum(at, 0)]
+    return columns
 
 
 def _source_of_columns(name: str, columns: dict[str, FloatArray], sim) -> ShadowSource:
     """A CSV's mapped columns as a source: rows in ``control.columns``' layout, the observer
     started from the first measurements, the reference held at that start unless mapped."""
     t = columns["time_s"]
-    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0.0):
+    if len(t) < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0.0):
         raise ShadowError(f"{name}: time_s must increase from row to row")
+    dt = float(sim.dt_s)
+    step = np.round((t - t[0]) / dt).astype(np.int64)
+    last = np.append(step[1:] != step[:-1], True)  # the last row of each control step
+    columns = {k: v[last] for k, v in columns.items()}
+    t = step[last] * dt
+    columns["time_s"] = t
     n = len(t)
     rec = np.zeros((n, N_LOG))
     rec[:, LAYOUT.starts["t_s"]] = t - t[0]

@@ -8,6 +8,9 @@ from typing import Annotated
 
 import typer
 
+BAG_SUFFIXES = (".mcap", ".db3")
+"""With ``--mapping``, a file of these (or a folder) is a ROS 2 bag, anything else a CSV."""
+
 
 def _fail(message: str) -> None:
     typer.echo(f"shadow: {message}", err=True)
@@ -26,11 +29,15 @@ def _mount(text: str) -> list[float]:
 
 def shadow(
     recording: Annotated[
-        Path, typer.Argument(help="a session log (.mcap) of ours, or a trial's CSV (--mapping)")
+        Path,
+        typer.Argument(
+            help="a session log (.mcap) of ours; with --mapping a trial's CSV or a ROS 2 bag "
+            "(its folder, .mcap or .db3)"
+        ),
     ],
     mapping: Annotated[
         Path | None,
-        typer.Option(help="the CSV's mapping file (TOML; docs/formats.md)"),
+        typer.Option(help="the CSV's or bag's mapping file (TOML; docs/formats.md)"),
     ] = None,
     json_out: Annotated[bool, typer.Option("--json", help="one JSON object")] = False,
     out: Annotated[
@@ -52,14 +59,18 @@ def shadow(
     they estimate and command beside what the recording says, the innovations and the NIS
     against its chi-square band. Exit 0 when the observer was consistent, 1 when its NIS
     left the band, 2 when the file cannot be shadowed."""
-    if not recording.is_file():
+    if not recording.exists():
         _fail(f"{recording}: no such file")
     mount = None if mount_m is None else _mount(mount_m)
     from app import shadow as sh
 
     try:
-        if mapping is not None:
+        if mapping is not None and (recording.is_dir() or recording.suffix in BAG_SUFFIXES):
+            source = sh.from_rosbag(recording, mapping)
+        elif mapping is not None:
             source = sh.from_csv(recording, mapping)
+        elif recording.is_dir():
+            _fail(f"{recording}: a folder (a ROS 2 bag needs --mapping)")
         else:
             source = sh.from_recording(recording)
         import numpy as np

@@ -229,3 +229,91 @@ def test_a_bad_file_gets_one_line(kind, wrong_mount_log, tmp_path):
     assert result.exit_code == 2
     lines = result.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("shadow: "), result.output
+
+
+BAG_MAPPING = """
+mission = "model-rotation-wrong-r"
+
+[columns]                               # log times of the messages are the rows' times
+pos_north_m = { topic = "/rov/fix", field = "point.x" }
+pos_east_m = { topic = "/rov/fix", field = "point.y" }
+heading_rad = { topic = "/rov/heading", field = "data", unit = "deg" }
+gyro_r_rad_s = { topic = "/rov/gyro", field = "vector.z" }
+dvl_u_mps = { topic = "/rov/dvl", field = "twist.linear.x" }
+dvl_v_mps = { topic = "/rov/dvl", field = "twist.linear.y" }
+tau_surge_newton = { topic = "/rov/wrench", field = "wrench.force.x" }
+tau_sway_newton = { topic = "/rov/wrench", field = "wrench.force.y" }
+tau_yaw_newton_m = { topic = "/rov/wrench", field = "wrench.torque.z" }
+"""
+
+
+def _bag(log: Path, path: Path, storage: str) -> Path:
+    """The recording's measurements as a ROS 2 bag, each sensor on its own topic at its own
+    rate (fix 1 Hz, compass and DVL 10 Hz, gyro and the wrench 20 Hz)."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from app.recording import load_session
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    m = ts.types
+    rows = load_session(log).log
+    t_ns = np.round(rows.t_s * 1e9).astype(np.int64)
+    y, ach = rows["y"], rows["tau_rov_ach_b"]
+
+    def vec(x: float, y: float, z: float):
+        return m["geometry_msgs/msg/Vector3"](x=float(x), y=float(y), z=float(z))
+
+    def header(k: int):
+        sec, nanosec = divmod(int(t_ns[k]), 10**9)
+        stamp = m["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
+        return m["std_msgs/msg/Header"](stamp=stamp, frame_id="ned")
+
+    def fix(k: int):
+        point = m["geometry_msgs/msg/Point"](x=y[k, 0], y=y[k, 1], z=y[k, 2])
+        return m["geometry_msgs/msg/PointStamped"](header=header(k), point=point)
+
+    def heading(k: int):
+        return m["std_msgs/msg/Float64"](data=float(np.degrees(y[k, 4])))
+
+    def gyro(k: int):
+        v = vec(*y[k, 8:11])
+        return m["geometry_msgs/msg/Vector3Stamped"](header=header(k), vector=v)
+
+    def dvl(k: int):
+        twist = m["geometry_msgs/msg/Twist"](linear=vec(*y[k, 5:8]), angular=vec(0, 0, y[k, 10]))
+        return m["geometry_msgs/msg/TwistStamped"](header=header(k), twist=twist)
+
+    def wrench(k: int):
+        w = m["geometry_msgs/msg/Wrench"](force=vec(*ach[k, 0:3]), torque=vec(*ach[k, 3:6]))
+        return m["geometry_msgs/msg/WrenchStamped"](header=header(k), wrench=w)
+
+    topics = {  # topic: (type, every how many 100 Hz rows, message of row k)
+        "/rov/fix": ("geometry_msgs/msg/PointStamped", 100, fix),
+        "/rov/heading": ("std_msgs/msg/Float64", 10, heading),
+        "/rov/gyro": ("geometry_msgs/msg/Vector3Stamped", 5, gyro),
+        "/rov/dvl": ("geometry_msgs/msg/TwistStamped", 10, dvl),
+        "/rov/wrench": ("geometry_msgs/msg/WrenchStamped", 5, wrench),
+    }
+    plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+    with Writer(path, version=9, storage_plugin=plugin) as writer:
+        conns = {
+            t: writer.add_connection(t, kind, typestore=ts) for t, (kind, _, _) in topics.items()
+        }
+        for k in range(len(t_ns)):
+            for topic, (kind, every, make) in topics.items():
+                if k % every == every - 1:
+                    writer.write(conns[topic], int(t_ns[k]), ts.serialize_cdr(make(k), kind))
+    return path
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_a_ros2_bag_through_its_mapping(storage, wrong_mount_log, tmp_path):
+    bag = _bag(wrong_mount_log, tmp_path / f"trial-{storage}", storage)
+    mapping = tmp_path / "bag.toml"
+    mapping.write_text(BAG_MAPPING)
+    result = CliRunner().invoke(app, ["shadow", str(bag), "--mapping", str(mapping), "--json"])
+    assert result.exit_code == 1, result.output  # the wrong mount: NIS above band
+    s = json.loads(result.stdout)
+    assert s["nis"]["position"]["verdict"] == "above band"
+    assert s["nis"]["position"]["samples"] >= 60
