@@ -229,8 +229,11 @@ def rerun_command(
             recorder.close()
     can_slack = sim.wire_model in cm.SLACK_WIRES
     figures = cm.outcome_row(result, sim.t_s, time.perf_counter() - t0, can_slack)
+    # a row stored before a column was added has no figure of it to compare
     compare = {
-        k: (stored[k], figures[k], cm.same_figure(stored[k], figures[k])) for k in cm.FIGURES
+        k: (stored[k], figures[k], cm.same_figure(stored[k], figures[k]))
+        for k in cm.FIGURES
+        if k in stored
     }
     same = all(ok for _, _, ok in compare.values())
     if json_out:
