@@ -539,6 +539,96 @@ def render_campaign(res: Results) -> str:
     return "\n".join(rows)
 
 
+# ------------------------------------------------------------------------------ landing
+
+LANDING_ARGS = (
+    "--full", "0", "--installation", "200", "--model", "200", "--vessel", "auto,fixed",
+    "--seed", "44",
+)  # fmt: skip
+"""The vessel-assisted landing's Monte Carlo (issue 44): 200 full-scale landings in 0.1-0.5
+m/s and 200 at model scale in the sea trial's currents, each flown with the vessel moved
+and with it fixed."""
+LANDING_SCALES = {
+    "installation": "full scale, 36 t tree at 400 m",
+    "model": "model scale, the sea trial's module at 180 m",
+}
+
+
+def compute_landing() -> Results:
+    out = subprocess.run(
+        [sys.executable, "benchmarks/landing_montecarlo.py", *LANDING_ARGS, "--json"],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    res: Results = json.loads(out.strip().splitlines()[-1])
+    return res
+
+
+def _refusal(r: Results) -> str:
+    """One landing that did not land: the case, and why."""
+    c = r["case"]
+    return para(
+        f"{c['speed_mps']:.3f} m/s towards {c['direction_deg']:.0f} deg, the frame "
+        f"{c['offset_m']:.2f} m off at {c['bearing_deg']:.0f} deg, turned to "
+        f"{c['frame_heading_deg']:.0f} deg: {_shorter(r['why'])}",
+        indent="  ",
+        first="- ",
+    )
+
+
+def _shorter(why: str) -> str:
+    """A refusal's reason without the mission's prefix."""
+    return why.removeprefix("refused: ").split("failed: ", 1)[-1]
+
+
+def render_landing(res: Results) -> str:
+    """The landings with the vessel moved against with it fixed, per scale, and every
+    refusal and failure with the vessel moved, with its reason."""
+    summary = res["summary"]
+    rows = [
+        para(
+            f"`.venv/bin/python {res['command'].removesuffix(' --json')}`: random landings, "
+            "the current's speed and direction, the frame's offset from the crane tip, its "
+            'bearing and heading drawn at random, each case flown with `vessel = "auto"` '
+            'and again with `"fixed"`:'
+        ),
+        "",
+        "| scale | current m/s | frame off the crane tip m | vessel | landed | refused | "
+        "failed | vessel moved |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for scale, label in LANDING_SCALES.items():
+        for vessel in ("auto", "fixed"):
+            s = summary.get(f"{scale}/{vessel}")
+            if s is None:
+                continue
+            lo, hi = s["current_mps"]
+            olo, ohi = s["offset_m"]
+            moved = (
+                f"{s['vessel_moved']}, up to {s['vessel_moved_max_m']:.1f} m"
+                if s["vessel_moved"]
+                else "-"
+            )
+            rows.append(
+                f"| {label} | {lo:.3g}-{hi:.3g} | {olo:.2f}-{ohi:.2f} | {vessel} "
+                f"| {s['landed']} of {s['cases']} ({100 * s['landed_share']:.1f} %) "
+                f"| {s['refused']} | {s['accepted'] - s['landed']} | {moved} |"
+            )
+    for scale, label in LANDING_SCALES.items():
+        s = summary.get(f"{scale}/auto")
+        if s is None:
+            continue
+        told = [*s["refusals"], *s["failures"]]
+        if not told:
+            rows += ["", f"At {label}, with the vessel moved, every case landed."]
+            continue
+        rows += ["", f"At {label}, with the vessel moved, the cases that did not land:", ""]
+        rows += [_refusal(r) for r in told]
+    return "\n".join(rows)
+
+
 # ------------------------------------------------------------------------------ log size
 
 
@@ -717,6 +807,7 @@ BLOCKS: dict[str, tuple[Callable[[], Results], Callable[[Results], str]]] = {
     "table-4.1": (compute_table_4_1, render_table_4_1),
     "table-4.2": (compute_table_4_2, render_table_4_2),
     "log-size": (compute_log_size, render_log_size),
+    "landing": (compute_landing, render_landing),
     "speed": (compute_speed, render_speed),
     "campaign": (compute_campaign, render_campaign),
     "operability": (compute_operability, render_operability),
