@@ -111,7 +111,7 @@ def _build_table(
         limits = op.limits_for(mission.setup.params, overrides)
     except ValueError as err:
         _fail(str(err))
-    folder = out if out is not None else RESULTS_DIR / op._safe(mission.name)
+    folder = out if out is not None else RESULTS_DIR / op.results_name(mission.name)
     try:
         t = tab.run_table(p, limits, folder, scheduler, workers, in_process, progress)
     except ValueError as err:  # a results folder holding another table
@@ -266,7 +266,7 @@ def window(
         m = schema.load_mission(mission)
     except schema.MissionError as err:
         _fail(str(err))
-    folder = RESULTS_DIR / op._safe(m.name)
+    folder = RESULTS_DIR / op.results_name(m.name)
     source = table if table is not None else folder / tab.TABLE_JSON
     if table is None and not source.is_file():
         _build_table(
@@ -333,22 +333,11 @@ def _alpha(name: str):
 
 def _judge(ww, fc, data: dict, alpha, reference: float, into: bool, vessel_heading) -> dict:
     """The verdicts as the JSON the command prints (``alpha``: the lowest applied)."""
-    if into:
-        verdicts = [
-            ww.judge_hours(
-                ww.Forecast(fc.source, (h,), fc.step),
-                data,
-                alpha,
-                reference,
-                (h.wave_dir_deg + 180.0) % 360.0,
-            )[0]
-            for h in fc.hours
-        ]
-        heading_text = "bow into the waves every hour"
-    else:
-        vh = data["vessel_heading_deg"] if vessel_heading is None else vessel_heading
-        verdicts = ww.judge_hours(fc, data, alpha, reference, vh)
-        heading_text = f"{vh:g} deg"
+    vh = (
+        None if into else (data["vessel_heading_deg"] if vessel_heading is None else vessel_heading)
+    )
+    verdicts = ww.judge_hours(fc, data, alpha, reference, vh)
+    heading_text = "bow into the waves every hour" if vh is None else f"{vh:g} deg"
     applied = [v.alpha for v in verdicts if v.alpha is not None]
     wins = ww.windows(verdicts, fc.step, reference)
     return {

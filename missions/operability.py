@@ -272,9 +272,9 @@ def plan(
     directions = [_round_deg(heading + h) for h in grid.heading_deg]
     lines = [
         "format_version = 1",
-        f'name = "operability {_safe(mission.name)}"',
-        f'description = "operability table of {_safe(mission.name)}"',
-        f'mission = "{_safe(mission.name)}"',
+        f'name = "operability {results_name(mission.name)}"',
+        f'description = "operability table of {results_name(mission.name)}"',
+        f'mission = "{results_name(mission.name)}"',
         f"seed = {seed}",
         f"runs_per_point = {seeds}",
         "",
@@ -299,8 +299,9 @@ def default_headings(mission: schema.Mission) -> tuple[float, ...]:
     return tuple(float(h) for h in range(0, 360, 45))
 
 
-def _safe(name: str) -> str:
-    """A mission's name as a campaign's (``schema.NAME_RE``'s characters, at most 60)."""
+def results_name(name: str) -> str:
+    """A mission's name as a campaign's and a folder's (``schema.NAME_RE``'s characters, at
+    most 60)."""
     return re.sub(r"[^\w .,:()+-]", "", name)[:60] or "mission"
 
 

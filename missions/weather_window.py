@@ -400,13 +400,15 @@ def judge_hours(
     table: dict,
     alpha: AlphaTable,
     reference_hours: float,
-    vessel_heading_deg: float,
+    vessel_heading_deg: float | None,
 ) -> list[Verdict]:
-    """Each forecast hour against alpha x the table's allowable Hs and the table's current."""
+    """Each forecast hour against alpha x the table's allowable Hs and the table's current.
+    ``vessel_heading_deg`` None: the vessel turns its bow into each hour's waves (180 deg)."""
     current_max = float(table["current"]["speed_mps"])
     out = []
     for h in forecast.hours:
-        rel = (h.wave_dir_deg - vessel_heading_deg) % 360.0
+        heading = h.wave_dir_deg + 180.0 if vessel_heading_deg is None else vessel_heading_deg
+        rel = (h.wave_dir_deg - heading) % 360.0
         allowable, why = allowable_at(table, h.tp_s, rel)
         if allowable is None:
             out.append(Verdict(h, rel, None, None, None, False, why))

@@ -202,3 +202,38 @@ def test_window_refuses_a_reference_period_beyond_72_hours(tmp_path: Path):
         "40",
     )
     assert proc.returncode == 2 and "weather-unrestricted" in proc.stderr
+
+
+def test_a_vessel_heading_into_the_waves_meets_them_at_180_every_hour(tmp_path: Path):
+    lines = [
+        HEADER,
+        "2026-03-01T00:00:00Z,2.0,9.0,90,0.2,225",
+        "2026-03-01T01:00:00Z,2.0,9.0,270,0.2,225",
+    ]
+    fc = ww.read_forecast(_write(tmp_path / "f.csv", lines))
+    into = ww.judge_hours(fc, table(), ww.ALPHA_TABLES["base"], 12.0, None)
+    assert [v.wave_heading_deg for v in into] == [180.0, 180.0] and all(v.go for v in into)
+    fixed = ww.judge_hours(fc, table(), ww.ALPHA_TABLES["base"], 12.0, 180.0)
+    assert [v.wave_heading_deg for v in fixed] == [270.0, 90.0]
+    assert not fixed[0].go and "not covered" in fixed[0].reason  # 270: no table heading near
+    assert fixed[1].limit_hs_m == pytest.approx(0.79 * 2.0)  # 90 deg: allowable 2 m
+    assert not fixed[1].go
+
+
+def _write(path: Path, lines: list[str]) -> Path:
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_an_alpha_table_of_ones_own_is_read_and_checked(tmp_path: Path):
+    own = ww.read_alpha_table(
+        _write(tmp_path / "mine.csv", ["reference_hours,1,4", "24,0.8,0.9", "48,0.7,0.8"])
+    )
+    assert own.alpha(20.0, 2.5) == pytest.approx(0.85) and own.alpha(30.0, 1.0) == 0.7
+    with pytest.raises(ValueError, match="weather-unrestricted"):
+        own.alpha(49.0, 1.0)
+    bad = _write(tmp_path / "bad.csv", ["reference_hours,1,4", "24,0.8,1.2"])
+    with pytest.raises(ValueError, match=r"alpha must lie in \(0, 1\]"):
+        ww.read_alpha_table(bad)
+    with pytest.raises(ValueError, match="must start with reference_hours"):
+        ww.read_alpha_table(_write(tmp_path / "h.csv", ["hours,1", "24,0.8"]))
