@@ -60,7 +60,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from control.columns import LogRows
 from missions.scoring import MissionResult
-from sim.docking import DockingFrame, DockingLayout
+from sim.docking import DockingFrame, DockingLayout, check_alignment
 from sim.params import ParameterSet
 
 FORMAT_VERSION = 1
@@ -363,6 +363,44 @@ def _dock_mask(result: MissionResult, rows: LogRows) -> np.ndarray:
     return mask
 
 
+def _landing_values(facts: RunFacts, contact_row: int | None) -> dict[str, float]:
+    """Landing miss, contact speed and time to land. A mission's landing is its own (the
+    result's, or its recorded event); a tree put down with no dock leg (flown by hand) is
+    judged from its rows where its bottom reached the post tops, its time to land counted
+    from the run's start."""
+    rows, out = facts.result.log, {}
+    landing = _landing(facts)
+    dock_start = _dock_start_s(facts)
+    if landing is not None and math.isfinite(float(landing.get("miss_m", math.nan))):
+        out["landing_miss"] = float(landing["miss_m"])
+        out["contact_speed"] = abs(float(landing.get("contact_speed_mps", math.nan)))
+    elif dock_start is None and contact_row is not None and rows is not None:
+        assert facts.frame is not None and facts.layout is not None  # _contact_row needs them
+        out["landing_miss"] = check_alignment(
+            rows["tree_eta_n"][contact_row], facts.frame, facts.layout
+        ).miss_m
+        out["contact_speed"] = abs(_down_speed_mps(rows, contact_row))
+        out["time_to_land"] = float(rows.t_s[contact_row] - rows.t_s[0])
+    elif dock_start is not None:
+        out["landing_miss"] = out["contact_speed"] = math.inf
+    if dock_start is not None:
+        if contact_row is not None and rows is not None:
+            out["time_to_land"] = float(rows.t_s[contact_row]) - dock_start
+        elif landing is not None and math.isfinite(float(landing.get("t_contact_s", math.nan))):
+            out["time_to_land"] = float(landing["t_contact_s"]) - dock_start
+        else:
+            out["time_to_land"] = math.inf
+    return out
+
+
+def _down_speed_mps(rows: LogRows, k: int) -> float:
+    """The tree's downward speed arriving at row ``k`` [m/s] (from its depth, row to row)."""
+    j = max(k - 1, 0)
+    k = max(k, 1)
+    down, t = rows["tree_eta_n"][:, 2], rows.t_s
+    return float((down[k] - down[j]) / (t[k] - t[j]))
+
+
 def slack_episodes(tension_newton: np.ndarray, static_newton: float) -> int:
     """Episodes (runs of rows) with the tension below ``SLACK_FRACTION`` of the static."""
     slack = np.asarray(tension_newton, float) < SLACK_FRACTION * static_newton
@@ -399,21 +437,8 @@ def measure(facts: RunFacts) -> dict[str, float | None]:
     result, rows = facts.result, facts.result.log
     out: dict[str, float | None] = dict.fromkeys(BY_NAME)
     out["time_saturated"] = float(result.saturated_time_s)
-    landing = _landing(facts)
-    dock_start = _dock_start_s(facts)
-    if landing is not None and math.isfinite(float(landing.get("miss_m", math.nan))):
-        out["landing_miss"] = float(landing["miss_m"])
-        out["contact_speed"] = abs(float(landing.get("contact_speed_mps", math.nan)))
-    elif dock_start is not None:
-        out["landing_miss"] = out["contact_speed"] = math.inf
     contact_row = _contact_row(facts, rows) if rows is not None and len(rows) else None
-    if dock_start is not None:
-        if contact_row is not None and rows is not None:
-            out["time_to_land"] = float(rows.t_s[contact_row]) - dock_start
-        elif landing is not None and math.isfinite(float(landing.get("t_contact_s", math.nan))):
-            out["time_to_land"] = float(landing["t_contact_s"]) - dock_start
-        else:
-            out["time_to_land"] = math.inf
+    out.update(_landing_values(facts, contact_row))
     if rows is None or len(rows) < 2:
         return out
     dt = float(np.median(np.diff(rows.t_s)))

@@ -15,6 +15,7 @@ import math
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pytest
 import tomli_w
 from fastapi.testclient import TestClient
@@ -364,3 +365,34 @@ def test_the_logbook_over_http_needs_a_token(client: TestClient) -> None:
     teach = {"Authorization": f"Bearer {INSTRUCTOR}"}
     rows = _rows(client.get(url, params={"format": "csv"}, headers=teach).text)
     assert rows[-1]["criterion"] == "total" and rows[0]["trainee"] == TRAINEE
+
+
+def test_a_tree_put_down_by_hand_is_judged_where_it_reached_the_posts() -> None:
+    """No dock leg (the pilot cannot take over during a mission's legs): the landing is read
+    from the rows, where the tree's bottom first reaches the post tops."""
+    from control.columns import LAYOUT, N_LOG, LogRows
+    from missions.scoring import MissionResult
+    from sim.docking import DockingFrame
+    from sim.params import load
+
+    ps = load("full-scale")
+    layout = ps.spec.docking.to_numeric()
+    frame = DockingFrame(np.array([10.0, 5.0]), 0.0, 400.0)
+    half_h = float(ps.tree.dimensions_m[2]) / 2.0
+    t = np.arange(0.0, 100.0, 0.05)
+    data = np.zeros((len(t), N_LOG))
+    data[:, LAYOUT.starts["t_s"]] = t
+    tree = LAYOUT.starts["tree_eta_n"]
+    data[:, tree] = 10.0 + 0.12  # 0.12 m north of the posts
+    data[:, tree + 1] = 5.0
+    post_top = frame.post_top_depth_m(layout)
+    data[:, tree + 2] = post_top - half_h - 2.0 + 0.04 * t  # 0.04 m/s down, 2 m to go
+    rows = LogRows(data, 4)
+    result = MissionResult("by hand", [], 0, 0, 0, 0, 0.0, None, [0.0] * 6, False, [], {})
+    result.log = rows
+    facts = asmt.RunFacts(result, [], frame, layout, half_h, None)
+    values = asmt.measure(facts)
+    assert values["landing_miss"] == pytest.approx(0.12, abs=1e-9)
+    assert values["contact_speed"] == pytest.approx(0.04, rel=1e-6)
+    assert values["time_to_land"] == pytest.approx(50.0, abs=0.05)
+    assert values["time_off_tolerance"] is None, "no dock leg: no reference to land by"
