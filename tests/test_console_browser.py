@@ -228,7 +228,7 @@ def test_recording_from_the_panel_is_written_and_replayed(
     # update of this field landing on the typed value before the page sent it can turn the
     # seek into one to where the replay already is (the likely cause of a timeout here in
     # one full run; not reproduced alone)
-    time_box = field(page, "Replay time s")
+    time_box = field(page, "Scrub s")
     # 0.15 s: the panel shows the replay's time rounded to 0.1 s, and moves the bar only
     # when it is more than 0.05 s off (web/tabs/record.py, RecordTab.update)
     wait_for(

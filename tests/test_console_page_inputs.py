@@ -15,6 +15,7 @@ from collections.abc import Iterator
 from types import SimpleNamespace
 from typing import Any
 
+import numpy as np
 import pytest
 import viser
 from hypothesis import given
@@ -174,3 +175,135 @@ def test_live_current_direction_is_shown_within_0_to_360(page: Page, console: Co
     for rad, shown_deg in ((math.radians(-90.0), 270.0), (math.radians(-0.02), 0.0)):
         control.update(dataclasses.replace(snap, current_direction_rad=rad))
         assert control.current_dir.value == pytest.approx(shown_deg)
+
+
+def _form(gui: Any, holding: Any) -> Any:
+    """The form that holds ``holding`` (viser's forms are containers)."""
+    from viser._gui_handles import GuiFormHandle
+
+    forms = [h for h in gui._container_handle_from_uuid.values() if isinstance(h, GuiFormHandle)]
+    parent = holding._impl.parent_container_id
+    (form,) = (f for f in forms if f._impl.uuid == parent)
+    return form
+
+
+def submit(page: Page, form: Any) -> None:
+    """As viser applies a browser's Enter in a form's input: the form's submit callbacks."""
+    for callback in list(form._submit_cb):
+        callback(GuiEvent(client_id=7, client=page.client, target=form))  # type: ignore[arg-type]
+
+
+def test_a_typed_speed_is_applied_by_enter(page: Page, console: Console) -> None:
+    """Defect (issue 47 item 26): typing a speed and pressing Enter did nothing (the speed was
+    a dropdown of eight values; a typed '3' matched none). The speed is a number in a form:
+    Enter applies it, as "Set speed" does, and a preset is a click."""
+    run = RunTab(page.operator, console)
+    page.type_in(run.speed, 3.0)
+    submit(page, _form(page.client.gui, run.speed))
+    assert page.sent == [cmd.SetSpeed(3.0)]
+    page.type_in(run.speed, 80.0)
+    submit(page, _form(page.client.gui, run.speed))
+    assert page.sent == [cmd.SetSpeed(3.0)], "out of range: refused in words, not sent"
+    assert "allowed 0.25 to 50 x" in page.operator.last_error
+    page.type_in(run.speed_presets, "20")
+    assert page.sent[-1] == cmd.SetSpeed(20.0)
+
+
+def test_enter_applies_the_current_and_the_target(page: Page, console: Console) -> None:
+    """Enter in the current's or the target's inputs applies them, as their buttons do."""
+    control = ControlTab(page.operator, console)
+    page.type_in(control.current_speed, 0.4)
+    page.type_in(control.current_dir, 90.0)
+    submit(page, _form(page.client.gui, control.current_speed))
+    assert page.sent == [cmd.SetCurrent(0.4, 90.0)]
+    run = RunTab(page.operator, console)
+    page.type_in(run.target_n, 3.0)
+    submit(page, _form(page.client.gui, run.target_n))
+    assert isinstance(page.sent[-1], cmd.SetTarget) and page.sent[-1].north_m == 3.0
+
+
+def test_a_preview_out_of_the_live_runs_sight_turns_the_camera_to_it(
+    page: Page, console: Console
+) -> None:
+    """Defect (issue 47 item 23): the builder's preview was drawn at the built mission's depth,
+    150 m above the camera that looked at the live run: invisible. The browser's camera is now
+    turned to it (once per extent), and not when it lies where the live run is."""
+    shown_points: list[Any] = []
+    builder = BuilderPanel(
+        page.client,  # type: ignore[arg-type]
+        console,
+        page.operator.guard,
+        lambda mission: None,
+        lambda: True,
+        show=lambda pts, what: shown_points.append((pts, what)),
+    )
+    live_depth = console.loop.snapshot.tree_eta_n[2]
+    builder.legs = [{"type": "move", "north_m": 5.0, "east_m": 0.0}]
+    page.type_in(builder.depth, round(live_depth, 1))
+    builder._draw_preview()
+    assert shown_points == [], "where the live run is: the camera stays"
+    page.type_in(builder.depth, round(live_depth - 150.0, 1))
+    builder._draw_preview()
+    assert len(shown_points) == 1
+    pts, what = shown_points[0]
+    assert np.isclose(pts[:, 2], live_depth - 150.0).sum() >= 2, "the path, at its depth"
+    assert "preview" in what
+    builder._draw_preview()
+    assert len(shown_points) == 1, "the same preview again: the camera is not moved again"
+
+
+def _record_a_little(folder: Any) -> str:
+    """A recording of 5 s of station keeping in ``folder``, with a pause command in it."""
+    from app.console.session import Session, prepare_run, station_keeping_mission
+
+    session = Session(prepare_run(station_keeping_mission("model-scale", 100.0), False), folder)
+    try:
+        name = session.start_recording("page")
+        session.advance(200)
+        session.note("command", "pause", {})
+        session.advance(300)
+        session.stop_recording()
+    finally:
+        session.close()
+    return name
+
+
+def test_a_replay_is_watched_without_a_token_at_its_own_speed(page: Page, console: Console) -> None:
+    """Defects (issue 47 item 27): "Open replay" was greyed out with no word of why until the
+    console token was entered (watching changes nothing for anyone else); a typed time was
+    ignored while playing (the frames wrote the scrub bar's box over); the replay's speed was
+    the live run's; the scrub bar's dots had no words."""
+    from web.tabs.record import RecordTab, jump_label
+
+    name = _record_a_little(console.settings.recordings_dir)
+    page.operator.unlocked = False
+    record = RecordTab(page.operator, console, lambda: None)
+    assert not record.replay_open.disabled
+    record._refresh_recordings()
+    page.type_in(record.recordings, name)
+    page.press(record.replay_open)
+    assert record.replay is not None, page.said[-1]
+    assert record.replay.speed == 1.0, "real time until another speed is clicked"
+    live = console.loop.snapshot
+    assert live.speed == 1.0
+    page.type_in(record.replay_speed, "5")
+    assert record.replay.speed == 5.0
+    snap = record.replay.snapshot(live)
+    assert snap.speed == 5.0, "the replay's own speed, not the live run's"
+    record.update(snap)
+    assert "x5" in shown(record.replay_md)
+    page.press(_button(page.client.gui, "Play replay"))
+    page.type_in(record.goto, 3.0)
+    submit(page, _form(page.client.gui, record.goto))
+    record.update(record.replay.snapshot(live))  # a frame comes: the typed time stays
+    assert record.goto.value == 3.0
+    assert record.replay.status().t_s == pytest.approx(3.0, abs=0.1)
+    # the dots in words: the pause command at 2 s
+    jumps = record.replay.status().jumps
+    assert any(text == "pause" for _, text in jumps), jumps
+    t_pause = next(t for t, text in jumps if text == "pause")
+    page.type_in(record.jump, jump_label(t_pause, "pause"))
+    assert record.replay.status().t_s == pytest.approx(t_pause, abs=0.05)
+    marks = record.replay_time._impl.props._marks or ()
+    assert marks and all(not m.label for m in marks), "dots on the bar, words in the list"
+    assert page.sent == [], "nothing went to the loop"

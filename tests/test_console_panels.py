@@ -185,7 +185,7 @@ def test_finished_mission_shows_its_table_counters_and_five_thruster_bars(
     unlock(page, server.token)
     api.post("/api/missions/start", json={"name": "model-step-priority"}).raise_for_status()
     api.put("/api/run/speed", json={"speed": 50.0}).raise_for_status()
-    bars = page.locator(".mantine-Progress-root")
+    bars = page.locator("[data-thruster]")
     wait_for(lambda: bars.count() == 5, 60.0, "five thruster bars for the model-scale ROV")
     wait_for(
         lambda: api.get("/api/state").json()["mission"]["state"] in ("completed", "failed"),

@@ -127,8 +127,9 @@ def test_replay_is_per_browser_while_the_live_run_goes_on(
         # page A opens the first recording and scrubs to near its end
         _open(page, first)
         replay_t0 = _status(page)[1]
-        field(page, "Replay time s").fill(f"{replay_t0 + 35.0:.1f}")
-        field(page, "Replay time s").press("Enter")
+        field(page, "Go to t s").fill(f"{replay_t0 + 35.0:.1f}")
+        time.sleep(0.2)  # viser sends an input's value at most every 50 ms
+        field(page, "Go to t s").press("Enter")
         wait_for(lambda: abs(_status(page)[1] - (replay_t0 + 35.0)) < 0.5, 10.0, "page A to scrub")
         # the scene of A's replay drawn (a page draws at most once a second, SLOW_FRAMES; under
         # load later)
@@ -163,11 +164,19 @@ def test_replay_is_per_browser_while_the_live_run_goes_on(
 
         # page B opens the second recording meanwhile and plays it; A is not touched
         _open(other, second)
+        # at its own speed (the live run stays at 1x): to where the tree turned east
+        other.locator("xpath=//button[normalize-space(.)='20']").filter(visible=True).first.click()
         click(other, "Play replay")
         t_other = _status(other)[1]
         wait_for(lambda: _status(other)[1] > t_other + 1.0, 15.0, "page B's replay to play")
         assert _status(page)[0] == first and abs(_status(page)[1] - (replay_t0 + 35.0)) < 0.5
-        wait_for(lambda: _scene_difference(page, other) > 5.0, 20.0, "two replays, two scenes")
+        try:
+            wait_for(lambda: _scene_difference(page, other) > 5.0, 20.0, "two replays, two scenes")
+        except AssertionError as err:
+            where = Path(tempfile.mkdtemp(prefix="two-replays-"))
+            (where / "page-a.png").write_bytes(page.screenshot())
+            (where / "page-b.png").write_bytes(other.screenshot())
+            raise AssertionError(f"{err}; both pages' pictures in {where}") from None
         both = [page.screenshot(), other.screenshot()]
         save(_side_by_side(both), "console-two-replays.png")
         # each browser's plots follow what that browser shows
@@ -186,11 +195,17 @@ def test_replay_is_per_browser_while_the_live_run_goes_on(
         click(other, "Close replay")
         wait_for(lambda: _status(other)[0] == "live", 10.0, "page B live again")
         api.post("/api/run/pause").raise_for_status()
-        wait_for(
-            lambda: _scene_difference(page, other) < 2.0,
-            20.0,
-            "both pages to show the live scene again",
-        )
+        try:
+            wait_for(
+                lambda: _scene_difference(page, other) < 2.0,
+                20.0,
+                "both pages to show the live scene again",
+            )
+        except AssertionError as err:
+            where = Path(tempfile.mkdtemp(prefix="live-again-"))
+            (where / "page-a.png").write_bytes(page.screenshot())
+            (where / "page-b.png").write_bytes(other.screenshot())
+            raise AssertionError(f"{err}; both pages' pictures in {where}") from None
         api.post("/api/run/resume").raise_for_status()
         assert server.app.state.view.errors == []
     finally:

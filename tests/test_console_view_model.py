@@ -88,6 +88,69 @@ def test_camera_presets_look_at_the_job() -> None:
     assert top.position_n[2] < tree[2] - 3.6
 
 
+def _off_axis_deg(cam: geo.CameraPose, point: np.ndarray) -> float:
+    axis = (cam.look_at_n - cam.position_n) / np.linalg.norm(cam.look_at_n - cam.position_n)
+    ray = (point - cam.position_n) / np.linalg.norm(point - cam.position_n)
+    return math.degrees(math.acos(float(np.clip(ray @ axis, -1.0, 1.0))))
+
+
+def test_top_down_keeps_the_tree_and_the_rov_clear_of_the_panel() -> None:
+    """Defect (issue 47 item 27): Top-down cut the tree off. It looked straight down at the
+    frame from three tree sizes over it: the tree's corners and the ROV beside it lay up to
+    18 deg off its axis over the frame (more with the tree off it), where the panel covers
+    the right part of a 25 deg half-angle view.
+    Now the tree, the ROV beside it (a tree size from its centre) and the frame stay within
+    0.35 of the field of view (17.5 deg), the tree over the frame or 8 m off it."""
+    frame = np.array([1.0, 1.0, 404.3])
+    size = 3.6
+    for north in (1.0, 9.0):
+        tree = np.array([north, 1.0, 400.0, 0.0, 0.0, 0.0])
+        cam = geo.top_down_camera(frame[:2], frame[2], tree, size)
+        np.testing.assert_allclose(cam.up_n, [1.0, 0.0, 0.0]), "north up on the screen"
+        points = [frame, tree[:3]]
+        for d in ((1, 1), (1, -1), (-1, 1), (-1, -1)):  # the tree's top corners
+            points.append(tree[:3] + np.array([0.5 * size * d[0], 0.5 * size * d[1], -0.5 * size]))
+        for d in ((1, 0), (-1, 0), (0, 1), (0, -1)):  # the ROV, on any side of the tree
+            points.append(tree[:3] + np.array([size * d[0], size * d[1], 0.0]))
+        worst = max(_off_axis_deg(cam, p) for p in points)
+        assert worst <= 0.35 * 50.0 + 1e-9, (north, worst)
+
+
+def test_framing_camera_holds_a_preview_far_from_the_live_run() -> None:
+    """The builder's preview, 150 m above the live run (issue 47 item 23), framed whole."""
+    pts = np.array([[0.0, 0.0, 250.0], [20.0, 5.0, 250.0], [4.0, 2.5, 254.3]])
+    cam = geo.framing_camera(pts, 3.6)
+    assert cam.position_n[2] < 250.0, "from above"
+    assert max(_off_axis_deg(cam, p) for p in pts) < 25.0
+
+
+def test_the_reference_ghost_is_hidden_when_flown_by_hand(tmp_path) -> None:
+    """Defect (issue 47 item 27): in manual mode the reference ghost stayed at the autopilot's
+    old target, where the ROV was not going. It is hidden while flown by hand."""
+    import dataclasses
+
+    import viser
+
+    from app.console.session import Session, prepare_run, station_keeping_mission
+    from app.console.snapshot import LoopStats
+    from web.scene import SceneView
+
+    session = Session(prepare_run(station_keeping_mission("model-scale", 100.0), False), tmp_path)
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        snap = session.snapshot(1, False, 1.0, LoopStats(0.01, 0.0, 0.0, 0, 0, 0.0))
+        scene = SceneView(server)
+        scene.update(snap)
+        assert scene._ghost.visible
+        scene.update(dataclasses.replace(snap, mode="manual"))
+        assert not scene._ghost.visible
+        scene.update(dataclasses.replace(snap, mode="free"))
+        assert scene._ghost.visible
+    finally:
+        server.stop()
+        session.close()
+
+
 def test_overview_keeps_tree_and_frame_in_its_field_of_view() -> None:
     """Both the tree and the frame's centre lie inside the overview's cone (half angle 25 deg)
     with a margin, whether they are together or 18 m (five tree lengths) apart."""
@@ -426,11 +489,12 @@ def test_a_seek_is_not_undone_by_a_frame_update_that_comes_before_its_callback()
         operator=SimpleNamespace(unlocked=True, say=lambda text: None),
         _replay_name="trial",
         _replay_shown=20.0,
+        replay_md=SimpleNamespace(content=""),
     )
 
     def frame(t_s: float) -> None:
         status = ReplayStatus("trial", t_s, 0.0, 60.0, False, True)
-        RecordTab.update(tab, SimpleNamespace(source="replay", replay=status))
+        RecordTab.update(tab, SimpleNamespace(source="replay", replay=status, speed=1.0))
 
     frame(20.0)
     bar.value = 5.0  # the viewer's value, as viser sets it before the callback

@@ -12,11 +12,12 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from app.api.plots import rows_json
 from app.console import Console, ConsoleSettings
 from app.console.alarms import ALARM_NAMES, Alarm, AlarmLimits, AlarmMonitor
 from app.console.texts import ALARM_WORDS, alarm_title, heading_text
 from control.columns import N_LOG, LogRows
-from web.status import alarms_html, status_markdown
+from web.status import alarms_html, status_markdown, thrusters_html
 
 
 @pytest.fixture(scope="module")
@@ -74,3 +75,56 @@ def test_innovation_alarm_says_what_its_number_is() -> None:
     assert alarm.active
     assert "x expected" not in alarm.message
     assert "normalised innovation 9.3, about 1 expected" in alarm.message
+
+
+def _thrusters(console: Console, util: tuple, force: tuple, faults: tuple = ()) -> str:
+    snap = console.loop.snapshot
+    return thrusters_html(
+        dataclasses.replace(
+            snap, thruster_utilisation=util, thruster_force_newton=force, faults=faults
+        )
+    )
+
+
+def test_thruster_bars_are_named_and_signed(console: Console) -> None:
+    """Defect (issue 47 item 26): the bars showed magnitude only, with no names: a thruster
+    pushing back at 60 % looked like one pushing forward at 60 %."""
+    page = _thrusters(console, (0.6, 0.25, 0.0, 1.0), (-6e3, 2.5e3, 0.0, 1e4))
+    for number, text in ((1, "-60 %"), (2, "+25 %"), (3, "0 %"), (4, "+100 %")):
+        row = page.split(f"data-thruster='{number}'")[1].split("</div>")[0]
+        assert f">T{number}<" in row and f">{text}<" in row, row
+    # reverse thrust is drawn left of the middle, forward to its right
+    assert "left:20.0%;width:30.0%" in page.split("data-thruster='1'")[1]
+    assert "left:50.0%;width:12.5%" in page.split("data-thruster='2'")[1]
+    assert "reverse" in page and "forward" in page
+
+
+def test_a_killed_thruster_shows_killed_not_full_red(console: Console) -> None:
+    """Defect (issue 47 item 26): a thruster the instructor killed showed 100 % red (the
+    control system asked it for all it had, which it could not give)."""
+    from app.console import FaultView
+
+    killed = FaultView("thruster_lost", 10.0, 60.0, 0.0, "-", 2, 0.0, "active", "T2 lost")
+    weak = FaultView("thruster_weakened", 10.0, 60.0, 0.4, "factor", 3, 0.0, "active", "T3")
+    later = FaultView("thruster_lost", 90.0, 60.0, 0.0, "-", 4, 0.0, "scheduled", "T4 lost")
+    page = _thrusters(console, (0.1, 1.0, 0.5, 0.2), (1e3, 1e4, 5e3, 2e3), (killed, weak, later))
+    row2 = page.split("data-thruster='2'")[1].split("</div>")[0]
+    assert "data-thruster='2' data-state='killed'" in page
+    assert ">killed<" in row2 and "100 %" not in row2 and "red" not in row2
+    row3 = page.split("data-thruster='3'")[1].split("</div>")[0]
+    assert "+50 %" in row3 and "weakened to 40 %" in row3
+    row4 = page.split("data-thruster='4'")[1].split("</div>")[0]
+    assert "killed" not in row4, "a scheduled fault is not on yet"
+
+
+def test_plot_headings_are_sent_as_compass_degrees() -> None:
+    """Defect (issue 47 item 26): the plots page's headings were unwrapped angles
+    ('558.1' on its axis) while the rest of the page wraps them into [0, 360)."""
+    trend = np.zeros((3, 7))
+    trend[:, 0] = [0.0, 0.5, 1.0]
+    trend[:, 3] = np.radians([558.1, -0.01, 359.99])
+    trend[:, 6] = np.radians([-90.0, 720.0, 10.0])
+    rows = rows_json(trend)
+    assert [r[3] for r in rows] == pytest.approx([198.1, 359.99, 359.99])
+    assert [r[6] for r in rows] == pytest.approx([270.0, 0.0, 10.0])
+    assert all(0.0 <= r[c] < 360.0 for r in rows for c in (3, 6))

@@ -165,3 +165,26 @@ def test_gamepad_axes_with_a_dead_band_reach_the_demand(pilot) -> None:
         assert text(pg, "#v-heave") == "1.00"
     finally:
         context.close()
+
+
+def test_the_embedded_view_has_the_console_panel_minimised(pilot, server: RunningServer) -> None:
+    """Defect (issue 47 item 27): the pilot page embedded the whole console, whose panel
+    covered a third of the view. The view's socket is opened on ``PILOT_VIEW_PATH`` and the
+    console minimises that browser's panel (a click on its bar opens it again)."""
+    from app.console import PILOT_VIEW_PATH
+    from tests.browser import save
+
+    view = server.app.state.view
+
+    def pilot_panel() -> bool:
+        pilot.evaluate("1")  # let Playwright take in the page's events
+        with view._lock:
+            ids = list(view._panels)
+        return any(view._socket_path(i) == PILOT_VIEW_PATH for i in ids)
+
+    wait_for(pilot_panel, 60.0, "the pilot page's view to connect on its own path")
+    frame = next(f for f in pilot.frames if "websocket=" in f.url)
+    frame.get_by_text("ROV console").first.wait_for(timeout=60_000)
+    time.sleep(2.0)  # the minimise comes with the panel's first messages
+    assert not frame.get_by_text("Unlock controls").first.is_visible()
+    save(pilot.screenshot(), "pilot-page.png")

@@ -44,7 +44,7 @@ def test_feed_sends_the_window_once_then_only_new_rows() -> None:
     t = [r[0] for r in first["rows"]]
     assert t[0] >= 200.0 - WINDOW_S and t[-1] == 200.0
     assert len(t) == WINDOW_S * POINTS_PER_S + 1, "2 rows a second over 120 s (both ends)"
-    assert first["rows"][-1][3] == pytest.approx(np.degrees(20.0), abs=1e-3), "degrees"
+    assert first["rows"][-1][3] == pytest.approx(np.degrees(20.0) % 360.0, abs=1e-3), "degrees"
     assert feed.message(_snap(_trend(0.0, 200.0))) is None, "nothing new: nothing sent"
     assert feed.message(_snap(_trend(0.0, 200.4))) is None, "same half-second bin as sent"
     nxt = feed.message(_snap(_trend(0.0, 201.7)))

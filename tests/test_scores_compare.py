@@ -209,7 +209,10 @@ def test_the_pages_scores_text_lists_runs_best_and_debrief_links(
     scores.record(db, "Anna", flown(log_rows, 100, 0.1), "console", "a.mcap")
     scores.record(db, "Anna", flown(log_rows, 0, 0.05), "run")
     text = scores_markdown(scores.history(db, "Anna"), "http://127.0.0.1:8000", "Anna")
-    assert f"[report]({report_url('http://127.0.0.1:8000', 'a.mcap')})" in text
+    # in a tab of its own (issue 47 item 27: the debrief replaced the console's tab, and
+    # coming back needed the token again)
+    url = report_url("http://127.0.0.1:8000", "a.mcap")
+    assert f'<a href="{url}" target="_blank" rel="noopener">report</a>' in text
     assert "latest runs of Anna" in text and "best run of each mission" in text
     best_part = text.split("best run of each mission")[1]
     assert "0.050" in best_part and "autopilot" in best_part and "0.100" not in best_part

@@ -49,8 +49,14 @@ class BuilderPanel:
         start: Callable[[schema.Mission], None],
         is_unlocked: Callable[[], bool],
         pickers: Sequence[Any] = (),
+        show: Callable[[np.ndarray, str], None] | None = None,
     ) -> None:
+        """``show``: turns this browser's camera to points (k, 3) named in words; the
+        preview is shown with it when it lies out of the live run's sight."""
         self.client = client
+        self._show = show
+        self._shown_extent: tuple[float, ...] | None = None
+        """The preview's extent the camera was last turned to (not again for the same)."""
         self.gui = gui = client.gui
         self.console = console
         self._start = start
@@ -467,6 +473,26 @@ class BuilderPanel:
                 )
             if pv.frame is not None:
                 nodes.extend(self._draw_frame(pv.frame, snap.scene.layout.frame_size_m, size))
+        self._show_if_out_of_sight(pv, snap, size)
+
+    def _show_if_out_of_sight(self, pv: mb.Preview, snap: Snapshot, size: float) -> None:
+        """Turn the camera to the preview when it lies more than two tree sizes above or below
+        the live tree, or ten away across (drawn there, it was out of the picture: 150 m above
+        the camera), once for each new extent of it."""
+        points = [(n, e, pv.depth_m) for n, e in pv.path_ne]
+        if pv.frame is not None:
+            points.append((pv.frame[0], pv.frame[1], pv.frame[3]))
+        pts = np.array(points, float)
+        tree = np.array(snap.tree_eta_n[0:3])
+        far = (
+            np.abs(pts[:, 2] - tree[2]).max() > 2.0 * size
+            or np.hypot(*(pts[:, 0:2] - tree[0:2]).T).min() > 10.0 * size
+        )
+        extent = tuple(np.round(np.concatenate([pts.min(axis=0), pts.max(axis=0)]), 1))
+        if self._show is None or not far or extent == self._shown_extent:
+            return
+        self._shown_extent = extent
+        self._show(pts, f"the built mission's preview ({pv.depth_m:g} m deep)")
 
     def _draw_frame(
         self, frame: tuple[float, float, float, float], frame_size_m: Any, size: float

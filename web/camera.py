@@ -14,8 +14,13 @@ from app.console import Console, Snapshot
 from web import geometry as geo
 
 CAMERAS = ("Overview", "Top-down", "ROV camera", "Follow ROV")
-FOLLOWING = ("Overview", "ROV camera", "Follow ROV")
-"""Presets that follow the scene each frame (the overview only until the user moves it)."""
+FOLLOWING = ("Overview", "Top-down", "ROV camera", "Follow ROV")
+"""Presets that follow the scene each frame (the overview and the top-down view only until
+the user moves the camera)."""
+LET_GO = ("Overview", "Top-down")
+"""Presets that stop following when the user moves the camera by hand."""
+PREVIEW = "Preview"
+"""The mode of a camera turned to something shown once (``Camera.show_points``)."""
 CAMERA_SETTLE_S = 1.5
 """After a preset is pressed (or the first pose is sent), camera reports are not taken for
 the user's: the browser may still report the camera it had."""
@@ -38,6 +43,8 @@ class Camera:
         position it sets), and a page pressed to "Top-down" while its overview was
         following showed the seabed edge-on (CI on a slower machine,
         tests/test_console_replay.py)."""
+        self._framed: geo.CameraPose | None = None
+        """The pose ``show_points`` chose."""
         self._sent = geo.CameraEchoes()
         self._settle = 0.0
         gui = client.gui
@@ -61,19 +68,34 @@ class Camera:
             self.camera_md.content = ""
             self._apply(self.console.loop.snapshot)
 
+    def show_points(self, points_n: np.ndarray, what: str) -> None:
+        """Turn this browser's camera to ``points_n`` ((k, 3), NED), framed whole, and stay
+        there until a preset is pressed (the builder's preview at another depth than the live
+        run's would be out of sight)."""
+        size = max(self.console.loop.snapshot.scene.tree_dimensions_m)
+        with self.lock:
+            self.mode = PREVIEW
+            self._framed = geo.framing_camera(points_n, size)
+            self.pending = True
+            self._settle = time.monotonic() + CAMERA_SETTLE_S
+            self.camera_md.content = f"camera on {what}: press a preset to go back"
+            self._apply(self.console.loop.snapshot)
+
     def _on_moved(self, camera: viser.CameraHandle) -> None:
         """The browser reports its camera: one that matches none of the poses sent lately
         was moved by the user, and the overview stops following until a preset is pressed."""
-        if self.mode != "Overview" or not self.pending or not self._sent:
+        if self.mode not in LET_GO or not self.pending or not self._sent:
             return
         if time.monotonic() < self._settle:
             return  # reports of the camera the browser had before
         if not self._sent.is_echo(np.asarray(camera.position), np.asarray(camera.look_at)):
             self.pending = False
-            self.camera_md.content = "camera moved by hand: press Overview to follow again"
+            self.camera_md.content = f"camera moved by hand: press {self.mode} to follow again"
 
     def _pose(self, snap: Snapshot) -> geo.CameraPose:
         """The present preset's pose for the scene in ``snap``."""
+        if self.mode == PREVIEW and self._framed is not None:
+            return self._framed
         info = snap.scene
         size = max(info.tree_dimensions_m)
         tree = np.array(snap.tree_eta_n)

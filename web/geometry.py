@@ -24,6 +24,7 @@ __all__ = [
     "current_arrow",
     "current_arrow_ends_n",
     "follow_rov_camera",
+    "framing_camera",
     "funnel_points_b",
     "loaded_wire_points_n",
     "overview_camera",
@@ -96,6 +97,9 @@ OVERVIEW_DIRECTION_N = np.array([-1.0, -0.8, -0.9]) / np.linalg.norm([-1.0, -0.8
 """From the overview's target to its camera: up and to the south-west."""
 OVERVIEW_FOV_RAD = np.radians(50.0)
 """Vertical field of view of the overview and top-down presets."""
+TOP_DOWN_FILL = 0.35
+"""Share of the vertical field of view from the middle of the top-down view to the edge of
+what it must show (the tree, the ROV, the frame)."""
 ROV_CAMERA_FOV_RAD = np.radians(60.0)
 """Vertical field of view of the ROV's camera."""
 ROV_CAMERA_PITCH_RAD = (math.radians(10.0), math.radians(35.0))
@@ -132,12 +136,32 @@ def overview_camera(
 def top_down_camera(
     frame_center_n: FloatArray, landing_depth_m: float, tree_eta_n: FloatArray, tree_size_m: float
 ) -> CameraPose:
-    """Straight down over the docking frame: the funnels over the posts (alignment view).
-    'Up' on the screen is north."""
+    """Straight down over the middle between the tree and the docking frame: the funnels over
+    the posts (alignment view). 'Up' on the screen is north. High enough over the tree that a
+    circle holding both, a tree size around each (the ROV beside the tree, the frame's
+    posts), fits ``TOP_DOWN_FILL`` of the vertical field of view from the middle: the panel
+    covers the right part of the screen, and three tree sizes over the frame (as it was) cut
+    the tree off."""
     eta = np.asarray(tree_eta_n, float)
-    center = np.array([frame_center_n[0], frame_center_n[1], landing_depth_m])
-    height = max(landing_depth_m - eta[2], 0.0) + 3.0 * tree_size_m
-    return CameraPose(center - np.array([0.0, 0.0, height]), center, np.array([1.0, 0.0, 0.0]))
+    frame_ne = np.asarray(frame_center_n, float)[:2]
+    middle = 0.5 * (eta[0:2] + frame_ne)
+    radius = 0.5 * float(np.linalg.norm(eta[0:2] - frame_ne)) + tree_size_m
+    height = radius / math.tan(TOP_DOWN_FILL * OVERVIEW_FOV_RAD)
+    center = np.array([middle[0], middle[1], landing_depth_m])
+    above = np.array([middle[0], middle[1], min(eta[2], landing_depth_m) - height])
+    return CameraPose(above, center, np.array([1.0, 0.0, 0.0]))
+
+
+def framing_camera(points_n: FloatArray, tree_size_m: float) -> CameraPose:
+    """From up and to the south-west (as the overview), looking at the middle of
+    ``points_n`` ((k, 3)) from far enough that a sphere holding them all, a tree size around
+    each, fits the vertical field of view: the mission builder's preview, wherever it is."""
+    pts = np.asarray(points_n, float).reshape(-1, 3)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    target = 0.5 * (lo + hi)
+    radius = 0.5 * float(np.linalg.norm(hi - lo)) + tree_size_m
+    distance = max(radius / math.sin(0.5 * OVERVIEW_FOV_RAD), 4.0 * tree_size_m)
+    return CameraPose(target + distance * OVERVIEW_DIRECTION_N, target, UP_N)
 
 
 def rov_camera(

@@ -1,5 +1,5 @@
 """The operator's panel, one per browser (viser client): the status at the top, the camera
-presets, the Access folder, then the tabs (``web.tabs``) and the plots.
+presets, the Access folder, the thrusters, the plots, then the tabs (``web.tabs``).
 
 Each browser has its own panel (its own camera preset, mission being built, replay and unlock
 state) while all share the scene. Watching needs nothing; every control that changes the run
@@ -48,12 +48,17 @@ class ClientPanel:
         self.camera = Camera(client, console)
         self.operator = Operator(client, console, self.status.say)
         self.operator.add_access()
-        self.status.add_folders(console.loop.snapshot.scene.n_thrusters)
+        self.status.add_folders()
+        # the plots above the tabs: below them, a long tab (the mission builder) pushed them
+        # out of sight
+        with gui.add_folder("Plots", expand_by_default=True):
+            self.plots_url = plots_url(console.settings, client.client_id)
+            self.plots_html = add_plots(gui, self.plots_url)
         tabs = gui.add_tab_group()
         with tabs.add_tab("Run"):
             self.run = RunTab(self.operator, console)
         with tabs.add_tab("Mission"):
-            self.mission = MissionTab(client, self.operator, console)
+            self.mission = MissionTab(client, self.operator, console, self.camera.show_points)
         with tabs.add_tab("Control"):
             self.control = ControlTab(self.operator, console)
         with tabs.add_tab("Record"):
@@ -62,9 +67,6 @@ class ClientPanel:
             self.scores = ScoresTab(self.operator, console, self._any_unlocked)
         with tabs.add_tab("Instructor"):
             self.instructor = InstructorTab(self.operator, console)
-        with gui.add_folder("Plots", expand_by_default=True):
-            self.plots_url = plots_url(console.settings, client.client_id)
-            self.plots_html = add_plots(gui, self.plots_url)
         self.operator.set_enabled(False)
 
     @property

@@ -279,8 +279,10 @@ class SceneView:
         self._draw_current(snap, max(info.tree_dimensions_m))
         self._update_track(snap, tree_eta[2])
         ref = snap.eta_ref
+        ghost_shown = snap.mode != "manual"
         pose = np.concatenate(
             [
+                [float(ghost_shown)],
                 tree_eta,
                 snap.rov_eta_n,
                 ref,
@@ -307,6 +309,10 @@ class SceneView:
             self._tree.wxyz = geo.quaternion_wxyz_from_rpy_radians(*tree_eta[3:6])
             self._rov.position = np.array(snap.rov_eta_n[0:3])
             self._rov.wxyz = geo.quaternion_wxyz_from_rpy_radians(*snap.rov_eta_n[3:6])
+            # by hand the autopilot's reference is not where the ROV is going (it stays at the
+            # last target): the ghost is shown only while a controller follows it
+            if self._ghost.visible != ghost_shown:
+                self._ghost.visible = ghost_shown
             self._ghost.position = (ref[0], ref[1], tree_eta[2])
             self._ghost.wxyz = geo.quaternion_wxyz_from_rpy_radians(0.0, 0.0, ref[2])
             self._wire.points = geo.polyline_segments(wire)

@@ -30,6 +30,73 @@ def bar_color(utilisation: float) -> BarColor:
     return "orange" if utilisation >= 0.8 else "blue"
 
 
+KILLED_KIND = "thruster_lost"
+WEAKENED_KIND = "thruster_weakened"
+
+
+def thruster_states(snap: Snapshot) -> dict[int, str]:
+    """What the instructor did to each thruster now (1-based number -> 'killed' or
+    'weakened to 40 %'), from the active faults (none in a replay: they are not recorded as
+    a state, only as events)."""
+    states: dict[int, str] = {}
+    for f in snap.faults:
+        if f.state != "active":
+            continue
+        if f.kind == KILLED_KIND:
+            states[f.thruster] = "killed"
+        elif f.kind == WEAKENED_KIND and states.get(f.thruster) != "killed":
+            states[f.thruster] = f"weakened to {100 * f.value:.0f} %"
+    return states
+
+
+def thruster_row_html(number: int, utilisation: float, force_newton: float, state: str) -> str:
+    """One thruster: its name, a bar from the middle (right: forward thrust, left: reverse)
+    and the signed share of its limit; a killed thruster shows 'killed' and no bar (the
+    control system may still ask it for full thrust, which it cannot give)."""
+    share = min(max(utilisation, 0.0), 1.0)
+    sign = -1.0 if force_newton < 0.0 else 1.0
+    killed = state == "killed"
+    color = "#888" if killed else bar_color(utilisation)
+    width = 0.0 if killed else 50.0 * share
+    left = 50.0 if sign > 0 else 50.0 - width
+    percent = round(100 * share)
+    text = "killed" if killed else f"{sign * percent:+.0f} %" if percent else "0 %"
+    note = f" ({html.escape(state)})" if state and not killed else ""
+    track = "#eee" if not killed else "repeating-linear-gradient(45deg,#ddd 0 4px,#bbb 4px 8px)"
+    return (
+        f"<div data-thruster='{number}' data-state='{'killed' if killed else 'on'}' "
+        "style='display:flex;align-items:center;gap:6px;font-size:12px;line-height:18px'>"
+        f"<span style='width:2em;font-weight:600'>T{number}</span>"
+        f"<span style='position:relative;flex:1;height:10px;background:{track};"
+        "border-radius:3px'>"
+        "<span style='position:absolute;left:50%;top:-2px;bottom:-2px;width:1px;"
+        "background:#666'></span>"
+        f"<span style='position:absolute;top:0;bottom:0;left:{left:.1f}%;width:{width:.1f}%;"
+        f"background:{color};border-radius:2px'></span></span>"
+        f"<span style='min-width:4.2em;text-align:right;"
+        f"color:{'#c0392b' if killed else 'inherit'}'>{text}</span>"
+        + (f"<span style='font-size:11px;color:#b9770e'>{note}</span>" if note else "")
+        + "</div>"
+    )
+
+
+def thrusters_html(snap: Snapshot) -> str:
+    """The thrusters' bars, signed and named, with the instructor's kills and weakenings."""
+    states = thruster_states(snap)
+    rows = "".join(
+        thruster_row_html(i + 1, u, f, states.get(i + 1, ""))
+        for i, (u, f) in enumerate(
+            zip(snap.thruster_utilisation, snap.thruster_force_newton, strict=False)
+        )
+    )
+    legend = (
+        "<div style='display:flex;font-size:11px;color:#777;padding-left:2.6em;"
+        "padding-right:4.6em'><span style='flex:1'>&larr; reverse</span>"
+        "<span>forward &rarr;</span></div>"
+    )
+    return f"<div>{legend}{rows}</div>"
+
+
 def next_due(due: float, period: float, now: float) -> float:
     """The next time an every-``period`` update is due: one period after the last due time
     (not after now: frames come every 50 ms, and counting from the frame that did the update
@@ -124,21 +191,12 @@ class StatusHeader:
         """Show what the last action did."""
         self.message_md.content = text
 
-    def add_folders(self, n_thrusters: int) -> None:
+    def add_folders(self) -> None:
         gui = self.gui
         with gui.add_folder("Operations log", expand_by_default=False):
             self.operations_md = gui.add_markdown("*nothing done yet*")
-        with gui.add_folder("Thrusters") as self.thruster_folder:
-            self.thruster_md = gui.add_markdown("")
-        self.bars: list[Any] = []
-        self._make_bars(n_thrusters)
-
-    def _make_bars(self, n: int) -> None:
-        """One bar a thruster (the ROV of a new set-up may have another number of them)."""
-        for bar in self.bars:
-            bar.remove()
-        with self.thruster_folder:
-            self.bars = [self.gui.add_progress_bar(0.0, color="blue") for _ in range(n)]
+        with gui.add_folder("Thrusters (share of each one's limit)"):
+            self.thrusters = gui.add_html("")
 
     def update(self, snap: Snapshot, live: Snapshot) -> None:
         """From what this browser shows (``snap``: the live run or its replay) and the live
@@ -150,15 +208,4 @@ class StatusHeader:
         _set(self.operations_md, operations_markdown(snap))
 
     def _update_thrusters(self, snap: Snapshot) -> None:
-        util = snap.thruster_utilisation
-        if len(self.bars) != len(util):
-            self._make_bars(len(util))
-        for bar, u in zip(self.bars, util, strict=False):
-            value = round(100.0 * min(max(u, 0.0), 1.0), 1)
-            if bar.value != value:
-                bar.value = value
-            color = bar_color(u)
-            if bar.color != color:
-                bar.color = color
-        text = " | ".join(f"T{i + 1} {100 * u:.0f}%" for i, u in enumerate(util))
-        _set(self.thruster_md, text)
+        _set(self.thrusters, thrusters_html(snap))

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import viser
 
-from app.console import allowed_hosts, origin_allowed
+from app.console import PILOT_VIEW_PATH, allowed_hosts, origin_allowed
 from web import geometry as geo
 from web.panels import ClientPanel
 from web.scene import SceneView
@@ -99,8 +99,19 @@ class ConsoleView:
         cam.look_at = pose.look_at_n
         cam.up = pose.up_n
 
+    def _socket_path(self, client_id: int) -> str:
+        """The path the browser opened the view's socket on ('/' for the console's page,
+        ``PILOT_VIEW_PATH`` for the pilot page's view). viser keeps each client's websocket
+        by its id but does not hand it on, so it is read from there."""
+        live = getattr(self.server._websock_server, "_live_connections", {})
+        connection = live.get(client_id)
+        request = getattr(connection, "request", None)
+        return str(getattr(request, "path", "/") or "/")
+
     def _connect(self, client: viser.ClientHandle) -> None:
         panel = ClientPanel(client, self.console, self.scene)
+        if self._socket_path(client.client_id).split("?")[0] == PILOT_VIEW_PATH:
+            client.gui.main_panel.minimize()  # the pilot page has its own side panel
         self.uploads.guard(client.gui, lambda: panel.operator.unlocked, panel.mission.builder.say)
         with self._lock:
             self._panels[client.client_id] = panel

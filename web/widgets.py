@@ -253,9 +253,16 @@ class Operator:
         self.say("")
         return result
 
-    def action(self, button: Any, make: Callable[[], Any], done: str | None = None) -> None:
+    def action(
+        self,
+        button: Any,
+        make: Callable[[], Any],
+        done: str | None = None,
+        form: Any = None,
+    ) -> None:
         """A button that runs a command; ``done``: the input group it sends, which follows
-        the live value again once sent."""
+        the live value again once sent; ``form``: the form (``gui.add_form``) holding the
+        button's inputs, where Enter in an input runs the command too, as a click does."""
 
         feedback = self.gui.add_markdown("") if done is not None else None
 
@@ -272,6 +279,8 @@ class Operator:
                 self._sent(done)
 
         button.on_click(clicked)
+        if form is not None:
+            form.on_submit(clicked)
 
     def when_client(self, make: Callable[[], Any]) -> Callable[[Any], None]:
         """An input callback that acts on what the operator did, not on our own updates."""

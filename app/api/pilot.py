@@ -31,7 +31,7 @@ from fastapi import APIRouter, Request, WebSocket, WebSocketDisconnect
 from fastapi.responses import HTMLResponse
 
 from app.api.guards import websocket_origin_allowed
-from app.console import Console, ConsoleError
+from app.console import PILOT_VIEW_PATH, Console, ConsoleError
 from app.console.pilot import (
     DEMAND_TIMEOUT_S,
     PilotConnected,
@@ -57,7 +57,8 @@ def pilot_page(request: Request) -> HTMLResponse:
     """The pilot's page: the 3D view beside the pilot's readout; keys and gamepad fly."""
     view = request.app.state.view
     port = view.port if view is not None else 0  # 0: the page says the 3D view is off
-    return HTMLResponse(PAGE.replace("__VIEW_PORT__", str(port)))
+    page = PAGE.replace("__VIEW_PORT__", str(port)).replace("__VIEW_PATH__", PILOT_VIEW_PATH)
+    return HTMLResponse(page)
 
 
 class PilotRefused(Exception):

@@ -36,7 +36,7 @@ from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from fastapi.responses import HTMLResponse
 
 from app.api.guards import websocket_origin_allowed
-from app.console import Snapshot
+from app.console import Snapshot, compass_degrees
 
 router = APIRouter(tags=["plots"])
 PAGE = (Path(__file__).parent / "plots_page.html").read_text(encoding="utf-8")
@@ -80,9 +80,11 @@ def thinned(trend: np.ndarray, after_bin: int | None) -> np.ndarray:
 
 
 def rows_json(rows: np.ndarray) -> list[list[float]]:
-    """Rows in the page's units (degrees for the headings), rounded to ``NDIGITS``."""
+    """Rows in the page's units, rounded to ``NDIGITS``: the headings in compass degrees,
+    [0, 360), as the rest of the page prints them (the page draws them across north
+    unbroken)."""
     out = np.array(rows[:, :7], dtype=float)
-    out[:, [3, 6]] = np.degrees(out[:, [3, 6]])
+    out[:, [3, 6]] = compass_degrees(out[:, [3, 6]], NDIGITS)
     return [[round(float(v), NDIGITS) if math.isfinite(v) else 0.0 for v in r] for r in out]
 
 

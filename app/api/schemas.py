@@ -146,6 +146,9 @@ class ReplayOut(BaseModel):
     marks: list[tuple[float, str]] = Field(
         default_factory=list, description="events on the scrub bar: [t_s, label]"
     )
+    jumps: list[tuple[float, str]] = Field(
+        default_factory=list, description="the marked events in words: [t_s, text]"
+    )
 
     @staticmethod
     def of(r: ReplayStatus) -> ReplayOut:

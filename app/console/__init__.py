@@ -38,7 +38,13 @@ from app.console.session import (
     prepare_run,
     station_keeping_mission,
 )
-from app.console.settings import ConsoleSettings, allowed_hosts, is_loopback, origin_allowed
+from app.console.settings import (
+    PILOT_VIEW_PATH,
+    ConsoleSettings,
+    allowed_hosts,
+    is_loopback,
+    origin_allowed,
+)
 from app.console.snapshot import (
     FaultView,
     LoopStats,
@@ -50,6 +56,7 @@ from app.console.snapshot import (
 from app.console.texts import (
     alarm_meaning,
     alarm_title,
+    compass_degrees,
     compass_heading_deg,
     counters_markdown,
     heading_text,
@@ -71,6 +78,7 @@ __all__ = [
     "FAULT_KINDS",
     "INSTRUCTOR_TOKEN_ENV",
     "MODES",
+    "PILOT_VIEW_PATH",
     "RECORDING_NAME",
     "SATURATED",
     "SCORES_DB",
@@ -101,6 +109,7 @@ __all__ = [
     "allowed_hosts",
     "attachment_point_n",
     "commands",
+    "compass_degrees",
     "compass_heading_deg",
     "counters_markdown",
     "heading_text",

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import math
 import re
+import threading
+import weakref
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from pathlib import Path
@@ -48,12 +50,29 @@ def recording_path(directory: Path, name: str) -> Path:
     return directory / name
 
 
+_LOADED: weakref.WeakValueDictionary[tuple[str, int, int], SessionData] = (
+    weakref.WeakValueDictionary()
+)
+_LOADING = threading.Lock()
+
+
 def load_replay(directory: Path, name: str) -> SessionData:
-    """Read a recording for replay (call off the loop task: it can take a while)."""
+    """Read a recording for replay (call off the loop task: it can take a while). Watching a
+    replay needs no token, so one read is done at a time, and a recording some replay holds
+    already is handed out again (its data is only read, never changed; keyed by the file's
+    size and time of change): many viewers of one recording cost one read and one copy in
+    memory, which goes when the last of them closes it."""
     path = recording_path(directory, name)
     if not path.is_file():
         raise FileNotFoundError(f"no recording named {name}")
-    return load_session(path)
+    with _LOADING:
+        st = path.stat()
+        key = (str(path.resolve()), st.st_size, st.st_mtime_ns)
+        data = _LOADED.get(key)
+        if data is None:
+            data = load_session(path)
+            _LOADED[key] = data
+        return data
 
 
 def list_recordings(directory: Path) -> list[dict]:
@@ -98,6 +117,27 @@ def event_marks(events: list[dict], start_s: float, end_s: float) -> tuple[tuple
         elif kind in ("command", "operation") or (kind == "alarm" and data.get("active", True)):
             marks.append((float(t), ""))
     return tuple(marks[:MAX_MARKS])
+
+
+JUMP_TEXT_CHARS = 60
+"""Characters of an event's text a jump list entry shows at most."""
+
+
+def event_jumps(events: list[dict], start_s: float, end_s: float) -> tuple[tuple[float, str], ...]:
+    """The events a viewer may jump to, in words: (time, text) for each mark of
+    ``event_marks`` (legs, runs, landings, commands, alarms coming on), its text the event's
+    own ('leg 2 (move) started', 'pause', 'saturation on: ...'): the scrub bar's dots carry
+    no words, these say what each is."""
+    marked = {t for t, _ in event_marks(events, start_s, end_s)}
+    out: list[tuple[float, str]] = []
+    for e in events:
+        t = e.get("t_s")
+        if isinstance(t, int | float) and float(t) in marked:
+            text = " ".join(str(e.get("text") or e.get("kind") or "").split())
+            if len(text) > JUMP_TEXT_CHARS:
+                text = text[: JUMP_TEXT_CHARS - 3] + "..."
+            out.append((float(t), text))
+    return tuple(out[:MAX_MARKS])
 
 
 RUN_SCENE_VERSIONS = 1 << 20
@@ -216,6 +256,7 @@ class Replay:
         self.playing = False
         self.trend_all = frozen_copy(trend_rows(self.log))
         self.marks = event_marks(data.events, float(self.times[0]), float(self.times[-1]))
+        self.jumps = event_jumps(data.events, float(self.times[0]), float(self.times[-1]))
         self._shown()
 
     def _shown(self) -> None:
@@ -313,4 +354,5 @@ class Replay:
             self.playing,
             bool(self.data.complete),
             self.marks,
+            self.jumps,
         )

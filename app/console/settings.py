@@ -147,3 +147,9 @@ def origin_allowed(origin: str | None, hosts: list[str], ports: Collection[int])
 
 DEFAULT_PORTS = {"http": 80, "https": 443}
 """The port an Origin without one means, by its scheme (the only schemes a page has here)."""
+
+
+PILOT_VIEW_PATH = "/pilot-view"
+"""The path of the 3D view's socket when the pilot page embeds the view: that browser's
+console panel starts minimised (the pilot flies from the pilot page's own side panel, and
+the console's panel covered a third of the view)."""

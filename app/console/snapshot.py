@@ -140,6 +140,8 @@ class ReplayStatus:
     """False when the log was not closed cleanly (its tail was recovered)."""
     marks: tuple[tuple[float, str], ...] = ()
     """Events to mark on the scrub bar: (time [s], label; '' for a plain tick)."""
+    jumps: tuple[tuple[float, str], ...] = ()
+    """The marked events in words, to jump to: (time [s], the event's text)."""
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,8 @@ import math
 import re
 from pathlib import Path
 
+import numpy as np
+
 from missions.scoring import LEG_TABLE_COLUMNS, QUALITY_CHECKS, landing_lines, leg_table_rows
 from sim.sensors import SENSOR_NAMES
 
@@ -22,6 +24,10 @@ ALARM_WORDS: dict[str, tuple[str, str]] = {
         "the tree (in free mode the ROV) further from its set point than the mission allows",
     ),
     "wire_slack": ("slack wire", "the wire carries less than its share of the tree's weight"),
+    "wire_snap": (
+        "snap load",
+        "the wire went slack under the hanging tree and tightened again with a jerk",
+    ),
     "innovation": (
         "sensors disagree",
         "the sensors' fixes lie further from the observer's prediction than their noise "
@@ -52,6 +58,13 @@ def compass_heading_deg(psi_rad: float) -> float:
     """A heading as a compass shows it: in [0, 360) deg at the page's 0.1 deg, so a heading a
     hair west of north reads 0.0, not 360.0."""
     return round(math.degrees(psi_rad), 1) % 360.0 + 0.0
+
+
+def compass_degrees(psi_rad: np.ndarray, ndigits: int) -> np.ndarray:
+    """Headings as a compass shows them, for many at once: in [0, 360) deg at ``ndigits``
+    decimals (a heading that rounds to 360 reads 0), as ``compass_heading_deg`` does one."""
+    deg = np.round(np.degrees(np.asarray(psi_rad, dtype=float)), ndigits) % 360.0
+    return np.where(deg >= 360.0, 0.0, deg) + 0.0
 
 
 def heading_text(psi_rad: float) -> str:

@@ -58,18 +58,19 @@ def recording_scene(data: SessionData, fallback: SceneInfo, version: int) -> Sce
     return scene_info(ps, frame, version, frame_in_mission=in_mission)
 
 
-def replay_snapshot(rp: Replay, live: Snapshot) -> Snapshot:
+def replay_snapshot(rp: Replay, live: Snapshot, speed: float | None = None) -> Snapshot:
     """What a reader of the replay sees: the replayed row, its run's scene, mission and current,
     the alarms recorded as shown then, and its trend, with the live run's sequence number,
     loop statistics, operations and recording (those belong to the console, not to the
-    recording)."""
+    recording). ``speed``: the replay's own speed (the live run's when
+    None)."""
     v = row_view(rp.row(), rp.scene.n_thrusters)
     crane_tip_n, wire_length_m, tension_newton = rp.site()
     return Snapshot(
         seq=live.seq,
         source="replay",
         paused=not rp.playing,
-        speed=live.speed,
+        speed=live.speed if speed is None else speed,
         t_s=v.t_s,
         tree_eta_n=v.tree_eta_n,
         rov_eta_n=v.rov_eta_n,
@@ -99,15 +100,28 @@ def replay_snapshot(rp: Replay, live: Snapshot) -> Snapshot:
 
 
 class ViewerReplay:
-    """One reader's replay: opened from a loaded recording, played on the wall clock at the
-    console's speed (simulated seconds per wall second, as the live run), paused, sought and
-    closed by its owner alone."""
+    """One reader's replay: opened from a loaded recording, played on the wall clock at its
+    own speed (simulated seconds per wall second; the live run's speed is the live run's
+    business), paused, sought and closed by its owner alone."""
 
-    def __init__(self, name: str, data: SessionData, live: Snapshot, version: int) -> None:
+    def __init__(
+        self, name: str, data: SessionData, live: Snapshot, version: int, speed: float = 1.0
+    ) -> None:
         scene = recording_scene(data, live.scene, version)
         self._replay = Replay(name, data, scene, CLOCK_TICK_S)
         self._lock = threading.Lock()
         self._wall: float | None = None
+        self.speed = 1.0
+        self.set_speed(speed)
+
+    def set_speed(self, speed: float) -> None:
+        """Play at ``speed`` times real time from now on (its owner keeps it in the loop's
+        range, ``commands.SPEED_MIN`` to ``SPEED_MAX``)."""
+        if not (math.isfinite(speed) and speed > 0.0):
+            raise ConsoleError(f"replay speed must be a positive number, got {speed:g}")
+        self.advance(self.speed)  # the time played so far at the old speed
+        with self._lock:
+            self.speed = float(speed)
 
     @property
     def name(self) -> str:
@@ -153,7 +167,7 @@ class ViewerReplay:
                 self._wall = now - wall
 
     def snapshot(self, live: Snapshot) -> Snapshot:
-        """The replay as of now, advanced first (the live snapshot lends its speed)."""
-        self.advance(live.speed)
+        """The replay as of now, advanced first at its own speed."""
+        self.advance(self.speed)
         with self._lock:
-            return replay_snapshot(self._replay, live)
+            return replay_snapshot(self._replay, live, self.speed)

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from app.console import MODES, Console, Gains, Snapshot, compass_heading_deg
 from app.console import commands as cmd
 from web.widgets import Operator
@@ -58,9 +60,9 @@ class ControlTab:
         self.allocation.on_update(op.when_client(lambda: cmd.SetAllocation(self.allocation.value)))
         self.grip = op.guard(gui.add_checkbox("Grip", bool(snap.grip)))
         self.grip.on_update(op.when_client(lambda: cmd.SetGrip(bool(self.grip.value))))
-        with gui.add_folder("Gains"):
-            self._build_gains(snap)
-        with gui.add_folder("Current"):
+        with gui.add_form("Gains") as gains_form:
+            self._build_gains(snap, gains_form)
+        with gui.add_form("Current") as current_form:
             self.current_speed = op.live_input(
                 "current",
                 op.bounded(
@@ -84,8 +86,9 @@ class ControlTab:
                 op.guard(gui.add_button("Set current")),
                 lambda: cmd.SetCurrent(op.number(self.current_speed), op.degrees(self.current_dir)),
                 done="current",
+                form=current_form,
             )
-        with gui.add_folder("Vessel (crane tip)"):
+        with gui.add_form("Vessel (crane tip)") as vessel_form:
             ct = snap.crane_tip_n
             lim = cmd.VESSEL_RANGE_M
             self.vessel_n, self.vessel_e = (
@@ -99,9 +102,11 @@ class ControlTab:
                 op.guard(gui.add_button("Move vessel")),
                 lambda: cmd.MoveVessel(op.number(self.vessel_n), op.number(self.vessel_e), 0.5),
                 done="vessel",
+                form=vessel_form,
             )
 
-    def _build_gains(self, snap: Snapshot) -> None:
+    def _build_gains(self, snap: Snapshot, form: Any) -> None:
+        """The gain rows; Enter in a row applies them (``form``), as "Apply gains" does."""
         gui, op = self.operator.gui, self.operator
         preset = snap.scene.preset_gains
         live = snap.gains or preset
@@ -118,7 +123,7 @@ class ControlTab:
             )
             for term in TERMS
         }
-        op.action(op.guard(gui.add_button("Apply gains")), self.typed_gains, "gains")
+        op.action(op.guard(gui.add_button("Apply gains")), self.typed_gains, "gains", form)
         op.action(
             op.guard(gui.add_button("Preset gains")),
             lambda: cmd.SetGains(self.console.loop.snapshot.scene.preset_gains),

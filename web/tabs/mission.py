@@ -4,8 +4,10 @@ running mission's progress and result, the signal checks' counters, and the miss
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
+import numpy as np
 import viser
 
 from app.console import (
@@ -51,7 +53,14 @@ def mission_markdown(snap: Snapshot) -> str:
 
 
 class MissionTab:
-    def __init__(self, client: viser.ClientHandle, operator: Operator, console: Console) -> None:
+    def __init__(
+        self,
+        client: viser.ClientHandle,
+        operator: Operator,
+        console: Console,
+        show: Callable[[np.ndarray, str], None] | None = None,
+    ) -> None:
+        """``show``: turns this browser's camera to points (the builder's preview)."""
         self.operator = operator
         self.console = console
         gui, op = operator.gui, operator
@@ -71,6 +80,7 @@ class MissionTab:
                 lambda mission: start_mission(op, mission),
                 lambda: op.unlocked,
                 (self.mission_pick,),
+                show=show,
             )
 
     def _on_start_library(self, event: Any) -> None:

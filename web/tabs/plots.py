@@ -1,7 +1,8 @@
-"""The plots, in a folder below the tabs (not a tab: the plots page redraws whenever it is
-shown again, with its own ResizeObserver): the console's plots page (``app.api.plots``) in an
-iframe. viser's uPlot handle re-sends its whole data at each assignment (no append), 48 kB/s
-for two updates a second; the page gets the window once, then only the new rows."""
+"""The plots, in a folder above the tabs (not a tab, and not below them: they stay in sight
+whichever tab is open, the mission builder's long one too): the console's plots page
+(``app.api.plots``) in an iframe. viser's uPlot handle re-sends its whole data at each
+assignment (no append), 48 kB/s for two updates a second; the page gets the window once,
+then only the new rows."""
 
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ def plots_url(settings: ConsoleSettings, client_id: int) -> str:
 def add_plots(gui: viser.GuiApi, url: str) -> viser.GuiHtmlHandle:
     return gui.add_html(
         f'<iframe src="{url}" title="plots" '
-        'style="width:100%;height:530px;border:0;display:block"></iframe>'
+        'style="width:100%;height:430px;border:0;display:block"></iframe>'
         f'<a href="{url}" target="_blank" rel="noopener" '
         'style="font-size:12px">open the plots in their own tab</a>'
     )

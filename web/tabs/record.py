@@ -10,6 +10,7 @@ from typing import Any
 from app.console import (
     Console,
     ConsoleError,
+    ReplayStatus,
     Snapshot,
     ViewerReplay,
     list_recordings,
@@ -19,6 +20,29 @@ from app.console import (
 )
 from app.console import commands as cmd
 from web.widgets import Operator
+
+REPLAY_SPEEDS = ("0.25", "1", "5", "20", "50")
+"""A replay's own speeds (the live run keeps its own)."""
+NO_JUMP = "(choose an event)"
+REPLAY_HELP = (
+    "Watch a recording in this browser alone (no token needed): the live run and the other "
+    "browsers go on. On the scrub bar the dots are the recording's events (legs, runs, "
+    "landings, commands, alarms coming on): *Jump to event* names them."
+)
+
+
+def jump_label(t_s: float, text: str) -> str:
+    """An entry of the jump list: '412.3 s: leg 2 (move) started'."""
+    return f"{t_s:.1f} s: {text}"
+
+
+def replay_text(rp: ReplayStatus, speed: float) -> str:
+    """Where the replay is, at what speed, and from where to where."""
+    state = "playing" if rp.playing else "paused"
+    return (
+        f"replay {state} at x{speed:g}: t = {rp.t_s:.1f} s of {rp.start_s:.1f} to "
+        f"{rp.end_s:.1f} s" + ("" if rp.complete else " (a recording cut short: its tail read)")
+    )
 
 
 class RecordTab:
@@ -40,41 +64,52 @@ class RecordTab:
         stop.on_click(lambda event: self._on_record(False))
         self.record_md = gui.add_markdown("")
         with gui.add_folder("Replay") as self.replay_folder:
+            gui.add_markdown(REPLAY_HELP)
             self.recordings = gui.add_dropdown("Recording", self._recording_names())
             refresh = gui.add_button("Refresh list")
             refresh.on_click(lambda _: self._refresh_recordings())
-            self.replay_open = op.guard(gui.add_button("Open replay"))
+            self.replay_open = gui.add_button("Open replay")
             self.replay_open.on_click(self._on_open_replay)
             for label, act in (
                 ("Play replay", lambda: self._play_replay(True)),
                 ("Pause replay", lambda: self._play_replay(False)),
                 ("Close replay", self._close_replay),
             ):
-                op.guard(gui.add_button(label)).on_click(self._replay_action(act))
+                gui.add_button(label).on_click(self._replay_action(act))
+            self.replay_speed = gui.add_button_group("Replay speed", REPLAY_SPEEDS)
+            self._speed = 1.0
+            """The speed the next replay opened plays at (the last clicked)."""
+            self.replay_speed.on_click(self._on_replay_speed)
+            self.replay_md = gui.add_markdown("")
+            with gui.add_form(None) as goto_form:
+                self.goto = gui.add_number("Go to t s", 0.0, step=0.1)
+                go = gui.add_button("Go")
+            go.on_click(self._replay_action(self._go_to))
+            goto_form.on_submit(self._replay_action(self._go_to))
+            self.jump = gui.add_dropdown("Jump to event", (NO_JUMP,), initial_value=NO_JUMP)
+            self.jump.on_update(self._on_jump)
         self.replay_time: Any = None
+        self._replay_jumps: tuple[tuple[float, str], ...] = ()
         self._make_replay_slider(0.0, 1.0, ())  # enters the folder itself
 
     def _make_replay_slider(
         self, start_s: float, end_s: float, marks: tuple[tuple[float, str], ...]
     ) -> None:
-        """The scrub bar, with the recording's events as marks (legs, runs, landings named;
-        commands and alarms as ticks); made anew for each replay opened."""
+        """The scrub bar, with the recording's events as dots (their words are in "Jump to
+        event": labels on a bar this narrow ran into each other); made anew for each replay
+        opened."""
         old = self.replay_time
         if old is not None:
-            self.operator.unguard(old)
             old.remove()
         with self.replay_folder:
-            self.replay_time = self.operator.guard(
-                self.operator.gui.add_slider(
-                    "Replay time s",
-                    min=start_s,
-                    max=max(end_s, start_s + 0.1),
-                    step=0.1,
-                    initial_value=start_s,
-                    marks=tuple((t, label) if label else t for t, label in marks) or None,
-                )
+            self.replay_time = self.operator.gui.add_slider(
+                "Scrub s",
+                min=start_s,
+                max=max(end_s, start_s + 0.1),
+                step=0.1,
+                initial_value=start_s,
+                marks=tuple(t for t, _ in marks) or None,
             )
-        self.replay_time.disabled = not self.operator.unlocked
         self.replay_time.on_update(self._on_seek_replay)
         self._replay_shown = float(self.replay_time.value)
         """The scrub bar's value as this tab last set it: another value there is a viewer's
@@ -105,14 +140,13 @@ class RecordTab:
     def _on_open_replay(self, event: Any) -> None:
         name = str(self.recordings.value)
         say = self.operator.say
-        if not self.operator.unlocked:
-            say("**locked**: enter the console token under Access")
-            return
         say(f"opening {md_text(name)}...")
         try:
             data = load_replay(self.console.settings.recordings_dir, name)
             self._replay_count += 1
-            replay = ViewerReplay(name, data, self.console.loop.snapshot, self._replay_count)
+            replay = ViewerReplay(
+                name, data, self.console.loop.snapshot, self._replay_count, self._speed
+            )
         except (ConsoleError, FileNotFoundError, ValueError) as err:
             say(f"**error**: {md_text(err)}")
             return
@@ -121,21 +155,32 @@ class RecordTab:
         say(f"replay of {md_code(name)} in this browser; the live run goes on")
 
     def _replay_action(self, act: Callable[[], None]) -> Callable[[Any], None]:
-        """A replay button: acts on this browser's replay only (the live run and the other
-        browsers are not touched, so nothing goes to the loop)."""
+        """A replay control: acts on this browser's replay only (the live run and the other
+        browsers are not touched, so nothing goes to the loop and no token is needed)."""
 
         def clicked(event: Any) -> None:
             if event.client is None:
                 return
-            if not self.operator.unlocked:
-                self.operator.say("**locked**: enter the console token under Access")
-                return
             if self.replay is None:
-                self.operator.say("**error**: no replay is open")
+                self.operator.say("**error**: no replay is open (choose a recording, Open)")
                 return
-            act()
+            try:
+                act()
+            except (ConsoleError, ValueError) as err:
+                self.operator.say(f"**error**: {md_text(err)}")
 
         return clicked
+
+    def _on_replay_speed(self, event: Any) -> None:
+        """The speed clicked, for the replay open and the next ones (a button group's value
+        is its last click, and the first option before any: the speed is kept here, 1x until
+        one is clicked)."""
+        if event.client is None:
+            return
+        self._speed = float(self.replay_speed.value)
+        if self.replay is not None:
+            self.replay.set_speed(self._speed)
+        self.operator.say(f"replays play at x{self._speed:g}")
 
     def _play_replay(self, playing: bool) -> None:
         if self.replay is not None:
@@ -147,11 +192,25 @@ class RecordTab:
         self.on_replay()
         self.operator.say("replay closed: live")
 
+    def _go_to(self) -> None:
+        """Seek to the typed time (playing or not: the frames never write over this box)."""
+        if self.replay is not None:
+            self.replay.seek(float(self.goto.value))
+
+    def _on_jump(self, event: Any) -> None:
+        if event.client is None or self.replay is None:
+            return
+        picked = str(self.jump.value)
+        for t, text in self._replay_jumps:
+            if jump_label(t, text) == picked:
+                self.replay.seek(t)
+                return
+
     def _on_seek_replay(self, event: Any) -> None:
         replay = self.replay
         value = float(self.replay_time.value)
         try:
-            if event.client is None or replay is None or not self.operator.unlocked:
+            if event.client is None or replay is None:
                 return
             replay.seek(value)
         except ConsoleError as err:
@@ -164,10 +223,19 @@ class RecordTab:
         rp = snap.replay if snap.source == "replay" else None
         if rp is None:
             self._replay_name = None
+            if self.replay_md.content:
+                self.replay_md.content = ""
             return
         if rp.name != self._replay_name:
             self._replay_name = rp.name
             self._make_replay_slider(rp.start_s, rp.end_s, rp.marks)
+            self._replay_jumps = rp.jumps
+            options = (NO_JUMP, *(jump_label(t, text) for t, text in rp.jumps))
+            self.jump.options = options
+            self.jump.value = NO_JUMP  # type: ignore[misc]  # settable at run time
+        text = replay_text(rp, snap.speed)
+        if self.replay_md.content != text:
+            self.replay_md.content = text
         value = self.replay_time.value
         if value != self._replay_shown:
             # a viewer moved the bar since this tab last set it and its seek has not run

@@ -16,7 +16,8 @@ def bounded_target(op: Operator, handle: Any) -> Any:
     return op.bounded(handle, -cmd.TARGET_RANGE_M, cmd.TARGET_RANGE_M, "m")
 
 
-SPEEDS = ("0.25", "0.5", "1", "2", "5", "10", "20", "50")
+SPEEDS = ("0.25", "1", "5", "20", "50")
+"""The speed presets, a click each (any other speed in range is typed)."""
 
 
 class RunTab:
@@ -27,13 +28,12 @@ class RunTab:
         op.action(op.guard(gui.add_button("Pause")), cmd.Pause)
         op.action(op.guard(gui.add_button("Resume")), cmd.Resume)
         op.action(op.guard(gui.add_button("Step 0.1 s")), lambda: cmd.Step(10))
-        self.speed = op.guard(gui.add_dropdown("Speed (x real time)", SPEEDS, initial_value="1"))
-        self.speed.on_update(op.when_client(lambda: cmd.SetSpeed(float(self.speed.value))))
+        self._build_speed(console.loop.snapshot.speed)
         self.reset_button = op.guard(gui.add_button("Reset to station keeping"))
         self.reset_button.on_click(lambda _: self._reset())
         snap = console.loop.snapshot
         goal = snap.target or snap.eta_ref
-        with gui.add_folder("Target (no mission)"):
+        with gui.add_form("Target (no mission)") as target_form:
             self.target_n = op.live_input(
                 "target",
                 bounded_target(op, gui.add_number("Target north m", round(goal[0], 2), step=0.1)),
@@ -56,6 +56,33 @@ class RunTab:
                     op.degrees(self.target_psi),
                 ),
                 done="target",
+                form=target_form,
+            )
+
+    def _build_speed(self, speed: float) -> None:
+        """The run's speed: typed (Enter applies it, as "Set speed" does; any speed in the
+        loop's range) or one of the presets at a click."""
+        gui, op = self.operator.gui, self.operator
+        with gui.add_form("Speed (x real time)") as form:
+            self.speed = op.live_input(
+                "speed",
+                op.bounded(
+                    gui.add_number("Speed x real time", speed, step=0.25),
+                    cmd.SPEED_MIN,
+                    cmd.SPEED_MAX,
+                    "x",
+                ),
+            )
+            op.action(
+                op.guard(gui.add_button("Set speed")),
+                lambda: cmd.SetSpeed(op.number(self.speed)),
+                done="speed",
+                form=form,
+            )
+            # not guarded: viser cannot disable a button group (a locked page says so)
+            self.speed_presets = gui.add_button_group("Presets", SPEEDS)
+            self.speed_presets.on_click(
+                op.when_client(lambda: cmd.SetSpeed(float(self.speed_presets.value)))
             )
 
     def _reset(self) -> None:
@@ -75,6 +102,4 @@ class RunTab:
                 (self.target_psi, compass_heading_deg(goal[2])),
             ),
         )
-        speed = f"{live.speed:g}"
-        if speed in SPEEDS and speed != self.speed.value:
-            self.speed.value = speed
+        self.operator.follow("speed", ((self.speed, live.speed),))

@@ -11,6 +11,7 @@ instructor token (they carry the console's debrief ticket).
 
 from __future__ import annotations
 
+import html
 from collections.abc import Callable
 from typing import Any
 from urllib.parse import quote
@@ -27,6 +28,15 @@ def report_url(api_base: str, name: str, ticket: str | None = None) -> str:
     for a browser that is unlocked: the report needs a token, and a link carries no header."""
     url = f"{api_base}/api/recordings/{quote(name)}/report"
     return url + (f"?ticket={quote(ticket)}" if ticket else "")
+
+
+def new_tab_link(url: str, text: str) -> str:
+    """A link that opens in a tab of its own (HTML in the Markdown, which viser renders): the
+    debrief replaced the console's tab, and coming back needed the token again."""
+    return (
+        f'<a href="{html.escape(url, quote=True)}" target="_blank" rel="noopener">'
+        f"{html.escape(text)}</a>"
+    )
 
 
 def _cell(v: float | None, fmt: str) -> str:
@@ -59,7 +69,11 @@ def scores_markdown(
             "|---|---|---|---|---|---|---|",
         ]
         for s in scores:
-            link = f"[report]({report_url(api_base, s.log_file, ticket)})" if s.log_file else "-"
+            link = (
+                new_tab_link(report_url(api_base, s.log_file, ticket), "report")
+                if s.log_file
+                else "-"
+            )
             lines.append(
                 f"| {s.utc[5:16].replace('T', ' ')} | {md_text(s.mission)} | {_verdict(s)} | "
                 f"{_cell(s.miss_m, '.3f')} | {s.rms_north_m:.3f}/{s.rms_east_m:.3f} | "
@@ -135,10 +149,14 @@ class ScoresTab:
             return
         ticket = self._ticket()
         url = report_url(self.api_base, name, ticket)
-        self.debrief_md.content = f"[open the debrief of {md_text(name)}]({url}) " + (
-            "(opens the report page)"
-            if ticket
-            else "(the report needs the console token: unlock under Access first)"
+        self.debrief_md.content = (
+            new_tab_link(url, f"open the debrief of {name}")
+            + " "
+            + (
+                "(opens the report in a new tab; this one stays as it is)"
+                if ticket
+                else "(the report needs the console token: unlock under Access first)"
+            )
         )
 
     def _ticket(self) -> str | None:
