@@ -129,3 +129,36 @@ def test_the_report_page_says_which_run_it_is_of(
     page = out.read_text()
     assert f"<h1>Debrief: {MISSION}</h1>" in page
     assert "several runs" in page and "<li>none</li>" not in page
+
+
+def test_alarms_on_when_a_recording_starts_are_in_it(tmp_path: Path) -> None:
+    """Defect (issue 47): only an alarm's changes were written, so an alarm already on when
+    the recording started was missing from it (its replay and debrief) until it went off.
+    The recording now starts with an event for each alarm on, which its replay shows."""
+    from app.console.replay import Replay, recorded_alarms
+    from app.console.snapshot import LoopStats
+
+    session = Session(prepare_run(station_keeping_mission("model-scale", 100.0), False), tmp_path)
+    try:
+        session.sim.set_target(5.0, 0.0, 0.0)  # far from the reference: a position error
+        for _ in range(40):
+            session.advance(100)
+            if any(a.active for a in session.monitor.state):
+                break
+        on = {a.name: a.message for a in session.monitor.state if a.active}
+        assert on, "an alarm is on before the recording starts"
+        name = session.start_recording("alarms")
+        session.advance(200)
+        session.stop_recording()
+        live = session.snapshot(1, False, 1.0, LoopStats(0.01, 0.0, 0.0, 0, 0, 0.0))
+    finally:
+        session.close()
+    data = load_session(tmp_path / name)
+    events = [e for e in data.events if e["kind"] == "alarm" and e["data"].get("on_at_start")]
+    assert {e["data"]["name"] for e in events} == set(on)
+    start = float(data.rows[0, 0])
+    assert all(e["t_s"] <= start for e in events), "at the recording's first moment"
+    shown = recorded_alarms(data.events, float(data.runs[0]["start_t_s"]), start)
+    assert {a.name for a in shown if a.active} == set(on)
+    replay = Replay(name, data, live.scene, 0.01)
+    assert {a.name for a in replay.alarms if a.active} == set(on), "shown from its start"

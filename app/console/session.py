@@ -480,7 +480,20 @@ class Session:
         # a mission already under way: what it did before the recording started goes in too
         self._mission_events_written = 0
         self._record_mission_events()
+        self._record_alarms_on()
         return name
+
+    def _record_alarms_on(self) -> None:
+        """The alarms on when a recording starts, as events at its first moment: only their
+        changes are written as they come, so one on already was missing from the recording
+        (its replay and debrief) until it went off."""
+        for alarm in self.monitor.state:
+            if alarm.active:
+                self.note(
+                    "alarm",
+                    f"{alarm_title(alarm.name)} on{': ' + alarm.message if alarm.message else ''}",
+                    {"name": alarm.name, "active": True, "on_at_start": True},
+                )
 
     def flush_recording(self) -> None:
         if self.recorder is None or not self._rec_rows:
