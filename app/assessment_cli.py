@@ -144,6 +144,7 @@ def draw_trend(trainee: str, points, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     fig, ax = plt.subplots(figsize=(7, 3.2), dpi=110)
     xs = list(range(1, len(points) + 1))
@@ -153,7 +154,8 @@ def draw_trend(trainee: str, points, path: Path) -> None:
         ax.scatter(
             [x], [y], s=30, facecolors="none" if p.faults else "tab:blue", edgecolors="tab:blue"
         )
-    ax.set_xlabel("run")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_xlabel("run (hollow: instructor's faults acted)")
     ax.set_ylabel("total (0-100)")
     ax.set_ylim(-3, 103)
     ax.set_title(f"{trainee}: assessment over {len(points)} runs", fontsize=10)
