@@ -185,3 +185,18 @@ def test_operability_refuses_a_bad_grid_in_one_line():
     proc = subprocess.run(args, capture_output=True, text=True, timeout=120, env=env)
     assert proc.returncode == 2 and "--hs takes numbers" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.slow  # a local cluster's start and four landings: some 15 s
+def test_the_table_runs_on_a_local_dask_cluster_with_its_second_pass(tmp_path: Path):
+    """Two cells, two seeds, one worker: the first pass runs each cell's first seed, the
+    second the other seed of the cells near a limit (both here: the last within the limits
+    and the first beyond them, or both within and none near), all in one results folder."""
+    p = op.plan(short_mission(False), op.Grid((1.0, 3.0), (10.0,), (180.0,)), seeds=2)
+    t = tab.run_table(p, LIMITS, tmp_path, workers=1, show_progress=False)
+    rows = tab.store.read_rows(tmp_path)
+    first = op.cells_of(p, [r for r in rows if r["repetition"] == 0], LIMITS)
+    near = op.boundary_points(first)
+    assert {int(r["run"]) for r in rows} == {0, 2} | {2 * q + 1 for q in near}
+    assert [c.seeds for c in t.cells] == [2 if c.point in near else 1 for c in t.cells]
+    assert len(t.allowable) == 1 and t.allowable[0].tp_s == 10.0
