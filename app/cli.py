@@ -957,6 +957,24 @@ def serve(
             "spaces, not the console token; without it the instructor's features are off",
         ),
     ] = None,
+    winch_token: Annotated[
+        str | None,
+        typer.Option(
+            "--winch-token",
+            envvar="ROV_CONSOLE_WINCH_TOKEN",
+            help="the winch station's token (GET /winch: pay out, haul in, stop, heave "
+            "compensation): at least 8 printable characters, no spaces, unlike the others",
+        ),
+    ] = None,
+    supervisor_token: Annotated[
+        str | None,
+        typer.Option(
+            "--supervisor-token",
+            envvar="ROV_CONSOLE_SUPERVISOR_TOKEN",
+            help="the supervisor's token (GET /supervisor: watch, pause, resume): at least 8 "
+            "printable characters, no spaces, unlike the others",
+        ),
+    ] = None,
     params: Annotated[
         str, typer.Option(help="parameter set when no mission is given")
     ] = "full-scale",
@@ -1000,6 +1018,8 @@ def serve(
             viser_port=viser_port,
             token=token,
             instructor_token=instructor_token,
+            winch_token=winch_token,
+            supervisor_token=supervisor_token,
             params=params,
             mission=mission,
             depth_m=depth,

@@ -28,6 +28,7 @@ from starlette.middleware.trustedhost import TrustedHostMiddleware
 from app.api import (
     assessment,
     control,
+    crew,
     environment,
     faults,
     gains,
@@ -73,6 +74,7 @@ ROUTERS = (
     assessment.router,
     pilot.router,
     plots.router,
+    crew.router,
 )
 
 
@@ -99,6 +101,7 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
             if settings.announce:
                 print(addresses(settings, console.token, view.port if view else None), flush=True)
                 print(instructor_line(settings), flush=True)
+                print(crew_line(settings), flush=True)
             yield
         finally:
             console.loop.stop()
@@ -124,6 +127,7 @@ def create_app(settings: ConsoleSettings) -> FastAPI:
     app.state.allowed_hosts = allowed_hosts(settings.host, settings.allow_remote)
     app.state.telemetry_clients = 0
     app.state.pilot_name = None  # the pilot flying from the pilot page (one at a time)
+    app.state.winch_name = None  # the winch operator on the winch station (one at a time)
     for router in ROUTERS:
         app.include_router(router, responses=ERROR_RESPONSES)
     app.add_exception_handler(RequestValidationError, _validation_error)
@@ -220,6 +224,8 @@ def addresses(settings: ConsoleSettings, token: str, viser_port: int | None = No
         f"(OpenAPI: /openapi.json, telemetry: ws://{host}:{settings.port}/api/telemetry)",
         f"pilot page:  http://{host}:{settings.port}/pilot  (keys and gamepad fly the ROV)",
         f"plots page:  http://{host}:{settings.port}/plots  (also in the 3D console's Plots)",
+        f"winch page:  http://{host}:{settings.port}/winch  (the winch operator's station)",
+        f"supervisor:  http://{host}:{settings.port}/supervisor  (watch, pause and resume)",
         f"token:       {token}   (needed to change the run; watching needs none)",
     ]
     return "\n".join(lines)
@@ -233,6 +239,19 @@ def instructor_line(settings: ConsoleSettings) -> str:
             "ROV_CONSOLE_INSTRUCTOR_TOKEN to turn it on)"
         )
     return "instructor:  on (faults need the instructor token, not the console token)"
+
+
+def crew_line(settings: ConsoleSettings) -> str:
+    """What ``serve`` prints about the crew's stations (never their tokens)."""
+    given = [
+        role for role in ("winch", "supervisor") if getattr(settings, f"{role}_token") is not None
+    ]
+    if not given:
+        return "crew:        the winch and supervisor pages open with the console token"
+    return (
+        f"crew:        {' and '.join(given)} token{'s' if len(given) > 1 else ''} set "
+        "(each opens its own page only; the console token opens them too)"
+    )
 
 
 def serve(settings: ConsoleSettings) -> None:

@@ -299,6 +299,40 @@ class Simulation:
         """The winch has reached its commanded payout."""
         return self.site.winch_idle
 
+    @property
+    def winch_target_m(self) -> float:
+        """The payout the winch is going to [m] (``winch_to``)."""
+        return float(self.site.wire_target_m)
+
+    @property
+    def winch_rate_mps(self) -> float:
+        """The speed the winch pays out or hauls in at while it moves [m/s]."""
+        return float(self.site.wire_rate_mps)
+
+    @property
+    def heave_compensation(self) -> bool | None:
+        """The crane's active heave compensation is on (``sim.vessel.VesselMotion``); None
+        when the crane tip does not heave (no sea or no vessel motion in this run)."""
+        motion = self.site.vessel_motion
+        return None if motion is None or self.site.wave_field is None else motion.heave_compensation
+
+    def set_heave_compensation(self, on: bool) -> None:
+        """Turn the crane's heave compensation on or off, from the next chunk; ValueError when
+        the crane tip does not heave in this run (no sea or no vessel motion)."""
+        motion = self.site.vessel_motion
+        if motion is None or self.site.wave_field is None:
+            raise ValueError(
+                "heave compensation: the crane tip does not heave in this run (no sea)"
+            )
+        self.site.vessel_motion = replace(motion, heave_compensation=bool(on))
+
+    @property
+    def thruster_health(self) -> FloatArray:
+        """Each thruster's share of the thrust its speed should give, as its drive reports it
+        (1 healthy, 0 lost; an injected thruster fault): the pilot's thruster telemetry. The
+        control system does not read it (it goes on allocating to a lost thruster)."""
+        return self._thrust_factors.copy()
+
     def winch_steps_busy(self) -> int:
         """Steps from now after each of which the winch is certainly still moving
         (``winch_idle`` false; ``SiteMotion.winch_steps_busy``); 0 with any fault scheduled

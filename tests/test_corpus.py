@@ -18,6 +18,8 @@ from app.server import serve_in_thread
 CORPUS = Path(__file__).parent / "corpus" / "bad_requests.txt"
 TOKEN = "corpus-test-token-0001"
 INSTRUCTOR = "corpus-instructor-01"
+WINCH = "corpus-winch-01"
+SUPERVISOR = "corpus-supervisor-01"
 
 
 @dataclass(frozen=True)
@@ -116,6 +118,8 @@ def served(tmp_path_factory: pytest.TempPathFactory):
         view=False,
         token=TOKEN,
         instructor_token=INSTRUCTOR,
+        winch_token=WINCH,
+        supervisor_token=SUPERVISOR,
         recordings_dir=tmp_path_factory.mktemp("rec"),
         speed=2.0,
     )
@@ -133,6 +137,8 @@ def test_every_bad_request_gets_its_status_and_words_and_the_loop_goes_on(served
         "token": {"Authorization": f"Bearer {TOKEN}"},
         "wrong": {"Authorization": "Bearer not-the-token-at-all"},
         "instructor": {"Authorization": f"Bearer {INSTRUCTOR}"},
+        "winch": {"Authorization": f"Bearer {WINCH}"},
+        "supervisor": {"Authorization": f"Bearer {SUPERVISOR}"},
         "none": {},
     }
     problems = []

@@ -46,6 +46,13 @@ def require_token(
             f"too many wrong tokens from this client: try again in {wait:.0f} s",
             headers={"Retry-After": str(max(int(wait + 0.999), 1))},
         )
+    role = console.crew_role(credentials.credentials) if credentials is not None else None
+    if not ok and role is not None:
+        raise HTTPException(
+            status.HTTP_403_FORBIDDEN,
+            f"that is the {role} station's token: it opens GET /{role} only; this action "
+            "needs the console token",
+        )
     if not ok:
         raise HTTPException(
             status.HTTP_401_UNAUTHORIZED,

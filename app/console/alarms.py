@@ -19,6 +19,12 @@ Five alarms, each with a limit taken from the parameter set where the thesis giv
   submerged weight W0 (the wire only pulls, eq. 2.28: a slack wire no longer carries the tree),
   while the tree hangs; a tree whose bottom is down at the post tops or deeper rests on the
   frame, which carries it, and a slack wire is then the landed state, not an alarm.
+- ``wire_snap``: the wire tightened again after going slack while the tree hung (a snap
+  load, DNV-RP-H103's other wire criterion, found in the tick's rows by
+  ``missions.seaway.WireWatch`` as the seaway study finds it: slack below 10 % of W0, the
+  peak tension within ``SNAP_WINDOW_S`` after); it stands for ``snap_show_s`` after the
+  peak, saying how many times the static tension it reached. Rows where the tree rests on the
+  frame count as taut (a landing is not a slack, nor a lift-off a snap).
 - ``innovation``: the mean normalised innovation squared of the last ``nis_window`` accepted
   position or heading fixes is above ``nis_limit`` (its expected value is 1 per axis when the
   EKF's model and noise agree with the measurements).
@@ -50,6 +56,7 @@ from numpy.typing import NDArray
 
 from control.columns import LogRows
 from missions.scoring import SATURATED
+from missions.seaway import WireWatch
 from sim.gnc import ssa
 from sim.params import ParameterSet
 from sim.sensors import SENSOR_NAMES
@@ -62,6 +69,7 @@ ALARM_NAMES = (
     "innovation",
     "dropout",
     "mount_vector",
+    "wire_snap",
 )
 SETTLE_S = 60.0
 """How long a run may take to settle from its start before the position alarm is armed
@@ -87,6 +95,9 @@ class AlarmLimits:
     before it is armed [s]; the console's (``for_params``) is ``SETTLE_S``."""
     slack_fraction: float = 0.1
     """Tension below this fraction of W0 counts as slack [-]."""
+    snap_show_s: float = 10.0
+    """How long the snap alarm stands after a snap load's peak [s] (our choice: long enough
+    for the winch operator to read it; the load itself lasts about a wire period)."""
     nis_limit: float = 4.0
     """Mean NIS per axis over the window above which the observer disagrees with the sensors."""
     nis_window: int = 10
@@ -152,6 +163,9 @@ class AlarmMonitor:
     _t_s: float = field(init=False, default=0.0)
     _t_first_s: float = field(init=False, default=math.nan)
     _position_armed: bool = field(init=False, default=False)
+    _wire_watch: WireWatch = field(init=False)
+    _snap_alarm: Alarm = field(init=False)
+    _snap_until_s: float = field(init=False, default=-math.inf)
     state: tuple[Alarm, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -161,6 +175,8 @@ class AlarmMonitor:
         self.state = tuple(Alarm(name, False, "") for name in ALARM_NAMES)
         self._mount_rows = deque(maxlen=int(round(self.limits.mount_window_s / MOUNT_SAMPLE_S)))
         self._mount_alarm = Alarm("mount_vector", False, "")
+        self._wire_watch = WireWatch(self.weight_newton)
+        self._snap_alarm = Alarm("wire_snap", False, "")
 
     def update(
         self,
@@ -185,6 +201,7 @@ class AlarmMonitor:
             self._innovation(rows),
             self._dropout(rows),
             self._mount_check(rows, mount),
+            self._snap(rows),
         )
         return self.state
 
@@ -292,6 +309,29 @@ class AlarmMonitor:
         if tension_newton is not None and tension_newton < slack and not self.resting(rows):
             return Alarm("wire_slack", True, f"wire tension {tension_newton / 1e3:.1f} kN")
         return Alarm("wire_slack", False, "")
+
+    def _snap(self, rows: LogRows) -> Alarm:
+        """The snap alarm (see the module's notes); rows without the tension leave it be."""
+        if not rows.layout.has("wire_tension"):
+            return self._snap_alarm
+        tension = np.array(rows["wire_tension"], dtype=float).reshape(len(rows))
+        if self.support_depth_m is not None:
+            bottom_m = rows["tree_eta_n"][:, 2] + self.tree_half_height_m
+            tension[bottom_m >= self.support_depth_m] = self.weight_newton
+        for event in self._wire_watch.feed(rows.t_s, tension):
+            if event.kind == "snap":
+                self._snap_until_s = event.t_s + self.limits.snap_show_s
+                ratio = event.tension_newton / self.weight_newton
+                self._snap_alarm = Alarm(
+                    "wire_snap",
+                    True,
+                    f"{event.tension_newton / 1e3:.1f} kN, {ratio:.2f} x the static tension, "
+                    f"at {event.t_s:.1f} s",
+                )
+        self._wire_watch.events.clear()  # only the newest matter here; bounded memory
+        if self._snap_alarm.active and self._t_s >= self._snap_until_s:
+            self._snap_alarm = Alarm("wire_snap", False, "")
+        return self._snap_alarm
 
     def _innovation(self, rows: LogRows) -> Alarm:
         if not self.uses_sensors:

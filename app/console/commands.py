@@ -10,7 +10,7 @@ import numbers
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Future
 from dataclasses import dataclass
-from typing import Protocol
+from typing import ClassVar, Protocol
 
 import numpy as np
 
@@ -19,6 +19,7 @@ from app.console.session import PreparedRun, Session
 from app.recording import SessionData
 from app.recording.notes import NOTE_KIND, note_author, note_text
 from control.config import Allocation, Gains, Mode
+from control.simulation import WINCH_RATE_MAX_MPS, WIRE_LENGTH_RANGE_M, Simulation
 
 SPEED_MIN, SPEED_MAX = 0.25, 50.0
 """Simulated seconds per wall-clock second the loop can run at."""
@@ -286,6 +287,107 @@ class MoveVessel:
             {"north_m": self.north_m, "east_m": self.east_m, "speed_mps": self.speed_mps},
         )
         return {"north_m": self.north_m, "east_m": self.east_m}
+
+
+# ---------------------------------------------------------------------- the winch station
+WINCH_SPEED_MAX_MPS = WINCH_RATE_MAX_MPS
+"""Fastest the winch station pays out or hauls in [m/s]: the simulation's winch limit."""
+WINCH_DISTANCE_MAX_M = 1000.0
+"""Longest one pay-out or haul-in the station asks for [m] (none given: until stopped)."""
+
+
+def winch_state(sim: Simulation) -> dict[str, object]:
+    """What a winch command answers: the payout, where the winch is going and how fast."""
+    return {
+        "payout_m": float(sim.wire_length_m),
+        "target_m": sim.winch_target_m,
+        "rate_mps": sim.winch_rate_mps,
+        "moving": not sim.winch_idle,
+        "heave_compensation": sim.heave_compensation,
+    }
+
+
+@dataclass(frozen=True)
+class _WinchRun:
+    """Run the winch at ``speed_mps`` for ``distance_m`` (None: until stopped, or until the
+    wire's end of travel, ``WIRE_LENGTH_RANGE_M``). Not while a mission runs its legs (its
+    dock legs drive the winch): abort it first."""
+
+    speed_mps: float
+    distance_m: float | None = None
+    direction: ClassVar[float] = 1.0
+    """+1 pays out (the tree goes down), -1 hauls in."""
+
+    def __post_init__(self) -> None:
+        number("speed_mps", self.speed_mps, 0.0, WINCH_SPEED_MAX_MPS, "m/s", lo_open=True)
+        if self.distance_m is not None:
+            number("distance_m", self.distance_m, 0.0, WINCH_DISTANCE_MAX_M, "m", lo_open=True)
+
+    def apply(self, loop: LoopControls) -> object:
+        eng = loop.session
+        eng.require_no_mission("winch")
+        sim = eng.sim
+        lo, hi = WIRE_LENGTH_RANGE_M
+        now = float(sim.wire_length_m)
+        far = math.inf if self.distance_m is None else self.distance_m
+        target = min(max(now + self.direction * far, lo), hi)
+        if abs(target - now) < 1e-6:
+            end = "paid out to its end" if self.direction > 0 else "hauled in to its end"
+            raise ConsoleError(f"winch: the wire is {end} ({target:g} m of [{lo:g}, {hi:g}] m)")
+        sim.winch_to(target, self.speed_mps)
+        eng.note("command", describe_winch(self), {"target_m": target, "speed_mps": self.speed_mps})
+        return winch_state(sim)
+
+
+def describe_winch(command: _WinchRun) -> str:
+    way = "pay out" if command.direction > 0 else "haul in"
+    far = "until stopped" if command.distance_m is None else f"{command.distance_m:g} m"
+    return f"winch {way} {far} at {command.speed_mps:g} m/s"
+
+
+@dataclass(frozen=True)
+class WinchPayOut(_WinchRun):
+    """Pay out: the tree goes down."""
+
+    direction: ClassVar[float] = 1.0
+
+
+@dataclass(frozen=True)
+class WinchHaulIn(_WinchRun):
+    """Haul in: the tree comes up."""
+
+    direction: ClassVar[float] = -1.0
+
+
+@dataclass(frozen=True)
+class WinchStop:
+    """Stop the winch where it is. Allowed while a mission runs (the all-stop is always the
+    winch operator's); a dock leg waiting for its payout then waits until its timeout."""
+
+    def apply(self, loop: LoopControls) -> object:
+        eng = loop.session
+        sim = eng.sim
+        sim.winch_to(float(sim.wire_length_m), sim.winch_rate_mps or WINCH_SPEED_MAX_MPS)
+        eng.note("command", "winch stop", {"payout_m": float(sim.wire_length_m)})
+        return winch_state(sim)
+
+
+@dataclass(frozen=True)
+class HeaveCompensation:
+    """The crane's active heave compensation on or off (``Simulation.set_heave_compensation``;
+    refused when the crane tip does not heave in this run)."""
+
+    on: bool
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.on, bool):
+            raise ValueError("heave compensation 'on' must be true or false")
+
+    def apply(self, loop: LoopControls) -> object:
+        eng = loop.session
+        eng.sim.set_heave_compensation(self.on)
+        eng.note("command", f"heave compensation {'on' if self.on else 'off'}", {"on": self.on})
+        return winch_state(eng.sim)
 
 
 # ---------------------------------------------------------------------- recording, replay

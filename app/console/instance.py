@@ -19,7 +19,7 @@ from app.console.errors import ConsoleError
 from app.console.loop import PacedLoop
 from app.console.session import PreparedRun, Session, prepare_run, station_keeping_mission
 from app.console.settings import ConsoleSettings
-from app.console.tokens import GuessLimit
+from app.console.tokens import CREW_ROLES, GuessLimit
 from missions import schema
 from sim import params as params_mod
 
@@ -76,11 +76,46 @@ class Console:
             return False, 0.0
         if self.is_token(candidate):
             return True, 0.0
+        if self.crew_role(candidate) is not None:
+            return False, 0.0  # a crew member's own token: refused, but no guess
         wait = self.guesses.retry_after_s(client)
         if wait > 0.0:
             return False, wait
         self.guesses.failed(client)
         return False, 0.0
+
+    # ----------------------------------------------------------- the crew's stations
+    def crew_role(self, candidate: str | None) -> str | None:
+        """The crew station (``tokens.CREW_ROLES``) whose token this is, else None (each
+        compared in constant time)."""
+        found = None
+        for role in CREW_ROLES:
+            wanted = getattr(self.settings, f"{role}_token")
+            if (
+                candidate
+                and wanted
+                and secrets.compare_digest(str(candidate).encode(), str(wanted).encode())
+            ):
+                found = role
+        return found
+
+    def check_station(self, role: str, candidate: str | None, client: str) -> tuple[str, float]:
+        """May ``candidate`` open the ``role`` station? ('ok' | 'missing' | 'another' | 'wrong',
+        seconds the client must wait). The station's own token and the console token open it
+        (the console token changes everything in the run already); another station's token,
+        or the instructor's, is refused but no guess; anything else counts against the client,
+        as for the console token, and the right token is accepted during a lockout."""
+        if not candidate:
+            return "missing", 0.0
+        if self.crew_role(candidate) == role or self.is_token(candidate):
+            return "ok", 0.0
+        if self.crew_role(candidate) is not None or self.is_instructor_token(candidate):
+            return "another", 0.0
+        wait = self.guesses.retry_after_s(client)
+        if wait > 0.0:
+            return "wrong", wait
+        self.guesses.failed(client)
+        return "wrong", 0.0
 
     def debrief_ticket(self) -> str:
         """A ticket that opens debrief reports for ``DEBRIEF_TICKET_S``: the 3D view puts it
@@ -112,8 +147,9 @@ class Console:
         )
 
     def check_instructor(self, candidate: str | None, client: str) -> tuple[str, float]:
-        """('ok' | 'off' | 'missing' | 'console token' | 'wrong', seconds the client must wait).
-        As for the console token: no token and the console token are no guesses, the right
+        """('ok' | 'off' | 'missing' | 'console token' | 'crew token' | 'wrong', seconds the
+        client must wait). As for the console token: no token, the console token and the
+        crew's tokens are no guesses, the right
         token is accepted during a lockout, and wrong ones count against the client (one
         guess limit for both tokens)."""
         wanted = self.settings.instructor_token
@@ -125,6 +161,8 @@ class Console:
             return "ok", 0.0
         if self.is_token(candidate):
             return "console token", 0.0
+        if self.crew_role(candidate) is not None:
+            return "crew token", 0.0  # a crew member's own token: refused, but no guess
         wait = self.guesses.retry_after_s(client)
         if wait > 0.0:
             return "wrong", wait

@@ -70,9 +70,10 @@ def _value_text(value: object) -> str:
 
 def trainee_of(who: str) -> str:
     """The trainee behind an operations-log name: the name typed in the page ("viewer 3
-    (Anna)" -> "Anna", the pilot page's "pilot (Anna)" -> "Anna"), else the sender as logged
+    (Anna)" -> "Anna", the pilot page's "pilot (Anna)" -> "Anna", the crew's stations' "winch
+    (Anna)" and "supervisor (Anna)" alike), else the sender as logged
     ("API 127.0.0.1", "viewer 3")."""
-    match = re.fullmatch(r"(?:viewer \d+|pilot) \((.+)\)", who)
+    match = re.fullmatch(r"(?:viewer \d+|pilot|winch|supervisor) \((.+)\)", who)
     return match.group(1) if match else who
 
 

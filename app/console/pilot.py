@@ -46,7 +46,23 @@ def pilot_status(sim: Simulation) -> dict[str, object]:
         "depth_m": float(rov[2]),
         "surge_mps": float(sim.plant_state[18]),
         "t_s": sim.t_s,
+        "thrusters_out": thrusters_out(sim),
     }
+
+
+THRUSTER_WEAK_SHARE = 0.95
+"""A thruster giving less than this share of its thrust shows on the pilot page [-]."""
+
+
+def thrusters_out(sim: Simulation) -> list[dict[str, float]]:
+    """The thrusters whose drives report less thrust than their speed should give (a lost
+    or weakened thruster, an instructor's fault), 1-based, with the share they give: what a
+    work-class ROV's thruster telemetry tells its pilot (the control system is not told)."""
+    return [
+        {"number": i + 1, "share": round(float(share), 2)}
+        for i, share in enumerate(sim.thruster_health)
+        if share < THRUSTER_WEAK_SHARE
+    ]
 
 
 def autopilot_mode(sim: Simulation) -> str:

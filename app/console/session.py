@@ -41,6 +41,7 @@ from app.console.snapshot import (
     frozen_copy,
     row_view,
     scene_info,
+    winch_view,
 )
 from app.console.texts import alarm_title
 from app.console.viewer_replay import recording_scene
@@ -617,6 +618,7 @@ class Session:
             trend=self._trend(),
             faults=fault_views(sim) if sim.faults else (),
             fault_log=tuple(sim.fault_events[-FAULT_LOG_KEEP:]),
+            winch=winch_view(sim),
         )
 
     def start_live_feed(self, port: int, host: str) -> LiveFeed:

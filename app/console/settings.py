@@ -11,7 +11,12 @@ from pathlib import Path
 from urllib.parse import urlsplit
 
 from app.console.commands import SPEED_MAX, SPEED_MIN
-from app.console.tokens import MIN_INSTRUCTOR_TOKEN_CHARS, MIN_TOKEN_CHARS
+from app.console.tokens import (
+    CREW_TOKEN_FIELDS,
+    MIN_INSTRUCTOR_TOKEN_CHARS,
+    MIN_TOKEN_CHARS,
+    check_crew_tokens,
+)
 
 
 @dataclass(frozen=True)
@@ -29,6 +34,11 @@ class ConsoleSettings:
     instructor_token: str | None = None
     """Token of the instructor (faults); None: the instructor's features are off (the API
     answers 403 saying how to turn them on; the page's instructor tab says the same)."""
+    winch_token: str | None = None
+    """Token of the winch station (GET /winch); None: only the console token opens it."""
+    supervisor_token: str | None = None
+    """Token of the supervisor's station (GET /supervisor: watch, pause, resume); None: only
+    the console token opens it."""
     params: str = "full-scale"
     """Parameter set when no mission is given."""
     mission: str | None = None
@@ -98,6 +108,9 @@ class ConsoleSettings:
                 )
             if t == self.token:
                 raise ValueError("instructor_token must differ from the console token")
+        check_crew_tokens(
+            {n: getattr(self, n) for n in ("token", "instructor_token", *CREW_TOKEN_FIELDS)}
+        )
         if not (math.isfinite(self.speed) and SPEED_MIN <= self.speed <= SPEED_MAX):
             raise ValueError(f"speed must be in [{SPEED_MIN}, {SPEED_MAX}], got {self.speed}")
         if not (math.isfinite(self.depth_m) and 5.0 < self.depth_m <= 4000.0):

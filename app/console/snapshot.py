@@ -21,6 +21,7 @@ from control.config import MODES, Gains
 from control.faults import FAULT_KINDS
 from sim.docking import DockingFrame, DockingLayout
 from sim.drawing import rov_drawing_box_m
+from sim.gnc import Rzyx
 from sim.params import ParameterSet
 
 if TYPE_CHECKING:
@@ -76,6 +77,37 @@ def fault_views(sim: Simulation) -> tuple[FaultView, ...]:
             )
         )
     return tuple(out)
+
+
+@dataclass(frozen=True)
+class WinchView:
+    """The winch as the winch station shows it (``winch_view``)."""
+
+    payout_m: float
+    """Wire paid out (unstretched) [m]."""
+    target_m: float
+    """Payout the winch is going to [m]."""
+    rate_mps: float
+    """Its speed while it moves [m/s]."""
+    moving: bool
+    heave_compensation: bool | None
+    """The crane's heave compensation on; None: the crane tip does not heave (no sea)."""
+    tree_down_speed_mps: float
+    """The tree's vertical speed, down positive (NED) [m/s]."""
+
+
+def winch_view(sim: Simulation) -> WinchView:
+    """The winch and the tree's vertical speed, read on the loop task."""
+    x = sim.plant_state
+    down_speed = float((Rzyx(*x[3:6]) @ x[6:9])[2])
+    return WinchView(
+        float(sim.wire_length_m),
+        sim.winch_target_m,
+        sim.winch_rate_mps,
+        not sim.winch_idle,
+        sim.heave_compensation,
+        down_speed,
+    )
 
 
 @dataclass(frozen=True)
@@ -209,6 +241,8 @@ class Snapshot:
     to the instructor alone)."""
     fault_log: tuple[tuple[float, str], ...] = ()
     """The latest fault starts and ends, (time [s], what) (instructor only)."""
+    winch: WinchView | None = None
+    """The winch (None in a replay)."""
 
     @property
     def active_alarms(self) -> tuple[Alarm, ...]:

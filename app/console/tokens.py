@@ -15,6 +15,13 @@ MIN_INSTRUCTOR_TOKEN_CHARS = 8
 the console token)."""
 INSTRUCTOR_TOKEN_ENV = "ROV_CONSOLE_INSTRUCTOR_TOKEN"
 """Environment variable ``rov-console serve`` reads the instructor token from."""
+CREW_ROLES = ("winch", "supervisor")
+"""The crew's stations with a token of their own (``serve --winch-token``,
+``--supervisor-token``): each opens its station and nothing else."""
+CREW_TOKEN_FIELDS = tuple(f"{role}_token" for role in CREW_ROLES)
+"""Their fields in ``ConsoleSettings``."""
+CREW_TOKEN_ENV = {role: f"ROV_CONSOLE_{role.upper()}_TOKEN" for role in CREW_ROLES}
+"""Environment variables ``rov-console serve`` reads the crew's tokens from."""
 GUESS_LIMIT = 10
 """Wrong tokens one client may send within the window before it is locked out."""
 GUESS_WINDOW_S = 60.0
@@ -54,3 +61,23 @@ class GuessLimit:
         while failures and failures[0] < self._clock() - self.window_s:
             failures.popleft()
         return failures
+
+
+def check_crew_tokens(tokens: dict[str, str | None]) -> None:
+    """ValueError naming the field when a crew token (``{role}_token``) is too short, has
+    spaces or unprintable characters, or equals another of the console's ``tokens`` (each
+    token must open one thing only)."""
+    for role in CREW_ROLES:
+        t = tokens.get(f"{role}_token")
+        if t is not None and (
+            len(t) < MIN_INSTRUCTOR_TOKEN_CHARS or not t.isprintable() or " " in t
+        ):
+            raise ValueError(
+                f"{role}_token must have at least {MIN_INSTRUCTOR_TOKEN_CHARS} printable "
+                "characters and no spaces"
+            )
+    given = [(name, t) for name, t in tokens.items() if t is not None]
+    for i, (name, t) in enumerate(given):
+        for other, u in given[i + 1 :]:
+            if t == u and (name in CREW_TOKEN_FIELDS or other in CREW_TOKEN_FIELDS):
+                raise ValueError(f"{name} and {other} must differ")
