@@ -98,6 +98,37 @@ def auc(clean: list[float], faulted: list[float]) -> float:
     return float(np.mean((c > f) + 0.5 * (c == f)))
 
 
+def total_without(scores: dict[str, float | None], left_out: str | None) -> float | None:
+    """The weighted total of a run's criterion scores with one criterion left out (None:
+    none), with the default weights."""
+    from app.assessment import default_criteria
+
+    judged = [
+        (c.weight, scores[c.name])
+        for c in default_criteria()
+        if c.name != left_out and scores.get(c.name) is not None and c.weight > 0
+    ]
+    weight = sum(w for w, _ in judged)
+    return sum(w * (s or 0.0) for w, s in judged) / weight if weight > 0 else None
+
+
+def auc_without(rows: list[dict], left_out: str) -> float:
+    """The AUC with one criterion left out of the totals."""
+    clean = [total_without(r["scores"], left_out) or 0.0 for r in rows if not r["fault"]]
+    faulted = [total_without(r["scores"], left_out) or 0.0 for r in rows if r["fault"]]
+    return auc(clean, faulted)
+
+
+def auc_alone(rows: list[dict], name: str) -> float:
+    """The AUC of one criterion's score alone (a run not judged on it counts 100)."""
+
+    def score(r: dict) -> float:
+        value = r["scores"].get(name)
+        return 100.0 if value is None else float(value)
+
+    return auc([score(r) for r in rows if not r["fault"]], [score(r) for r in rows if r["fault"]])
+
+
 def summarise(rows: list[dict]) -> dict:
     clean = {r["case"]: r["total"] for r in rows if not r["fault"]}
     faulted = [r for r in rows if r["fault"]]
@@ -126,6 +157,8 @@ def summarise(rows: list[dict]) -> dict:
             kind: {n: float(100.0 - np.mean(v)) for n, v in per.items() if np.mean(v) < 100.0}
             for kind, per in sorted(fell.items())
         },
+        "auc_without": {name: auc_without(rows, name) for name in rows[0]["scores"]},
+        "auc_alone": {name: auc_alone(rows, name) for name in rows[0]["scores"]},
         "rows": [
             {"case": r["case"], "fault": r["fault"], "total": r["total"], "landed": r["landed"]}
             for r in rows
@@ -190,6 +223,11 @@ def main() -> None:
         f"clean mean {summary['clean_total_mean']:.1f} (min {summary['clean_total_min']:.1f}), "
         f"faulted mean {summary['faulted_total_mean']:.1f}"
     )
+    for what in ("without", "alone"):
+        print(
+            f"  AUC, each criterion {'left out' if what == 'without' else 'alone'}: "
+            + ", ".join(f"{n} {v:.3f}" for n, v in summary[f"auc_{what}"].items())
+        )
     for kind, mean in summary["by_kind"].items():
         lost = ", ".join(f"{n} -{v:.0f}" for n, v in summary["lost_by_kind"][kind].items())
         print(f"  {kind:22s} mean total {mean:5.1f}  ({lost})")

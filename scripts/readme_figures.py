@@ -747,6 +747,16 @@ def render_assessment(res: Results) -> str:
         lost = res["lost_by_kind"].get(kind, {})
         words = ", ".join(f"{n} {v:.0f}" for n, v in lost.items()) or "none"
         rows.append(f"| `{kind}` | {res['runs_by_kind'][kind]} | {mean:.1f} | {words} |")
+    if "auc_alone" in res:
+        rows += [
+            "",
+            "What each criterion adds: the AUC of its score alone, and of the total without it.",
+            "",
+            "| criterion | AUC alone | AUC of the total without it |",
+            "|---|---|---|",
+        ]
+        for name, alone in res["auc_alone"].items():
+            rows.append(f"| `{name}` | {alone:.3f} | {res['auc_without'][name]:.3f} |")
     return "\n".join(rows)
 
 
