@@ -311,20 +311,15 @@ class Simulation:
 
     @property
     def heave_compensation(self) -> bool | None:
-        """The crane's active heave compensation is on (``sim.vessel.VesselMotion``); None
-        when the crane tip does not heave (no sea or no vessel motion in this run)."""
-        motion = self.site.vessel_motion
-        return None if motion is None or self.site.wave_field is None else motion.heave_compensation
+        """The crane's active heave compensation is on (or fading in); None when the crane
+        tip does not heave (no sea or no vessel motion in this run)."""
+        return self.site.heave_compensation
 
     def set_heave_compensation(self, on: bool) -> None:
-        """Turn the crane's heave compensation on or off, from the next chunk; ValueError when
+        """Turn the crane's heave compensation on or off: it fades in or out over two peak
+        periods of the sea from now (``SiteMotion.set_heave_compensation``); ValueError when
         the crane tip does not heave in this run (no sea or no vessel motion)."""
-        motion = self.site.vessel_motion
-        if motion is None or self.site.wave_field is None:
-            raise ValueError(
-                "heave compensation: the crane tip does not heave in this run (no sea)"
-            )
-        self.site.vessel_motion = replace(motion, heave_compensation=bool(on))
+        self.site.set_heave_compensation(bool(on), self.t_s)
 
     @property
     def thruster_health(self) -> FloatArray:

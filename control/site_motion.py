@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -145,6 +146,8 @@ class SiteMotion:
         """How the waves load the bodies (sim.environment.WAVE_LOADS)."""
         self.vessel_motion = vessel
         """The vessel's wave-frequency motion at the crane tip (None: the tip stands still)."""
+        self.compensation: vesselmod.CompensationRamp | None = None
+        """The heave compensation as switched during the run (None: as the mission set it)."""
         self.vessel_ramp_s = (
             vesselmod.ramp_time_s(waves.peak_period_s)
             if vessel is not None and waves is not None
@@ -152,6 +155,11 @@ class SiteMotion:
         )
         """The vessel's motion grows in over this long from t = 0 [s] (``sim.vessel.ramp_in``,
         two peak periods of the sea; 0: no vessel motion or no ramp)."""
+        self.compensation_ramp_s = (
+            vesselmod.ramp_time_s(waves.peak_period_s) if waves is not None else 0.0
+        )
+        """The heave compensation fades in or out over this long when switched [s]: as the
+        vessel's ramp-in, two peak periods, far slower than the wire's axial bounce."""
         self.crane_tip_n = crane_tip_n
         self.wire_length_m = self.wire_length_for_depth(tree_depth_m)
         self.crane_target_n = self.crane_tip_n.copy()
@@ -398,14 +406,49 @@ class SiteMotion:
         keeps station) is unchanged."""
         if self.vessel_motion is None or self.wave_field is None:
             return
-        env[:, plant.E_CT : plant.E_CT + 3] += vesselmod.crane_tip_motion_n(
+        t = self.times(k0, len(env))
+        tip = vesselmod.crane_tip_motion_n(
             self.wave_field,
-            self.times(k0, len(env)),
+            t,
             self.vessel_motion,
             float(self._refresh_point[3]),
             float(self._refresh_point[4]),
             self.vessel_ramp_s,
         )
+        if self.compensation is not None:  # switched during the run: the motion is without
+            tip[:, 2] *= self.compensation.z_factor(t)
+        env[:, plant.E_CT : plant.E_CT + 3] += tip
+
+    def set_heave_compensation(self, on: bool, t_s: float) -> None:
+        """Fade the heave compensation in (``on``) or out from ``t_s`` over
+        ``compensation_ramp_s`` (``sim.vessel.CompensationRamp``), from where it stands; the
+        vessel's motion is from then on the uncompensated one, scaled by the ramp."""
+        motion = self.vessel_motion
+        if motion is None or self.wave_field is None:
+            raise ValueError(
+                "heave compensation: the crane tip does not heave in this run (no sea)"
+            )
+        if self.compensation is not None:
+            share = float(self.compensation.share(t_s))
+        else:
+            share = 1.0 if motion.heave_compensation else 0.0
+        self.vessel_motion = replace(motion, heave_compensation=False)
+        self.compensation = vesselmod.CompensationRamp(
+            t_s,
+            share,
+            1.0 if on else 0.0,
+            self.compensation_ramp_s,
+            motion.heave_compensation_efficiency,
+        )
+
+    @property
+    def heave_compensation(self) -> bool | None:
+        """On (switching on), off (switching off), or None: the crane tip does not heave."""
+        if self.vessel_motion is None or self.wave_field is None:
+            return None
+        if self.compensation is not None:
+            return self.compensation.to_share > 0.5
+        return self.vessel_motion.heave_compensation
 
     def _elastic_wire_in_chunk(self, env: FloatArray) -> None:
         """The elastic wire's entries: the lumped wire mass m_wire L / 3 (L the payout at the

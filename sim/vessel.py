@@ -230,6 +230,33 @@ def ramp_in(t_s: ArrayLike, ramp_s: float) -> FloatArray:
     return 0.5 * (1.0 - np.cos(np.pi * x))
 
 
+@dataclass(frozen=True)
+class CompensationRamp:
+    """The heave compensation switched on or off while the vessel moves: its share of
+    ``efficiency`` goes from ``from_share`` to ``to_share`` (0 off, 1 on) along ``ramp_in``
+    over ``ramp_s`` from ``t0_s``. Switched at once, the crane tip's heave would step (by up
+    to the compensated part of its displacement) and the tree snap on the wire; a real active
+    compensation also fades in and out. The tip's vertical displacement is the uncompensated
+    one times ``z_factor`` (the compensation scales only the vertical, ``crane_tip_raos_n``)."""
+
+    t0_s: float
+    from_share: float
+    to_share: float
+    ramp_s: float
+    efficiency: float
+
+    def share(self, t_s: ArrayLike) -> FloatArray:
+        """The compensation's share at times t_s [s], in [0, 1]."""
+        t = np.asarray(t_s, dtype=np.float64)
+        return self.from_share + (self.to_share - self.from_share) * ramp_in(
+            t - self.t0_s, self.ramp_s
+        )
+
+    def z_factor(self, t_s: ArrayLike) -> FloatArray:
+        """What is left of the uncompensated vertical displacement at times t_s [-]."""
+        return 1.0 - self.efficiency * self.share(t_s)
+
+
 def crane_tip_motion_n(
     field: envmod.WaveField,
     t_s: ArrayLike,
