@@ -15,7 +15,7 @@ from __future__ import annotations
 import csv
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -146,24 +146,34 @@ def from_recording(path: Path) -> ShadowSource:
         notes.append(f"rows every {np.median(np.diff(t)):.3g} s, the controller's step "
                      f"{start.dt_s:g} s: each row held to the next, so the shadow is not exact "
                      "(record with run --log-rate for a step-exact shadow)")  # fmt: skip
-    use_ff = bool(start.C.use_ff)
-    if use_ff:
+    spring = _recorded_spring(rec, sim, start.dt_s)
+    if start.C.use_ff:
         acc = reference_acceleration_from_feedforward(
             rec["control_terms"][:, 9:12], rec["eta_hat_n"][:, 2], rec["eta_ref_n"],
-            rec["eta_ref_rate_n"], start.C,
+            rec["eta_ref_rate_n"], start.C, spring,
         )  # fmt: skip
     else:  # the law without feedforward does not read the acceleration
         acc = np.zeros((len(t), 3))
     reference = np.hstack([rec["eta_ref_n"], rec["eta_ref_rate_n"], acc])
     y = rec["y"][index]
+    t_steps = np.arange(len(index)) * start.dt_s + (t[0] - start.dt_s)
+    restart = np.zeros(len(index), dtype=np.bool_)
+    for event in data.events:  # the observer starts again at a grip (missions.legs' hookup)
+        k = int(round((float(event["t_s"]) - t_steps[0]) / start.dt_s))
+        if event.get("kind") == "hookup" and 0 < k < len(index):
+            restart[k] = True
     inputs = ShadowInput(
-        t_s=np.arange(len(index)) * start.dt_s + (t[0] - start.dt_s),
+        t_s=t_steps,
         y=y,
         fresh=fresh_from_changes(y, start.held_y),
         tau_ach_b=rec["tau_rov_ach_b"][index],
         mode=rec["mode"][index].astype(np.int64),
         reference=reference[index],
         has_reference=np.ones(len(index), dtype=np.bool_),
+        handover_command_b=_handover_commands(rec, index),
+        spring=spring[index],
+        heave_newton=_recorded_heave(rec, start)[index],
+        restart=restart,
     )
     return ShadowSource(
         name=str(path), inputs=inputs, start=start, row_steps=row_steps, recorded=rec,
@@ -171,12 +181,69 @@ def from_recording(path: Path) -> ShadowSource:
     )  # fmt: skip
 
 
+def _payout_m(rest_length_m: float, w: float, axial_stiffness: float) -> float:
+    """The wire's payout L whose stretched length L + w L^2 / (2 EA) is the row's rest length
+    (``sim.site.wire_entries_into``), to the last bit where one gives it back."""
+    a = 0.5 * w / axial_stiffness
+    payout = 2.0 * rest_length_m / (1.0 + math.sqrt(1.0 + 4.0 * a * rest_length_m))
+    best = payout
+    for candidate in (payout, np.nextafter(payout, 0.0), np.nextafter(payout, np.inf)):
+        if candidate + 0.5 * w * (candidate * candidate) / axial_stiffness == rest_length_m:
+            best = float(candidate)
+    return best
+
+
+def _recorded_spring(rec: LogRows, sim, dt_s: float) -> FloatArray:
+    """(n, 3) the control model's wire spring each row's step ran with, [k_h, p_eq north,
+    east] (``sim.site.chunk_rows_into``): refreshed at the steps on whole seconds from the
+    payout and crane tip where that step starts (the row before's end), held in between."""
+    from sim import site
+    from sim import wire as wm
+
+    wire = site.wire_site(sim.plant_ps)
+    w_spring = float(sim.plant_ps.wire.submerged_weight_per_length())
+    weight = float(sim.ps.tree.submerged_weight_newton)
+    n = len(rec)
+    step = np.round((rec.t_s - dt_s) / dt_s).astype(np.int64)
+    refresh = np.flatnonzero((step % sim.refresh_steps == 0) & (np.arange(n) > 0))
+    spring = np.full((n, 3), np.nan)
+    spring[0] = (sim.C.k_h, *sim.C.p_eq)
+    rest = rec["wire_rest_length"][refresh - 1]
+    payouts = {r: _payout_m(float(r), wire.w, wire.EA) for r in np.unique(rest)}
+    spring[refresh, 0] = [wm.horizontal_stiffness_c(w_spring, weight, payouts[r]) for r in rest]
+    spring[refresh, 1:3] = rec["crane_tip_ne"][refresh - 1]
+    filled = np.flatnonzero(~np.isnan(spring[:, 0]))
+    return spring[filled[np.searchsorted(filled, np.arange(n), side="right") - 1]]
+
+
+def _handover_commands(rec: LogRows, index: NDArray[np.intp]) -> FloatArray:
+    """(steps, 6) at each step whose mode is not the step before's, the wrench the row before
+    commanded (ROV axes); NaN elsewhere."""
+    mode = rec["mode"][index]
+    out = np.full((len(index), 6), np.nan)
+    change = np.flatnonzero(mode[1:] != mode[:-1]) + 1
+    out[change] = rec["tau_rov_cmd_b"][index[change - 1]]
+    return out
+
+
+def _recorded_heave(rec: LogRows, start: ShadowStart) -> FloatArray:
+    """(n,) the heave force on the tree the rows command [N] (the tree controller's heave
+    command is it), held through the rows in other modes; the start's before the first."""
+    heave = np.full(len(rec), np.nan)
+    on_tree = rec["mode"] == loop.MODE_TREE
+    heave[on_tree] = rec["tau_rov_cmd_b"][on_tree, 2]
+    if not on_tree[0]:
+        heave[0] = start.C.heave_newton
+    filled = np.flatnonzero(~np.isnan(heave))
+    return heave[filled[np.searchsorted(filled, np.arange(len(heave)), side="right") - 1]]
+
+
 def _started_from(start: ShadowStart, y0: FloatArray, ps) -> ShadowStart:
     """``start`` with the observer started from the measurements ``y0`` (at rest, no bias)."""
     from control.startup import initial_estimate
 
     xhat, p_cov = initial_estimate(np.asarray(y0, dtype=float), start.C, ps)
-    return ShadowStart(start.C, start.P, start.dt_s, xhat, p_cov, start.cs, start.Q, y0.copy())
+    return replace(start, xhat=xhat, P_cov=p_cov, held_y=np.array(y0, dtype=float))
 
 
 # ------------------------------------------------------------------ CSV with a mapping file
@@ -426,7 +493,14 @@ def shadow(source: ShadowSource, mount_m: FloatArray | None = None) -> ShadowRep
     at = source.row_steps
     mine, rec = result.rows, source.recorded
     est = mine["eta_hat_n"][at] - rec["eta_hat_n"]
-    cmd = mine["tau_rov_cmd_b"][at] - rec["tau_rov_cmd_b"]
+    # the free ROV's and the pilot's set points are commands a log does not keep: the
+    # commands are compared where the tree controller ran
+    on_tree = rec["mode"] == loop.MODE_TREE
+    cmd = (mine["tau_rov_cmd_b"][at] - rec["tau_rov_cmd_b"])[on_tree]
+    notes = list(source.notes)
+    if source.has_commands and not on_tree.all():
+        notes.append(f"{int((~on_tree).sum())} rows with the ROV free or flown by hand: their "
+                     "commands (on set points a log does not keep) are not compared")  # fmt: skip
     summary: dict = {
         "source": source.name,
         "samples": int(len(at)),
@@ -442,9 +516,13 @@ def shadow(source: ShadowSource, mount_m: FloatArray | None = None) -> ShadowRep
         ),
         "max_command_difference_newton": (_max_abs(cmd[:, 0:3]) if source.has_commands else None),
         "max_command_difference_newton_m": (_max_abs(cmd[:, 5]) if source.has_commands else None),
-        "nis": {name: nis_consistency(v, name).as_dict() for name, v in nis_values(mine).items()},
+        "nis": {
+            name: nis_consistency(v, name).as_dict()
+            for name, v in nis_values(mine, source.inputs.mode == loop.MODE_TREE).items()
+        },
         "innovation_rms": _innovation_rms(result.innovation),
-        "notes": list(source.notes),
+        "command_samples": int(on_tree.sum()) if source.has_commands else 0,
+        "notes": notes,
     }
     return ShadowReport(source, result, summary)
 
@@ -543,6 +621,7 @@ def shadow_figure(report: ShadowReport, path: Path) -> Path:
     ax = axes[3]
     nis = mine["nis"]
     accepted = mine["accepted"] > 0.5
+    accepted &= (src.inputs.mode == loop.MODE_TREE)[:, None]  # as the statistics
     pos = accepted[:, sensors.POSITION]
     ax.semilogy(t[pos], np.maximum(nis[pos, 0] + nis[pos, 1], 1e-6), ".", ms=2,
                 label="NIS, position (2)")  # fmt: skip

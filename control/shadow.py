@@ -19,6 +19,7 @@ a trial's log has the reference its controller followed, not the commands that m
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, replace
 
@@ -29,8 +30,10 @@ from scipy import stats
 
 from control import loop, pid
 from control.columns import LAYOUT, N_LOG, LogRows
+from control.startup import hookup_estimate
 from sim import plant, sensors
 from sim.gnc import JIT_NOALLOC, ssa_scalar
+from sim.params import ParameterSet
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -68,6 +71,19 @@ class ShadowInput:
     """(n, 9) the reference the controller follows: pose, rate, acceleration, NED [m, rad]."""
     has_reference: BoolArray
     """(n,) False where no reference is known (the controller's own model runs there)."""
+    handover_command_b: FloatArray | None = None
+    """(n, 6) where not NaN: the ROV wrench the recording commanded before this step, which a
+    change of mode hands over from (the bumpless starts read the last command); the
+    shadow's own where NaN or None (ROV axes) [N, N m]."""
+    spring: FloatArray | None = None
+    """(n, 3) the control model's wire spring at each step, [k_h [N/m], p_eq north, east [m]]
+    (``control.jobs.ClosedChunk.spring``); None: the start's throughout."""
+    heave_newton: FloatArray | None = None
+    """(n,) the ROV's heave force while on the tree [N] (``Simulation.set_heave_force``);
+    None: the start's throughout."""
+    restart: BoolArray | None = None
+    """(n,) True where the observer starts again before the step, from the held measurements
+    (a hook-up: ``control.startup.hookup_estimate``, as ``Simulation.reset_observer``)."""
 
 
 def fresh_from_changes(y: FloatArray, held_before: FloatArray | None = None) -> BoolArray:
@@ -103,12 +119,14 @@ def reference_acceleration_from_feedforward(
     eta_d: FloatArray,
     deta_d: FloatArray,
     C: loop.ControlArrays,
+    spring: FloatArray | None = None,
 ) -> FloatArray:
     """(n, 3) the reference's acceleration (NED) that the recorded feedforward term
     ``ff_tree`` (n, 3, tree axes) was made of: ``control.pid.feedforward_into`` solved for
     ``ddeta_d`` given the estimate's heading and the reference's pose and rate. A run's log
     keeps the reference's pose and rate but not its acceleration; this gives it back to
-    rounding (some 1e-12 of the term)."""
+    rounding (some 1e-12 of the term). ``spring`` (n, 3): the control model's wire spring of
+    each row, [k_h, p_eq north, east] (None: C's)."""
     cd, sd = np.cos(eta_d[:, 2]), np.sin(eta_d[:, 2])
     nu0 = cd * deta_d[:, 0] + sd * deta_d[:, 1]
     nu1 = -sd * deta_d[:, 0] + cd * deta_d[:, 1]
@@ -121,8 +139,10 @@ def reference_acceleration_from_feedforward(
     rest[:, 1] += (C.D_l[1] + C.D_nl[1] * np.abs(nu1)) * nu1
     rest[:, 2] += (C.D_l[2] + C.D_nl[2] * np.abs(nu2)) * nu2
     c, s = np.cos(psi_hat), np.sin(psi_hat)
-    sp0 = C.k_h * (eta_d[:, 0] - C.p_eq[0])
-    sp1 = C.k_h * (eta_d[:, 1] - C.p_eq[1])
+    if spring is None:
+        spring = np.tile([C.k_h, C.p_eq[0], C.p_eq[1]], (len(eta_d), 1))
+    sp0 = spring[:, 0] * (eta_d[:, 0] - spring[:, 1])
+    sp1 = spring[:, 0] * (eta_d[:, 1] - spring[:, 2])
     rest[:, 0] += c * sp0 + s * sp1
     rest[:, 1] += -s * sp0 + c * sp1
     acc = np.linalg.solve(M, (ff_tree - rest).T).T  # tree-axis acceleration of the reference
@@ -146,6 +166,8 @@ class ShadowStart:
     Q: loop.QualityState
     held_y: FloatArray
     """The held measurements before the first step."""
+    ps: ParameterSet | None = None
+    """The parameter set the configuration comes from (needed for ``ShadowInput.restart``)."""
 
     @staticmethod
     def of(sim) -> ShadowStart:
@@ -159,6 +181,7 @@ class ShadowStart:
             cs=np.array(sim.controller_state.vector, dtype=float),
             Q=loop.QualityState(*(np.array(a) for a in sim.Q)),
             held_y=np.array(sim.held_y, dtype=float),
+            ps=sim.ps,
         )
 
     def with_mount(self, r_rov_from_tree_tree_m: FloatArray) -> ShadowStart:
@@ -253,7 +276,8 @@ def _prior_innovation_into(
 @njit(**JIT_NOALLOC)
 def shadow_steps(
     t_s: np.ndarray, y: np.ndarray, fresh: np.ndarray, tau_ach: np.ndarray, mode: np.ndarray,
-    reference: np.ndarray, has_reference: np.ndarray, xhat: np.ndarray, Pc: np.ndarray,
+    reference: np.ndarray, has_reference: np.ndarray, handover: np.ndarray, xhat: np.ndarray,
+    Pc: np.ndarray,
     cs: np.ndarray, C: loop.ControlArrays, P: plant.PlantArrays, Q: loop.QualityState,
     dt: float, rows: np.ndarray, innovation: np.ndarray, x: np.ndarray, env: np.ndarray,
     saved_cs: np.ndarray, work: plant.PlantWork, W: loop.ControlWork,
@@ -270,6 +294,9 @@ def shadow_steps(
         env[plant.E_GRIP] = grip
         cs[loop.CS_GRIP] = grip
         cs[loop.CS_MODE] = mode[j]
+        if not np.isnan(handover[j, 0]):
+            for k in range(6):
+                cs[loop.CS_TAU + k] = handover[j, k]
         _prior_innovation_into(innovation[j], held, xhat, fresh[j], C, W)
         for i in range(cs.shape[0]):
             saved_cs[i] = cs[i]
@@ -294,23 +321,51 @@ def run_shadow(inputs: ShadowInput, start: ShadowStart) -> ShadowResult:
     innovation = np.full((n, 3), np.nan)
     xhat, Pc, cs = start.xhat.copy(), start.P_cov.copy(), start.cs.copy()
     Q = loop.QualityState(*(np.array(a) for a in start.Q))
-    shadow_steps(
-        np.ascontiguousarray(inputs.t_s, dtype=float),
-        np.ascontiguousarray(inputs.y, dtype=float),
-        np.ascontiguousarray(inputs.fresh, dtype=np.bool_),
-        np.ascontiguousarray(inputs.tau_ach_b, dtype=float),
-        np.ascontiguousarray(inputs.mode, dtype=np.int64),
-        np.ascontiguousarray(inputs.reference, dtype=float),
-        np.ascontiguousarray(inputs.has_reference, dtype=np.bool_),
-        xhat, Pc, cs, start.C, start.P, Q, start.dt_s, rows, innovation,
-        np.zeros(24), np.zeros(plant.N_ENV), np.zeros(cs.shape[0]),
-        plant.make_work(start.P.thr_T.shape[1]), loop.make_control_work(),
-    )  # fmt: skip
+    t_s = np.ascontiguousarray(inputs.t_s, dtype=float)
+    y = np.ascontiguousarray(inputs.y, dtype=float)
+    fresh = np.ascontiguousarray(inputs.fresh, dtype=np.bool_)
+    tau_ach = np.ascontiguousarray(inputs.tau_ach_b, dtype=float)
+    mode = np.ascontiguousarray(inputs.mode, dtype=np.int64)
+    reference = np.ascontiguousarray(inputs.reference, dtype=float)
+    has_reference = np.ascontiguousarray(inputs.has_reference, dtype=np.bool_)
+    handover = np.full((n, 6), np.nan)
+    if inputs.handover_command_b is not None:
+        handover[:] = inputs.handover_command_b
+    x, env, saved = np.zeros(24), np.zeros(plant.N_ENV), np.zeros(cs.shape[0])
+    work, W = plant.make_work(start.P.thr_T.shape[1]), loop.make_control_work()
+    restarts = [] if inputs.restart is None else np.flatnonzero(inputs.restart).tolist()
+    heave, spring = inputs.heave_newton, inputs.spring
+    changes = [] if heave is None else (np.flatnonzero(np.diff(heave) != 0.0) + 1).tolist()
+    if spring is not None:
+        changes += (np.flatnonzero(np.any(np.diff(spring, axis=0) != 0.0, axis=1)) + 1).tolist()
+    edges = sorted({0, n, *restarts, *changes})
+    for a, b in itertools.pairwise(edges):
+        if a in restarts:
+            xhat, Pc = _restarted(y[a - 1] if a else start.held_y, start, t_s[a], Q)
+        C = start.C if heave is None else start.C._replace(heave_newton=float(heave[a]))
+        if spring is not None:
+            C = C._replace(k_h=float(spring[a, 0]), p_eq=spring[a, 1:3].copy())
+        shadow_steps(
+            t_s[a:b], y[a:b], fresh[a:b], tau_ach[a:b], mode[a:b], reference[a:b],
+            has_reference[a:b], handover[a:b], xhat, Pc, cs, C, start.P, Q, start.dt_s, rows[a:b],
+            innovation[a:b], x, env, saved, work, W,
+        )  # fmt: skip
     result = LogRows(rows)
     accepted = result["accepted"] > 0.5
     innovation[~accepted[:, sensors.POSITION], 0:2] = np.nan
     innovation[~accepted[:, sensors.COMPASS], 2] = np.nan
     return ShadowResult(rows=result, innovation=innovation)
+
+
+def _restarted(
+    held_y: FloatArray, start: ShadowStart, t_s: float, Q: loop.QualityState
+) -> tuple[FloatArray, FloatArray]:
+    """The observer started again at ``t_s`` from ``held_y`` (``Simulation.reset_observer``)."""
+    if start.ps is None:
+        raise ValueError("an observer restart needs the start's parameter set")
+    last_fix_s = float(Q.last_t[sensors.POSITION])
+    xhat, P_cov = hookup_estimate(held_y, start.C, start.ps, t_s, last_fix_s)
+    return xhat, np.ascontiguousarray(P_cov)
 
 
 @dataclass(frozen=True)
@@ -345,10 +400,14 @@ class NisStatistics:
         }
 
 
-def nis_values(rows: LogRows) -> dict[str, FloatArray]:
-    """Each sensor's NIS at the steps its sample was accepted (position: north + east)."""
+def nis_values(rows: LogRows, on_tree: BoolArray | None = None) -> dict[str, FloatArray]:
+    """Each sensor's NIS at the steps its sample was accepted (position: north + east), of the
+    steps ``on_tree`` only when given (the ROV's measurements tell of the tree only while it
+    grips it)."""
     nis = rows["nis"]
     accepted = rows["accepted"] > 0.5
+    if on_tree is not None:
+        accepted = accepted & on_tree[:, None]
     return {
         "position": (nis[:, 0] + nis[:, 1])[accepted[:, sensors.POSITION]],
         "compass": nis[:, 2][accepted[:, sensors.COMPASS]],
