@@ -82,6 +82,9 @@ def test_slip_watch_tells_a_payout_jump_from_the_winch_running() -> None:
     assert text is not None and "jumped +1.00 m at 10.4 s" in text
     assert w.update(20.0, 101.1, 0.5) == text  # shown a while
     assert w.update(45.0, 101.1, 0.5) is None
+    assert w.update(46.0, 102.1, 0.5) is not None
+    assert w.update(0.0, 50.0, 0.5, run=2) is None  # a new run hangs the tree anew
+    assert w.update(0.2, 50.0, 0.5, run=2) is None
 
 
 def test_heave_compensation_fades_in_and_takes_most_of_the_heave_out() -> None:
@@ -265,7 +268,8 @@ def test_winch_operator_pays_out_and_the_log_names_them(client: TestClient) -> N
         "winch pay out: speed_mps 1, distance_m 0.5",
         "winch stop",
     ]
-    assert any(op["outcome"].startswith("refused: heave compensation") for op in mine)
+    refused = [op for op in mine if op["outcome"].startswith("refused: heave compensation")]
+    assert [op["action"] for op in refused] == ["heave compensation on"]
 
 
 def test_the_winch_over_http(client: TestClient) -> None:

@@ -383,10 +383,14 @@ class HeaveCompensation:
         if not isinstance(self.on, bool):
             raise ValueError("heave compensation 'on' must be true or false")
 
+    def summary(self) -> str:
+        """The operations log's words ('heave compensation on', not 'on on')."""
+        return f"heave compensation {'on' if self.on else 'off'}"
+
     def apply(self, loop: LoopControls) -> object:
         eng = loop.session
         eng.sim.set_heave_compensation(self.on)
-        eng.note("command", f"heave compensation {'on' if self.on else 'off'}", {"on": self.on})
+        eng.note("command", self.summary(), {"on": self.on})
         return winch_state(eng.sim)
 
 

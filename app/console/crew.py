@@ -55,10 +55,15 @@ class SlipWatch:
     """(time [s], payout [m]) of the last status."""
     _text: str | None = None
     _until_s: float = -math.inf
+    _run: int = -1
+    """The run (``SceneInfo.version``) the last status came from."""
 
-    def update(self, t_s: float, payout_m: float, rate_mps: float) -> str | None:
+    def update(self, t_s: float, payout_m: float, rate_mps: float, run: int = 0) -> str | None:
         """The slip to show now (None: none): a payout change larger than the winch can
-        travel since the last call plus ``SLIP_MARGIN_M``."""
+        travel since the last call plus ``SLIP_MARGIN_M``, within one ``run`` (a new run,
+        a mission started or the run reset, hangs the tree anew: no slip)."""
+        if run != self._run:
+            self._run, self._last, self._text = run, None, None
         if self._last is not None and t_s >= self._last[0]:
             t0, p0 = self._last
             jump = payout_m - p0
@@ -120,7 +125,7 @@ def winch_status(snap: Snapshot, slips: SlipWatch) -> dict[str, object]:
             "moving": w.moving,
             "heave_compensation": w.heave_compensation,
             "down_speed_mps": w.tree_down_speed_mps,
-            "slip": slips.update(snap.t_s, w.payout_m, w.rate_mps),
+            "slip": slips.update(snap.t_s, w.payout_m, w.rate_mps, snap.scene.version),
         }
     return out
 

@@ -38,7 +38,11 @@ class Operation:
 
 
 def describe(command: object) -> str:
-    """A short account of a command: its name in words and its values."""
+    """A short account of a command: its own ``summary()`` when it has one, else its name in
+    words and its values."""
+    summary = getattr(command, "summary", None)
+    if callable(summary):
+        return str(summary())
     words = re.sub(r"(?<!^)(?=[A-Z])", " ", type(command).__name__).lower()
     if not dataclasses.is_dataclass(command):
         return words
