@@ -376,3 +376,49 @@ def test_a_running_mission_keeps_the_winch_but_not_the_stop(client: TestClient) 
     assert r.json()["detail"] == "winch: mission 'crew-hold' is running; abort it first"
     assert client.post("/api/winch/stop", headers=winch).status_code == 200
     assert client.post("/api/missions/abort", headers=console).status_code == 200
+
+
+SEAWAY_MISSION = """
+format_version = 1
+name = "crew-seaway"
+[setup]
+params = "full-scale"
+depth_m = 100.0
+[setup.waves]
+significant_height_m = 2.0
+peak_period_s = 8.0
+direction_deg = 0.0
+[setup.vessel]
+[[legs]]
+type = "hold"
+duration_s = 600.0
+"""
+
+
+def test_the_winch_station_switches_the_heave_compensation_in_a_sea(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> None:
+    folder = tmp_path_factory.mktemp("seaway")
+    mission = folder / "crew-seaway.toml"
+    mission.write_text(SEAWAY_MISSION)
+    settings = ConsoleSettings(
+        view=False, token=TOKEN, winch_token=WINCH, mission=str(mission), recordings_dir=folder
+    )
+    with (
+        TestClient(create_app(settings), base_url="http://127.0.0.1") as c,
+        c.websocket_connect("ws://127.0.0.1/api/winch") as ws,
+    ):
+        ws.send_json({"type": "hello", "token": WINCH, "name": "Wanda"})
+        assert ws.receive_json()["type"] == "welcome"
+        first = until(ws, lambda m: m["type"] == "status", "a status")["status"]
+        assert first["heave_compensation"] is False and first["mission"] == "crew-seaway"
+        ws.send_json({"type": "compensation", "on": True})
+        done = until(ws, lambda m: m["type"] in ("done", "error"), "the answer")
+        assert done["type"] == "done" and done["result"]["heave_compensation"] is True
+        status = until(ws, lambda m: m["type"] == "status", "a status")["status"]
+        assert status["heave_compensation"] is True
+        ws.send_json({"type": "pay_out", "speed_mps": 0.1})
+        error = until(ws, lambda m: m["type"] == "error", "the refusal")
+        assert error["message"] == "winch: mission 'crew-seaway' is running; abort it first"
+    sim = c.app.state.console.loop.session.sim  # type: ignore[attr-defined]
+    assert sim.heave_compensation is True
