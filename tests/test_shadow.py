@@ -346,3 +346,24 @@ def test_a_ros2_bag_through_its_mapping(storage, wrong_mount_log, tmp_path):
     s = json.loads(result.stdout)
     assert s["nis"]["position"]["verdict"] == "above band"
     assert s["nis"]["position"]["samples"] >= 60
+
+
+def test_run_records_every_step_for_the_shadow(tmp_path):
+    """``run --log-rate 100`` keeps every plant step, and ``shadow`` then reproduces the run."""
+    mission = tmp_path / "hold.toml"
+    data = schema.load_mission("model-step-priority").model_dump()
+    data["setup"]["feedback"] = "ekf"
+    data["legs"] = [{"type": "hold", "name": "hold", "duration_s": 3.0}]
+    mission.write_text(schema.dump_mission(schema.Mission.model_validate(data)))
+    log = tmp_path / "hold.mcap"
+    runner = CliRunner()
+    ran = runner.invoke(
+        app, ["run", str(mission), "--log", str(log), "--log-rate", "100", "--json"]
+    )
+    assert ran.exit_code == 0, ran.output
+    result = runner.invoke(app, ["shadow", str(log), "--json"])
+    assert result.exit_code == 0, result.output
+    s = json.loads(result.stdout)
+    assert s["step_exact"] and s["samples"] == 300
+    assert s["max_estimate_difference_m"] <= ESTIMATE_TOL_M
+    assert s["max_command_difference_newton"] <= COMMAND_TOL_NEWTON
