@@ -18,7 +18,7 @@ from app.console.alarms import AlarmLimits, AlarmMonitor
 from app.console.commands import HeaveCompensation, WinchHaulIn, WinchPayOut
 from app.console.crew import SlipWatch
 from app.console.operations import trainee_of
-from app.server import create_app
+from app.server import create_app, crew_line
 from control.columns import N_LOG, LogRows
 from control.simulation import Simulation
 from sim import environment as envmod
@@ -72,6 +72,12 @@ def test_crew_tokens_are_checked_and_differ() -> None:
     with pytest.raises(ValueError, match="instructor_token and supervisor_token must differ"):
         ConsoleSettings(instructor_token=INSTRUCTOR, supervisor_token=INSTRUCTOR)
     assert trainee_of("winch (Wanda)") == "Wanda" and trainee_of("supervisor (Sam)") == "Sam"
+    both = ConsoleSettings(winch_token=WINCH, supervisor_token=SUPERVISOR)
+    line = crew_line(both)
+    assert (
+        "winch and supervisor tokens set" in line and WINCH not in line and SUPERVISOR not in line
+    )
+    assert "console token" in crew_line(ConsoleSettings())
 
 
 def test_slip_watch_tells_a_payout_jump_from_the_winch_running() -> None:
