@@ -165,7 +165,7 @@ def _run_words(part: RunPart, name: str) -> str:
     what = "its legs" if part.setup.get("legs_run", True) else "set-up only, holding station"
     start = "start" if math.isinf(part.start_s) else f"{part.start_s:.1f} s"
     stop = "end" if math.isinf(part.stop_s) else f"{part.stop_s:.1f} s"
-    return f"run {part.index}: {name} ({what}), {start} to {stop}"
+    return f"run {part.index}: {name} ({what}), {start} to {stop} of the recording"
 
 
 def _mission(meta: dict) -> schema.Mission | None:
@@ -187,6 +187,10 @@ def debrief(path: str | Path) -> Debrief:
     t_all = data.log.t_s
     keep = (t_all >= part.start_s - 1e-9) & (t_all < part.stop_s - 1e-9)
     rows = LogRows(data.log.data[keep], data.log.n_thrusters, layout=data.log.layout)
+    # on the run's own clock, as the console showed it (a run started while recording is on
+    # the recording's axis after the one before: 534.7 s there was the console's 110.6 s)
+    offset = data.run_offset_s(part.index - 1)
+    rows["t_s"][:] -= offset
     if len(rows) < 2:
         raise ValueError(f"{path}: the log holds {len(rows)} rows; a debrief needs two or more")
     t = rows.t_s
@@ -203,7 +207,7 @@ def debrief(path: str | Path) -> Debrief:
     ]
     events = sorted(
         (
-            e
+            {**e, "t_s": float(e["t_s"]) - offset}
             for e in [*data.events, *review_notes]
             if isinstance(e.get("t_s"), int | float)
             and part.start_s - 1e-9 <= e["t_s"] < part.stop_s - 1e-9

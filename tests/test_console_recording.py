@@ -91,8 +91,17 @@ def test_debrief_of_a_console_recording_matches_the_headless_runs(
     assert d.docking[0].heading_rad == pytest.approx(headless.docking[0].heading_rad)
 
     t = d.result.log.t_s if d.result.log is not None else np.zeros(0)
-    start = load_session(path).runs[1]["start_t_s"]
+    data = load_session(path)
+    start = data.runs[1]["start_t_s"] - data.run_offset_s(1)
     assert t[0] == pytest.approx(start, abs=0.06), "rows from the mission's start"
+    # one clock (issue 47 item 22): the run's own time, as the console showed it and as the
+    # headless run records it, not the recording's (20 s of station keeping came first)
+    assert t[0] == pytest.approx(headless.result.log.t_s[0], abs=0.06)
+    assert data.runs[1]["start_t_s"] > t[0] + 19.0
+    theirs_at = {e["kind"]: e["t_s"] for e in headless.events if e["kind"] in ("landing", "dock")}
+    ours_at = {e["kind"]: e["t_s"] for e in d.events if e["kind"] in ("landing", "dock")}
+    for kind, when in theirs_at.items():
+        assert ours_at[kind] == pytest.approx(when, abs=0.06), kind
     ours, theirs = d.result.legs, headless.result.legs
     assert [(leg.index, leg.type, leg.name) for leg in ours] == [
         (leg.index, leg.type, leg.name) for leg in theirs
@@ -162,3 +171,42 @@ def test_alarms_on_when_a_recording_starts_are_in_it(tmp_path: Path) -> None:
     assert {a.name for a in shown if a.active} == set(on)
     replay = Replay(name, data, live.scene, 0.01)
     assert {a.name for a in replay.alarms if a.active} == set(on), "shown from its start"
+
+
+def test_a_console_recordings_log_times_are_the_wall_clocks(tmp_path: Path) -> None:
+    """Issue 47 item 22: a console recording's log times were its start plus the simulated
+    time, so a run at 5x stamped its messages minutes into the future in a reviewer's tool
+    (Foxglove, the mcap CLI order and show messages by log time). They are now the wall clock
+    when each row was simulated (spread over its tick, one time a row) and each event
+    happened; the messages keep their simulation time, and the product's readers read the
+    rows, events and time range as before."""
+    from mcap.reader import make_reader
+
+    from app.recording import check_session
+
+    session = Session(prepare_run(station_keeping_mission("model-scale", 100.0), False), tmp_path)
+    try:
+        before_ns = time.time_ns()
+        name = session.start_recording("wall")
+        for _ in range(20):  # 10 s simulated in a fraction of a second: far faster than 5x
+            session.advance(50)
+        session.note("command", "pause", {})
+        session.stop_recording()
+        after_ns = time.time_ns()
+    finally:
+        session.close()
+    path = tmp_path / name
+    with path.open("rb") as f:
+        stamps = [(ch.topic, m.log_time) for _, ch, m in make_reader(f).iter_messages()]
+    times = [t for _, t in stamps]
+    assert before_ns <= min(times) and max(times) <= after_ns, "none in the future"
+    rows = [t for topic, t in stamps if topic == "/session/log"]
+    assert rows == sorted(rows) and len(set(rows)) == len(rows), "a time a row, in order"
+    data = load_session(path)
+    assert data.t_s[-1] - data.t_s[0] > 9.0, "the rows keep their simulation time"
+    assert not np.isnan(data.rows).any(), "every row whole: its channels joined by log time"
+    assert data.end_time_s == pytest.approx(data.t_s[-1], abs=0.05)
+    report = check_session(path)
+    start_s, end_s = report["time_range_s"]
+    assert start_s == pytest.approx(data.t_s[0], abs=0.05)
+    assert end_s == pytest.approx(data.t_s[-1], abs=0.05)

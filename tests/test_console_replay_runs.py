@@ -130,3 +130,25 @@ def test_recorded_alarms_follow_their_events() -> None:
     assert not any(a.active for a in recorded_alarms(events, -math.inf, 5.0))
     assert any(a.active for a in recorded_alarms(events, 25.0, 35.0))
     assert not any(a.active for a in recorded_alarms(events[:1], 12.0, 15.0))
+
+
+def test_a_replay_shows_the_runs_own_clock(recorded: tuple[SessionData, Snapshot]) -> None:
+    """Issue 47 item 22: the console showed a run's own time (an instructor's "compass freeze
+    from 110.59 s") while a replay of the same run said 534.7 s, the time on the recording's
+    axis, where a run started while recording goes on after the one before. A replay's
+    snapshot (its status line) is on the run's clock; the scrub bar stays on the recording's."""
+    data, live = recorded
+    viewer = ViewerReplay("replay.mcap", data, live, 1)
+    start = _mission_start_s(data)
+    offset = data.run_offset_s(1)
+    assert offset > 19.0, "the mission's run began after 20 s of station keeping"
+    viewer.seek(start + 200.0)
+    snap = viewer.snapshot(live)
+    assert snap.replay is not None
+    assert snap.replay.t_s == pytest.approx(start + 200.0, abs=0.06), "the scrub bar's axis"
+    assert snap.t_s == pytest.approx(start + 200.0 - offset, abs=0.06), "the run's own clock"
+    assert data.run_time_s(1.0) == 1.0, "the first run's clock is the recording's"
+    from web.status import status_markdown
+
+    text = status_markdown(snap, live)
+    assert f"t = {snap.t_s:8.1f} s ({snap.replay.t_s:.1f} s into the recording)" in text

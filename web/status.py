@@ -4,6 +4,7 @@ message line (what the last action did), the operations log and the thrusters' b
 from __future__ import annotations
 
 import html
+import time
 from typing import Any, Literal
 
 import numpy as np
@@ -114,8 +115,15 @@ def status_markdown(snap: Snapshot, live: Snapshot) -> str:
     state = "paused" if snap.paused else f"running x{snap.speed:g}"
     replaying = snap.source == "replay" and snap.replay is not None
     source = f"REPLAY {md_code(snap.replay.name)}" if replaying and snap.replay else "live"
+    # one clock: the run's own time everywhere (a replay's too), the wall clock beside it live
+    where = (
+        f" ({snap.replay.t_s:.1f} s into the recording)"
+        if replaying and snap.replay and abs(snap.replay.t_s - snap.t_s) > 0.05
+        else ""
+    )
+    wall = "" if replaying else time.strftime(", %H:%M:%S UTC", time.gmtime())
     return (
-        f"**{source}** t = {snap.t_s:8.1f} s, {state}  \n"
+        f"**{source}** t = {snap.t_s:8.1f} s{where}{wall}, {state}  \n"
         + (f"live run goes on: t = {live.t_s:.1f} s  \n" if replaying else "")
         + f"tree N {tree[0]:.2f} m, E {tree[1]:.2f} m, heading "
         f"{heading_text(tree[5])}, mode {snap.mode}  \n"

@@ -137,6 +137,9 @@ class Session:
         self._rec_offset_s = 0.0
         """Added to the simulation time in the recording: a run started while recording goes
         on in the same file after the one before."""
+        self._rec_wall: list[tuple[float, int]] = []
+        """(recording time [s], wall clock [ns]) when the rows waiting to be written had been
+        simulated, after the last written (the recording's log times)."""
         self.replay: Replay | None = None
         self.live: LiveFeed | None = None
         """The live feed for Foxglove (``serve --foxglove-port``), when there is one."""
@@ -356,6 +359,9 @@ class Session:
                 )
         if self.recorder is not None:
             self._rec_rows.append(rows.data)
+            # when these rows had been simulated: the recording's log times are the wall
+            # clock's (SessionRecorder's wall_log_times)
+            self._rec_wall.append((float(rows.t_s[-1]) + self._rec_offset_s, time.time_ns()))
             if sum(len(r) for r in self._rec_rows) >= RECORD_FLUSH_ROWS:
                 self.flush_recording()
 
@@ -468,12 +474,14 @@ class Session:
             k += 1
             name = f"{base}-{k}.mcap"
         self._rec_offset_s = 0.0
+        self._rec_wall = [(float(self.sim.t_s), time.time_ns())]
         self.recorder = SessionRecorder(
             recording_path(self.recordings_dir, name),
             metadata=self._run_metadata(label),
             params=self.sim.ps,
             n_thrusters=self.scene.n_thrusters,
             docking=self.scene.frame,
+            wall_log_times=True,
         )
         self.recording_name = name
         self._recording_label = label
@@ -501,6 +509,7 @@ class Session:
             return
         rows = np.vstack(self._rec_rows)
         self._rec_rows = []
+        wall, self._rec_wall = self._rec_wall, self._rec_wall[-1:]
         if self._rec_offset_s:
             rows[:, 0] += self._rec_offset_s  # t_s, the first column (control.columns)
         try:
@@ -509,6 +518,7 @@ class Session:
                 crane_tip_n=self.sim.crane_tip_n.copy(),
                 wire_length_m=float(self.sim.wire_length_m),
                 docking=self.scene.frame,
+                wall=wall,
             )
         except Exception as err:
             self._recording_failed(err)

@@ -71,7 +71,7 @@ def replay_snapshot(rp: Replay, live: Snapshot, speed: float | None = None) -> S
         source="replay",
         paused=not rp.playing,
         speed=live.speed if speed is None else speed,
-        t_s=v.t_s,
+        t_s=rp.data.run_time_s(v.t_s),  # the run's own clock, as the console showed it
         tree_eta_n=v.tree_eta_n,
         rov_eta_n=v.rov_eta_n,
         eta_ref=v.eta_ref,
@@ -149,6 +149,10 @@ class ViewerReplay:
     def status(self) -> ReplayStatus:
         with self._lock:
             return self._replay.status()
+
+    def run_time_s(self, t_s: float) -> float:
+        """Recording time ``t_s`` on the clock of the run going on then, the console's."""
+        return self._replay.data.run_time_s(t_s)
 
     def advance(self, speed: float, now: float | None = None) -> None:
         """Move the replay's clock by the wall time since the last call, times ``speed``."""

@@ -86,6 +86,18 @@ class SessionData:
                 here = k
         return here
 
+    def run_offset_s(self, index: int) -> float:
+        """What run ``index``'s own clock (the simulation time the console showed) is behind
+        the recording's time axis [s]: its ``time_offset_s`` (0 for the first run, and for a
+        file that does not record it)."""
+        run = self.runs[index] if 0 <= index < len(self.runs) else {}
+        offset = run.get("time_offset_s", 0.0)
+        return float(offset) if isinstance(offset, int | float) and math.isfinite(offset) else 0.0
+
+    def run_time_s(self, t_s: float) -> float:
+        """Recording time ``t_s`` on the clock of the run going on then [s]."""
+        return t_s - self.run_offset_s(self.run_index_at(t_s))
+
     def run_at(self, t_s: float) -> dict:
         """The set-up of the run going on at recording time ``t_s`` (the first run before it
         starts; the setup record when the file has no runs)."""
@@ -341,6 +353,26 @@ def time_origin_ns(setup: dict) -> int:
     return int(value) if isinstance(value, int | float) else 0
 
 
+def wall_log_times(setup: dict) -> bool:
+    """Whether a file's log times are the wall clock's (a console's recording since issue 47:
+    when each row was simulated, each event happened), not its origin plus simulation time."""
+    recorder = setup.get("recorder")
+    return isinstance(recorder, dict) and recorder.get("log_time") == "wall"
+
+
+def simulation_times(scan: FileScan, t_s: FloatArray) -> dict[int, float]:
+    """Simulation time [s] of each log time of a file of wall-clock log times: a row's (all
+    its channels share one log time; ``t_s``: the rows', in ``/session/log``'s order) and an
+    event's."""
+    session = scan.messages.get(SESSION_TOPIC, [])
+    out = {m.log_time: float(t) for m, t in zip(session, t_s, strict=True)}
+    for m in scan.messages.get(EVENTS_TOPIC, []):
+        t = json.loads(m.data).get("t_s")
+        if isinstance(t, int | float):
+            out.setdefault(m.log_time, float(t))
+    return out
+
+
 def read_scan(path: str | Path) -> tuple[FileScan, SessionData]:
     """The raw scan of a file and what it holds (for check_session and export_csv)."""
     scan = scan_file(Path(path))
@@ -355,16 +387,23 @@ def read_scan(path: str | Path) -> tuple[FileScan, SessionData]:
     if sources.carried:
         rows = _rebuilt_rows(scan, rows, sources)
     events = [json.loads(m.data) for m in scan.messages.get(EVENTS_TOPIC, [])]
-    ends = [m.log_time for msgs in scan.messages.values() for m in msgs]
+    t_s = layout.take(rows, "t_s").copy()
+    if wall_log_times(setup):
+        times = [float(t) for t in t_s if math.isfinite(t)]
+        times += [float(e["t_s"]) for e in events if isinstance(e.get("t_s"), int | float)]
+        end_s = max(times) if times else math.nan
+    else:
+        ends = [m.log_time for msgs in scan.messages.values() for m in msgs]
+        end_s = (max(ends) - time_origin_ns(setup)) / 1e9 if ends else math.nan
     data = SessionData(
         metadata=setup,
         columns=columns,
-        t_s=layout.take(rows, "t_s").copy(),
+        t_s=t_s,
         rows=rows,
         events=events,
         complete=scan.complete,
         message_counts={t: len(m) for t, m in sorted(scan.messages.items())},
-        end_time_s=(max(ends) - time_origin_ns(setup)) / 1e9 if ends else math.nan,
+        end_time_s=end_s,
         file_bytes=scan.file_bytes,
         intact_bytes=scan.intact_bytes,
         problem=scan.problem,
@@ -380,17 +419,26 @@ def load_session(path: str | Path) -> SessionData:
     return read_scan(path)[1]
 
 
-def _channel_report(scan: FileScan, ch: Channel, origin: int) -> dict:
-    """A channel's counts and simulation-time range [s]."""
+def _channel_report(
+    scan: FileScan, ch: Channel, origin: int, sim_at: dict[int, float] | None = None
+) -> dict:
+    """A channel's counts and simulation-time range [s] (``sim_at``: the simulation time of
+    each log time, for a file of wall-clock log times)."""
     msgs = scan.messages.get(ch.topic, [])
     schema = scan.schemas.get(ch.schema_id)
+
+    def sim_s(log_time: int) -> float | None:
+        if sim_at is None:
+            return (log_time - origin) / 1e9
+        return sim_at.get(log_time)
+
     return {
         "topic": ch.topic,
         "schema": schema.name if schema else "",
         "encoding": ch.message_encoding,
         "messages": len(msgs),
-        "first_s": (min(m.log_time for m in msgs) - origin) / 1e9 if msgs else None,
-        "last_s": (max(m.log_time for m in msgs) - origin) / 1e9 if msgs else None,
+        "first_s": sim_s(min(m.log_time for m in msgs)) if msgs else None,
+        "last_s": sim_s(max(m.log_time for m in msgs)) if msgs else None,
     }
 
 
@@ -400,7 +448,8 @@ def check_session(path: str | Path) -> dict:
     Raises ValueError naming the file when it is not an MCAP file at all."""
     scan, data = read_scan(path)
     origin = time_origin_ns(data.metadata)
-    channels = [_channel_report(scan, ch, origin) for ch in scan.channels_in_order()]
+    sim_at = simulation_times(scan, data.t_s) if wall_log_times(data.metadata) else None
+    channels = [_channel_report(scan, ch, origin, sim_at) for ch in scan.channels_in_order()]
     starts = [c["first_s"] for c in channels if c["first_s"] is not None]
     return {
         "file": str(path),

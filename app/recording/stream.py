@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -87,6 +87,31 @@ class RowBatch:
     crane_tip_n: FloatArray | None
     wire_length_m: float
     docking: DockingFrame | None
+    times_ns: NDArray[np.int64] | None = None
+    """Each kept row's log time [ns] when the caller said when the rows were simulated (the
+    wall clock); None: ``origin_ns`` plus the row's simulation time."""
+
+
+WallAnchors = Sequence[tuple[float, int]]
+"""(simulation time [s], wall-clock time [ns since 1970]) pairs, in time order: when the
+console had simulated up to that time."""
+
+
+def wall_times_ns(t_s: FloatArray, anchors: WallAnchors, after_ns: int) -> NDArray[np.int64]:
+    """The wall-clock time each row of ``t_s`` was simulated at [ns]: between two anchors in
+    proportion to the simulation time (a tick's rows come at once; spread over the tick, each
+    row has its own time, which readers join the channels of a row by), the anchors' own
+    times at either end, and each later than ``after_ns`` and the row before: never ahead of
+    the wall clock when the rows were handed over, never two rows at one time."""
+    t = np.asarray(t_s, float)
+    if len(anchors) == 0 or len(t) == 0:
+        return np.zeros(len(t), dtype=np.int64)
+    at = np.array([a[0] for a in anchors], float)
+    wall = np.array([a[1] for a in anchors], float)
+    out = np.interp(t, at, wall, left=wall[0], right=wall[-1]).astype(np.int64)
+    # strictly increasing, by 1 ns at least: the running maximum of out[k] - k, plus k
+    k = np.arange(len(out), dtype=np.int64)
+    return np.maximum.accumulate(np.maximum(out - k, after_ns + 1)) + k
 
 
 class SessionStream:
@@ -110,6 +135,8 @@ class SessionStream:
         self._numeric = Decimator(numeric_rate_hz)
         self._scene = Decimator(scene_rate_hz)
         self.origin_ns = int(origin_ns)
+        self.last_ns = -1
+        """The latest log time given to a row (wall-clock stamps go on after it)."""
 
     def channels(self) -> list[ChannelSpec]:
         """Every channel, in the order a file registers them."""
@@ -143,15 +170,23 @@ class SessionStream:
         crane_tip_n: FloatArray | None,
         wire_length_m: float,
         docking: DockingFrame | None,
+        wall: WallAnchors | None = None,
     ) -> RowBatch | None:
         """The rows of a hand-over that the decimators keep (None: none), in time order after
-        the rows kept before."""
+        the rows kept before; ``wall``: when the rows were simulated (their log times are
+        then the wall clock's, ``wall_times_ns``)."""
         numeric = self._numeric.select(t_s)
         scene = self._scene.select(t_s)
         keep = numeric | scene
         if not np.any(keep):
             return None
-        return RowBatch(rows[keep], numeric[keep], scene[keep], crane_tip_n, wire_length_m, docking)
+        times_ns = None
+        if wall:
+            times_ns = wall_times_ns(t_s[keep], wall, self.last_ns)
+            self.last_ns = int(times_ns[-1])
+        return RowBatch(
+            rows[keep], numeric[keep], scene[keep], crane_tip_n, wire_length_m, docking, times_ns
+        )
 
     def t_ns(self, t_s: float) -> int:
         return self.origin_ns + round(t_s * 1e9)
@@ -160,7 +195,11 @@ class SessionStream:
         """(topic, log time [ns], JSON bytes) of every message of a batch, row by row in
         channel order."""
         rows = batch.rows
-        times_ns = [self.t_ns(t_s) for t_s in rows[:, T_S].tolist()]
+        times_ns = (
+            [self.t_ns(t_s) for t_s in rows[:, T_S].tolist()]
+            if batch.times_ns is None
+            else batch.times_ns.tolist()
+        )
         numeric_rows = rows[batch.numeric]
         session = self._encoder.session_messages(numeric_rows)
         plots = self._encoder.plot_messages(numeric_rows)
@@ -184,11 +223,17 @@ class SessionStream:
                 yield SCENE_TOPIC, t_ns, json_bytes(scene)
 
     def event_messages(
-        self, t_s: float, kind: str, text: str, data: dict | None = None
+        self,
+        t_s: float,
+        kind: str,
+        text: str,
+        data: dict | None = None,
+        wall_ns: int | None = None,
     ) -> list[tuple[str, int, bytes]]:
         """The messages of an event at simulation time ``t_s``: on ``/events`` and on
-        ``/log`` (Foxglove's Log panel). ValueError when it is not a finite time >= 0, has
-        no kind, or its data cannot be written as JSON."""
+        ``/log`` (Foxglove's Log panel), logged at ``wall_ns`` (the wall clock when it
+        happened) when given, else at ``origin_ns`` plus ``t_s``. ValueError when it is not
+        a finite time >= 0, has no kind, or its data cannot be written as JSON."""
         if not math.isfinite(t_s) or t_s < 0.0:
             raise ValueError(f"event time must be a finite number of seconds >= 0, got {t_s}")
         if not kind:
@@ -197,7 +242,7 @@ class SessionStream:
             event = json_bytes(event_message(t_s, kind, text, data))
         except (TypeError, ValueError) as err:
             raise ValueError(f"event data cannot be written as JSON: {err}") from None
-        t_ns = self.t_ns(t_s)
+        t_ns = self.t_ns(t_s) if wall_ns is None else int(wall_ns)
         return [
             (EVENTS_TOPIC, t_ns, event),
             (LOG_TOPIC, t_ns, json_bytes(log_message(t_ns, kind, text))),

@@ -67,7 +67,7 @@ from app.recording.channels import (
 )
 from app.recording.messages import json_bytes
 from app.recording.stream import Decimator as Decimator  # re-exported
-from app.recording.stream import RowBatch, SessionStream
+from app.recording.stream import RowBatch, SessionStream, WallAnchors
 from control.columns import COLUMN_NAMES, LAYOUT, M_MAX, N_LOG, LogRows
 from sim.docking import DockingFrame
 from sim.params import ParameterSet
@@ -120,8 +120,9 @@ def _log_rows(data: FloatArray | LogRows) -> FloatArray:
 
 def time_origin_of(metadata: Mapping[str, Any]) -> int:
     """Wall-clock time [ns since 1970, UTC] of simulation time zero: the session's start
-    (``started_utc`` at ``start_t_s``) when the metadata gives it, else now. Message log times
-    are this plus the simulation time, so Foxglove shows the date the session ran."""
+    (``started_utc`` at ``start_t_s``) when the metadata gives it, else now. Without
+    ``wall_log_times``, message log times are this plus the simulation time, so Foxglove
+    shows the date the session ran."""
     started = metadata.get("started_utc")
     if isinstance(started, str):
         try:
@@ -140,6 +141,7 @@ def _setup_record(
     n_thrusters: int,
     rates: dict[str, float],
     origin_ns: int = 0,
+    wall_log_times: bool = False,
 ) -> dict[str, str]:
     """The metadata record: every value JSON-encoded (strings too, so reading is exact).
 
@@ -152,8 +154,15 @@ def _setup_record(
         "frames": "world = [north, west, up] (z up); "
         "ned = [north, east, down]; tree, rov, reference: children of ned",
         "time_origin_ns": origin_ns,
-        "times": "log time = time_origin_ns + simulation time; messages carry t_s (simulation)",
+        "times": (
+            "log time = the wall clock when the row was simulated or the event happened; "
+            "messages carry t_s (simulation)"
+            if wall_log_times
+            else "log time = time_origin_ns + simulation time; messages carry t_s (simulation)"
+        ),
     } | rates
+    if wall_log_times:
+        recorder["log_time"] = "wall"
     own = {"params": ps.spec.model_dump(mode="json"), "columns": COLUMNS, "recorder": recorder}
     clash = sorted(k for k in RESERVED_SETUP_KEYS if k in metadata and metadata[k] != own[k])
     if clash:
@@ -219,11 +228,17 @@ class SessionRecorder:
         overwrite: bool = False,
         docking: DockingFrame | None = None,
         time_origin_ns: int | None = None,
+        wall_log_times: bool = False,
     ) -> None:
         """Create ``path`` (refuses an existing file unless ``overwrite``), write the header,
         schemas, channels and the ``setup`` metadata record (``metadata``, e.g. from
         ``session_metadata``), and start the writer thread. ``docking``: the docking frame to
-        draw from the start (``write_log`` can change it)."""
+        draw from the start (``write_log`` can change it). ``wall_log_times``: the caller
+        says when each hand-over of rows was simulated (``write_log``'s ``wall``) and when each
+        event happened, and those wall-clock times are the log times (a console's session,
+        run at 5x, stamped start plus simulated time ran minutes into the future); else log
+        times are the start plus the simulated time (a headless run, simulated faster than
+        real time, would squeeze into seconds)."""
         if not 1 <= n_thrusters <= M_MAX:
             raise ValueError(f"n_thrusters must be in [1, {M_MAX}], got {n_thrusters}")
         rates = {
@@ -235,7 +250,10 @@ class SessionRecorder:
         self._origin_ns = (
             int(time_origin_ns) if time_origin_ns is not None else time_origin_of(metadata)
         )
-        setup = _setup_record(metadata, params, n_thrusters, rates, self._origin_ns)
+        self.wall_log_times = bool(wall_log_times)
+        setup = _setup_record(
+            metadata, params, n_thrusters, rates, self._origin_ns, self.wall_log_times
+        )
         self._stream = SessionStream(
             params, n_thrusters, numeric_rate_hz, scene_rate_hz, self._origin_ns
         )
@@ -301,6 +319,7 @@ class SessionRecorder:
         crane_tip_n: Sequence[float] | FloatArray | None = None,
         wire_length_m: float | None = None,
         docking: DockingFrame | None = None,
+        wall: WallAnchors | None = None,
     ) -> None:
         """Record log rows (``LogRows`` or an (n, N_LOG) array in ``control.columns`` layout),
         later than every row recorded so far and in time order (else ValueError: a restarted
@@ -308,7 +327,9 @@ class SessionRecorder:
         only when ``MAX_QUEUED`` batches are already waiting.
 
         ``crane_tip_n`` (NED, m), ``wire_length_m`` and ``docking``: None keeps the last value
-        given; the wire is drawn and ``/wire`` written once a crane tip is known."""
+        given; the wire is drawn and ``/wire`` written once a crane tip is known. ``wall``:
+        (simulation time, wall clock [ns]) when the rows up to that time had been simulated,
+        for a recorder of ``wall_log_times`` (ignored otherwise)."""
         rows = _log_rows(data)
         t = LAYOUT.take(rows, "t_s")
         with self._lock:
@@ -326,15 +347,33 @@ class SessionRecorder:
                 self._docking = docking
             self._last_t_s = float(t[-1]) if len(t) else self._last_t_s
             batch = self._stream.keep(
-                rows, t, self._crane_tip_n, self._wire_length_m, self._docking
+                rows,
+                t,
+                self._crane_tip_n,
+                self._wire_length_m,
+                self._docking,
+                wall if self.wall_log_times else None,
             )
             if batch is not None:
                 self._put(batch)
 
-    def event(self, t_s: float, kind: str, text: str, data: dict | None = None) -> None:
+    def event(
+        self,
+        t_s: float,
+        kind: str,
+        text: str,
+        data: dict | None = None,
+        wall_ns: int | None = None,
+    ) -> None:
         """Record an event at simulation time ``t_s`` on ``/events`` (and ``/log`` for
-        Foxglove's Log panel). ``kind``: e.g. leg, alarm, gains, landing."""
-        messages = self._stream.event_messages(t_s, kind, text, data)
+        Foxglove's Log panel). ``kind``: e.g. leg, alarm, gains, landing. ``wall_ns``: when it
+        happened on the wall clock (a recorder of ``wall_log_times`` logs it then; now when
+        not given)."""
+        if self.wall_log_times:
+            wall_ns = time.time_ns() if wall_ns is None else int(wall_ns)
+        else:
+            wall_ns = None
+        messages = self._stream.event_messages(t_s, kind, text, data, wall_ns)
         with self._lock:
             self._check_open()
             self._put(_Event(messages))

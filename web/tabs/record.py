@@ -37,11 +37,13 @@ def jump_label(t_s: float, text: str) -> str:
 
 
 def replay_text(rp: ReplayStatus, speed: float) -> str:
-    """Where the replay is, at what speed, and from where to where."""
+    """Where the replay is on the recording's time axis (the scrub bar's, and *Go to*'s), at
+    what speed."""
     state = "playing" if rp.playing else "paused"
     return (
-        f"replay {state} at x{speed:g}: t = {rp.t_s:.1f} s of {rp.start_s:.1f} to "
-        f"{rp.end_s:.1f} s" + ("" if rp.complete else " (a recording cut short: its tail read)")
+        f"replay {state} at x{speed:g}: {rp.t_s:.1f} s into the recording, which runs "
+        f"{rp.start_s:.1f} to {rp.end_s:.1f} s"
+        + ("" if rp.complete else " (a recording cut short: its tail read)")
     )
 
 
@@ -197,12 +199,17 @@ class RecordTab:
         if self.replay is not None:
             self.replay.seek(float(self.goto.value))
 
+    def _jump_label(self, t_s: float, text: str) -> str:
+        """A jump list entry on the run's own clock, as the status line shows it."""
+        replay = self.replay
+        return jump_label(t_s if replay is None else replay.run_time_s(t_s), text)
+
     def _on_jump(self, event: Any) -> None:
         if event.client is None or self.replay is None:
             return
         picked = str(self.jump.value)
         for t, text in self._replay_jumps:
-            if jump_label(t, text) == picked:
+            if self._jump_label(t, text) == picked:
                 self.replay.seek(t)
                 return
 
@@ -230,7 +237,7 @@ class RecordTab:
             self._replay_name = rp.name
             self._make_replay_slider(rp.start_s, rp.end_s, rp.marks)
             self._replay_jumps = rp.jumps
-            options = (NO_JUMP, *(jump_label(t, text) for t, text in rp.jumps))
+            options = (NO_JUMP, *(self._jump_label(t, text) for t, text in rp.jumps))
             self.jump.options = options
             self.jump.value = NO_JUMP  # type: ignore[misc]  # settable at run time
         text = replay_text(rp, snap.speed)
