@@ -134,6 +134,9 @@ class SceneInfo:
     frame_in_mission: bool = False
     """True when the mission places the docking frame (False: ``frame`` is drawn under the
     tree only to give the scene a seabed)."""
+    thruster_configuration: tuple[tuple[float, ...], ...] = ()
+    """The columns of the thrust configuration matrix T, one (6,) per thruster (drawing the
+    thrusters where the allocation puts them)."""
 
     @property
     def support_depth_m(self) -> float | None:
@@ -302,6 +305,7 @@ def scene_info(
         tree_weight_newton=float(ps.tree.submerged_weight_newton),
         preset_gains=Gains.of(ps.gains.kp, ps.gains.ki, ps.gains.kd),
         frame_in_mission=frame_in_mission,
+        thruster_configuration=tuple(tuple(map(float, col)) for col in ps.rov.thrusters.T.T),
     )
 
 
