@@ -7,7 +7,15 @@ import math
 from fastapi import APIRouter
 
 from app.api.deps import ConsoleDep, SnapshotDep, TokenDep, run_command
-from app.api.schemas import CommandOut, CurrentIn, CurrentOut, EnvironmentOut, VesselIn
+from app.api.schemas import (
+    CommandOut,
+    CurrentIn,
+    CurrentOut,
+    EnvironmentOut,
+    VesselIn,
+    VisibilityIn,
+    VisibilityOut,
+)
 from app.console.commands import MoveVessel, SetCurrent
 
 router = APIRouter(prefix="/api/environment", tags=["environment"])
@@ -40,3 +48,15 @@ async def move_vessel(body: VesselIn, console: ConsoleDep, _: TokenDep) -> Comma
     return CommandOut(
         result=await run_command(console, MoveVessel(body.north_m, body.east_m, body.speed_mps))
     )
+
+
+@router.get("/visibility", response_model=VisibilityOut)
+def get_visibility(console: ConsoleDep) -> VisibilityOut:
+    """How far the water lets one see (the 3D view's fog; the simulation is not changed)."""
+    return VisibilityOut(visibility_m=console.water.visibility_m)
+
+
+@router.put("/visibility", response_model=VisibilityOut)
+def set_visibility(body: VisibilityIn, console: ConsoleDep, _: TokenDep) -> VisibilityOut:
+    """Set the water's visibility, from turbid (2 m) to clear (30 m)."""
+    return VisibilityOut(visibility_m=console.water.set_visibility_m(body.visibility_m))

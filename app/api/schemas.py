@@ -8,7 +8,14 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from app.console import Alarm, MissionStatus, ReplayStatus, Snapshot
+from app.console import (
+    VISIBILITY_MAX_M,
+    VISIBILITY_MIN_M,
+    Alarm,
+    MissionStatus,
+    ReplayStatus,
+    Snapshot,
+)
 from app.console.commands import (
     CURRENT_MAX_MPS,
     DIRECTION_RANGE_DEG,
@@ -341,6 +348,19 @@ class CurrentIn(_In):
         allow_inf_nan=False,
         description="direction the water flows towards",
     )
+
+
+class VisibilityIn(_In):
+    visibility_m: float = Field(
+        ge=VISIBILITY_MIN_M,
+        le=VISIBILITY_MAX_M,
+        allow_inf_nan=False,
+        description="how far the water lets one see (turbid 2 m to clear 30 m)",
+    )
+
+
+class VisibilityOut(BaseModel):
+    visibility_m: float
 
 
 class VesselIn(_In):

@@ -12,6 +12,7 @@ from here.
     session.py    Session: simulation, mission driver, alarms, recorder, replay
     replay.py     recordings on disk and their replay
     viewer_replay.py  one reader's (a browser's) own replay beside the live run
+    water.py      the water's visibility (a session setting the 3D view's fog follows)
     snapshot.py   Snapshot and the other immutable views (FaultView among them)
     alarms.py     operator alarms from the log rows
     texts.py      the page's Markdown for results and signal-check counters
@@ -66,6 +67,7 @@ from app.console.texts import (
 )
 from app.console.tokens import INSTRUCTOR_TOKEN_ENV
 from app.console.viewer_replay import ViewerReplay
+from app.console.water import VISIBILITY_MAX_M, VISIBILITY_MIN_M, Water
 from control.config import ALLOCATIONS, MODES, Gains
 from control.faults import FAULT_KINDS, THRUSTER_KINDS
 from missions.scoring import SATURATED
@@ -85,6 +87,8 @@ __all__ = [
     "SPEED_MAX",
     "SPEED_MIN",
     "THRUSTER_KINDS",
+    "VISIBILITY_MAX_M",
+    "VISIBILITY_MIN_M",
     "Alarm",
     "ClearFaults",
     "Command",
@@ -104,6 +108,7 @@ __all__ = [
     "Session",
     "Snapshot",
     "ViewerReplay",
+    "Water",
     "alarm_meaning",
     "alarm_title",
     "allowed_hosts",

@@ -20,6 +20,7 @@ from app.console.loop import PacedLoop
 from app.console.session import PreparedRun, Session, prepare_run, station_keeping_mission
 from app.console.settings import ConsoleSettings
 from app.console.tokens import CREW_ROLES, GuessLimit
+from app.console.water import Water
 from missions import schema
 from sim import params as params_mod
 
@@ -39,6 +40,8 @@ class Console:
     uploads: OrderedDict[str, schema.Mission] = field(default_factory=OrderedDict)
     _uploads_lock: threading.Lock = field(default_factory=threading.Lock)
     guesses: GuessLimit = field(default_factory=GuessLimit)
+    water: Water = field(default_factory=Water)
+    """The water's visibility (the 3D view's fog)."""
     """Wrong tokens per client (HTTP address or 3D-view client)."""
     _ticket: tuple[str, float] = ("", 0.0)
     """The debrief ticket and when it expires (monotonic clock)."""
