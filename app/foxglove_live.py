@@ -50,6 +50,8 @@ class _Rows:
     crane_tip_n: np.ndarray
     wire_length_m: float
     docking: DockingFrame | None
+    wall_ns: int
+    """When they were handed over: the wall clock had simulated up to their last row."""
 
 
 @dataclass(frozen=True)
@@ -58,6 +60,7 @@ class _Event:
     kind: str
     text: str
     data: dict | None
+    wall_ns: int
 
 
 @dataclass(frozen=True)
@@ -94,6 +97,8 @@ class LiveFeed:
         self.dropped = 0
         """Hand-overs dropped because the sending thread fell behind."""
         self._last_sent = -float("inf")
+        self._anchor: tuple[float, int] | None = None
+        """(simulation time [s], wall clock [ns]) of the last hand-over."""
         self._thread = threading.Thread(target=self._send_loop, name="foxglove-live", daemon=True)
         self._thread.start()
 
@@ -106,10 +111,11 @@ class LiveFeed:
         docking: DockingFrame | None,
     ) -> None:
         """Hand over a tick's log rows (never waits)."""
-        self._put(_Rows(rows, np.asarray(crane_tip_n, float).copy(), wire_length_m, docking))
+        crane = np.asarray(crane_tip_n, float).copy()
+        self._put(_Rows(rows, crane, wire_length_m, docking, time.time_ns()))
 
     def event(self, t_s: float, kind: str, text: str, data: dict | None = None) -> None:
-        self._put(_Event(t_s, kind, text, dict(data) if data else None))
+        self._put(_Event(t_s, kind, text, dict(data) if data else None, time.time_ns()))
 
     def new_run(self, params: ParameterSet, n_thrusters: int, origin_ns: int) -> None:
         """A new run: its time starts again, its thrusters may differ (channels renewed)."""
@@ -177,14 +183,22 @@ class LiveFeed:
     def _send(self, item: object) -> None:
         if isinstance(item, _NewRun):
             self._stream = self._open_channels(item.params, item.n_thrusters, item.origin_ns)
+            self._anchor = None
             return
         if isinstance(item, _Event):
-            messages = self._stream.event_messages(item.t_s, item.kind, item.text, item.data)
+            messages = self._stream.event_messages(
+                item.t_s, item.kind, item.text, item.data, wall_ns=item.wall_ns
+            )
         else:
             assert isinstance(item, _Rows)
             t = LAYOUT.take(item.rows, "t_s")
+            # log times: the wall clock when the rows were simulated, as a console
+            # recording's (between the hand-over before and this one)
+            anchor = (float(t[-1]), item.wall_ns)
+            wall = [self._anchor, anchor] if self._anchor is not None else [anchor]
+            self._anchor = anchor
             batch = self._stream.keep(
-                item.rows, t, item.crane_tip_n, item.wire_length_m, item.docking
+                item.rows, t, item.crane_tip_n, item.wire_length_m, item.docking, wall
             )
             if batch is None or not self._watched():
                 return

@@ -25,9 +25,15 @@ from sim import params
 SUBPROTOCOLS = ["foxglove.sdk.v1", "foxglove.websocket.v1"]
 
 
+LATE_NS: list[int] = []
+"""How far each message's log time was behind the wall clock when it arrived [ns] (the
+last ``_listen``'s)."""
+
+
 async def _listen(port: int, seconds: float) -> tuple[dict, dict, dict[int, list[bytes]]]:
     """Connect as Foxglove does, subscribe to every channel, and gather for ``seconds``:
-    (serverInfo, channels by id, payloads by channel id)."""
+    (serverInfo, channels by id, payloads by channel id); ``LATE_NS`` the log times' lag."""
+    LATE_NS.clear()
     url = f"ws://127.0.0.1:{port}"
     async with websockets.connect(url, subprotocols=SUBPROTOCOLS) as ws:
         info: dict = {}
@@ -48,8 +54,9 @@ async def _listen(port: int, seconds: float) -> tuple[dict, dict, dict[int, list
                     subs = [{"id": c["id"], "channelId": c["id"]} for c in m["channels"]]
                     await ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
             elif msg[0] == 1:  # message data: opcode, subscription id, log time, payload
-                (sub,) = struct.unpack_from("<I", msg, 1)
+                sub, log_time_ns = struct.unpack_from("<IQ", msg, 1)
                 got.setdefault(sub, []).append(bytes(msg[13:]))
+                LATE_NS.append(time.time_ns() - log_time_ns)
         return info, channels, got
 
 
@@ -122,7 +129,7 @@ def test_serve_sends_the_running_session_and_its_events(tmp_path) -> None:
         assert srv.console.loop.session.live is not None
 
         def pause_later() -> None:
-            time.sleep(1.5)
+            time.sleep(1.0)
             httpx.post(
                 f"{srv.base_url}/api/run/pause",
                 headers={"Authorization": f"Bearer {srv.token}"},
@@ -130,7 +137,7 @@ def test_serve_sends_the_running_session_and_its_events(tmp_path) -> None:
             )
 
         threading.Thread(target=pause_later, daemon=True).start()
-        _, channels, got = asyncio.run(_listen(port, 3.0))
+        _, channels, got = asyncio.run(_listen(port, 4.0))
     topics = {channels[cid]["topic"]: payloads for cid, payloads in got.items()}
     poses = [json.loads(p) for p in topics["/tree/state"]]
     assert len(poses) >= 5, "the live run's rows arrive"
@@ -140,6 +147,9 @@ def test_serve_sends_the_running_session_and_its_events(tmp_path) -> None:
     assert all(validator.is_valid(json.loads(p)) for p in topics["/tf"])
     texts = [json.loads(p)["text"] for p in topics.get("/events", [])]
     assert any("pause" in t.lower() for t in texts), texts
+    # at 5x, log times are the wall clock when the rows were simulated: none in the future
+    # (start plus simulated time ran 4 s ahead for every second of wall time), none old
+    assert 0 <= min(LATE_NS) and max(LATE_NS) < 5e9, (min(LATE_NS), max(LATE_NS))
 
 
 @pytest.mark.parametrize(
