@@ -330,7 +330,7 @@ def rov_lamps_b(rov_size_m: FloatArray) -> FloatArray:
     return np.array([[0.5 * size[0], side * 0.35 * size[1], z] for side in (-1.0, 1.0)])
 
 
-def silt_cloud_mesh(radius_m: float, seed: int = 0, blobs: int = 14) -> trimesh.Trimesh:
+def silt_cloud_mesh(radius_m: float, seed: int = 0, blobs: int = 24) -> trimesh.Trimesh:
     """A silt cloud: ``blobs`` spheres scattered in a flat dome ``radius_m`` wide (its origin
     on the seabed, the dome above it, up being -z), so it reads as a cloud and not a ball."""
     rng = np.random.default_rng(seed)
@@ -338,7 +338,7 @@ def silt_cloud_mesh(radius_m: float, seed: int = 0, blobs: int = 14) -> trimesh.
     for _ in range(blobs):
         angle = rng.uniform(0.0, 2.0 * math.pi)
         reach = radius_m * math.sqrt(rng.uniform(0.0, 1.0)) * 0.7
-        r = radius_m * rng.uniform(0.25, 0.45)
+        r = radius_m * rng.uniform(0.2, 0.38)
         center = [reach * math.cos(angle), reach * math.sin(angle), -rng.uniform(0.2, 0.6) * r]
         sphere = trimesh.creation.icosphere(subdivisions=2, radius=r)
         sphere.apply_translation(center)

@@ -17,18 +17,16 @@ import viser
 
 from app.console import SceneInfo, Snapshot
 from web import geometry as geo
+from web import meshes
+from web.underwater import add_rov, frame_depth_m, tree_parts
+from web.water import SiltView
 
-TREE_COLOR = (235, 190, 40)
-ROV_COLOR = (230, 110, 30)
 GHOST_COLOR = (60, 200, 230)
 GUIDE_COLOR = (220, 40, 40)
-FRAME_COLOR = (120, 120, 130)
-POST_COLOR = (200, 200, 210)
 FUNNEL_COLOR = (90, 90, 100)
 WIRE_COLOR = (30, 30, 30)
 TRACK_COLOR = (40, 90, 220)
 CURRENT_COLOR = (20, 160, 90)
-SEABED_COLOR = (194, 178, 128)
 NORTH_COLOR = (30, 60, 160)
 SCALE_COLOR = (20, 20, 20)
 POSE_EPS = 1e-4
@@ -58,6 +56,7 @@ class SceneView:
         self.info: SceneInfo | None = None
         self._handles: list = []
         self._hidden: list = []
+        self.silt = SiltView()
 
     def names(self) -> set[str]:
         """Names of the nodes drawn (after the first ``update``)."""
@@ -90,52 +89,37 @@ class SceneView:
         lay, frame = info.layout, info.frame
         length, width, height = info.tree_dimensions_m
         size = max(length, width, height)
-        thick = 0.15 * height
+        thick = frame_depth_m(info)
         c, s = math.cos(frame.heading_rad), math.sin(frame.heading_rad)
         center = np.array([frame.center_n[0], frame.center_n[1], frame.landing_depth_m])
         frame_q = geo.quaternion_wxyz_from_rpy_radians(0.0, 0.0, frame.heading_rad)
         extent = 16.0 * size
-        sc.add_grid(
+        sc.add_mesh_trimesh(
             "/site/seabed",
-            width=extent,
-            height=extent,
-            plane="xy",
-            cell_size=size / 2,
-            section_size=2 * size,
-            cell_color=(150, 140, 100),
-            section_color=(120, 110, 80),
-            plane_color=SEABED_COLOR,
-            plane_opacity=1.0,
+            meshes.seabed_mesh(extent, size / 4, seed=info.version),
             position=center + np.array([0.0, 0.0, thick + 0.01]),
-            fade_distance=40 * size,
+            cast_shadow=False,
+            receive_shadow=False,
         )
-        sc.add_box(
+        sc.add_mesh_trimesh(
             "/site/frame",
-            color=FRAME_COLOR,
-            dimensions=(float(lay.frame_size_m[0]), float(lay.frame_size_m[1]), thick),
-            position=center + np.array([0.0, 0.0, thick / 2]),
+            meshes.combined(
+                meshes.docking_frame_parts(
+                    lay.frame_size_m, lay.post_xy_m, lay.post_radius_m, lay.post_height_m, thick
+                )
+            ),
+            position=center,
             wxyz=frame_q,
+            cast_shadow=False,
+            receive_shadow=False,
         )
-        for k, (px, py) in enumerate(lay.post_xy_m):
-            pn = center[:2] + np.array([c * px - s * py, s * px + c * py])
-            sc.add_cylinder(
-                f"/site/post_{k}",
-                radius=float(lay.post_radius_m),
-                height=float(lay.post_height_m),
-                color=POST_COLOR,
-                position=(pn[0], pn[1], center[2] - lay.post_height_m / 2),
-            )
         tree = sc.add_frame("/tree", show_axes=False)
-        sc.add_box("/tree/body", color=TREE_COLOR, dimensions=(length, width, height))
-        funnel_h = 0.12 * height
-        for k, p in enumerate(geo.funnel_points_b(lay.post_xy_m, height)):
-            sc.add_cylinder(
-                f"/tree/funnel_{k}",
-                radius=float(lay.funnel_mouth_radius_m),
-                height=funnel_h,
-                color=FUNNEL_COLOR,
-                position=(p[0], p[1], p[2] + funnel_h / 2),
-            )
+        sc.add_mesh_trimesh(
+            "/tree/body",
+            meshes.combined(tree_parts(info)),
+            cast_shadow=False,
+            receive_shadow=False,
+        )
         for k, p in enumerate(geo.funnel_points_b(lay.post_xy_m, height)):
             # the funnels' places marked on the tree's top, to line up with the guides
             sc.add_cylinder(
@@ -166,10 +150,14 @@ class SceneView:
                 position=(pn[0], pn[1], guide_top + guide_len / 2),
             )
         rov = sc.add_frame("/rov", show_axes=False)
-        sc.add_box("/rov/body", color=ROV_COLOR, dimensions=info.rov_dimensions_m)
+        add_rov(sc, info)
         ghost = sc.add_frame("/reference", show_axes=False)
-        sc.add_box(
-            "/reference/body", color=GHOST_COLOR, dimensions=(length, width, height), opacity=0.3
+        sc.add_line_segments(  # an outline: it stands on the tree when station keeping
+            "/reference/body",
+            meshes.box_edges((length, width, height)),
+            GHOST_COLOR,
+            thickness=2.0,
+            thickness_units="screen",
         )
         self._tree, self._rov, self._ghost = tree, rov, ghost
         self._wire = sc.add_line_segments(
@@ -197,6 +185,7 @@ class SceneView:
             "/tree/depth_label", "", position=(0.0, 0.0, -0.5 * height - 0.2 * size)
         )
         self._tree_label_text = ""
+        self.silt.build(sc, info)
         self._version = info.version
 
     def _build_marks(self, sc: _Recorder, info: SceneInfo, center: np.ndarray, size: float) -> None:
@@ -278,6 +267,7 @@ class SceneView:
         tree_eta = np.array(snap.tree_eta_n)
         self._draw_current(snap, max(info.tree_dimensions_m))
         self._update_track(snap, tree_eta[2])
+        self.silt.update(snap)
         ref = snap.eta_ref
         ghost_shown = snap.mode != "manual"
         pose = np.concatenate(
