@@ -250,7 +250,8 @@ def _problems(err: ValidationError) -> str:
                 msg = f"{e['input']} is not {FORMAT_VERSION} (the only version)"
         elif e["type"] == "extra_forbidden":
             msg = "not a field (limit, zero_at, weight; or format_version, criteria)"
-        lines.append(f"{where}: {msg}" if not msg.startswith(where) else msg)
+        named = msg.startswith(where) or (where == "file" and msg.startswith("criteria."))
+        lines.append(msg if named else f"{where}: {msg}")
     return "\n".join(lines)
 
 

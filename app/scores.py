@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from app.assessment import Criteria, FrameLimits, RunFacts, assess, measure
+from app.assessment import Assessment, Criteria, FrameLimits, RunFacts, assess, measure
 from missions.scoring import MissionResult
 
 SCHEMA = """
@@ -315,6 +315,12 @@ def assessment_values(s: Score) -> tuple[dict[str, float | None], FrameLimits | 
     return told, None
 
 
+def assessed(s: Score, criteria: Criteria) -> Assessment:
+    """A stored run scored with ``criteria`` (its values and frame limits as stored)."""
+    values, frame = assessment_values(s)
+    return assess(values, criteria, frame)
+
+
 @dataclass(frozen=True)
 class TrendPoint:
     """One run of a trainee, scored with the criteria in force."""
@@ -335,8 +341,7 @@ def trend(
     criteria re-scores the whole history: the database keeps values, not scores)."""
     out = []
     for s in reversed(history(db, trainee, mission)):
-        values, frame = assessment_values(s)
-        a = assess(values, criteria, frame)
+        a = assessed(s, criteria)
         out.append(
             TrendPoint(
                 s.id,

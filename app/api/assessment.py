@@ -24,6 +24,7 @@ from app.api.faults import InstructorDep
 from app.api.recordings import finished_recording
 from app.api.schemas import Finite, _In
 from app.console import RECORDING_NAME, Console
+from app.console import criteria as in_force
 from app.console.session import SCORES_DB
 
 router = APIRouter(tags=["assessment"])
@@ -76,13 +77,13 @@ class TrendPointOut(BaseModel):
 
 
 def criteria_path(console: Console) -> Path:
-    return console.settings.recordings_dir / asmt.CRITERIA_FILE
+    return in_force.criteria_path(console.settings.recordings_dir)
 
 
 def console_criteria(console: Console) -> asmt.Criteria:
     """The criteria in force on this console (the defaults until the instructor sets any)."""
     try:
-        return asmt.load_criteria(criteria_path(console))
+        return in_force.criteria_in_force(console.settings.recordings_dir)
     except asmt.CriteriaError as err:  # the file was edited by hand and broken
         raise HTTPException(UNPROCESSABLE, f"{asmt.CRITERIA_FILE}: {err}") from None
 
@@ -107,13 +108,9 @@ def put_criteria(body: CriteriaIn, console: ConsoleDep, _: InstructorDep) -> Cri
     out of range is refused with the field and its range named."""
     data = body.model_dump(exclude_none=True)
     try:
-        criteria = asmt.parse_criteria(data, "the request")
+        criteria = in_force.apply_criteria(console.settings.recordings_dir, data, "the request")
     except asmt.CriteriaError as err:
         raise HTTPException(UNPROCESSABLE, str(err)) from None
-    path = criteria_path(console)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(criteria.to_toml(), encoding="utf-8")
     except OSError as err:
         raise HTTPException(
             status.HTTP_507_INSUFFICIENT_STORAGE, f"cannot write: {err.strerror or err}"
@@ -124,8 +121,7 @@ def put_criteria(body: CriteriaIn, console: ConsoleDep, _: InstructorDep) -> Cri
 @router.delete("/api/assessment/criteria", response_model=CriteriaOut)
 def reset_criteria(console: ConsoleDep, _: InstructorDep) -> CriteriaOut:
     """Back to the default criteria (the instructor token)."""
-    criteria_path(console).unlink(missing_ok=True)
-    return _out(console, asmt.default_criteria())
+    return _out(console, in_force.reset_criteria(console.settings.recordings_dir))
 
 
 @router.get("/api/scores/trend", response_model=list[TrendPointOut])

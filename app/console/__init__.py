@@ -17,13 +17,15 @@ from here.
     alarms.py     operator alarms from the log rows
     texts.py      the page's Markdown for results and signal-check counters
     faults.py     the instructor's commands (InjectFault, ClearFaults)
+    criteria.py   the assessment's criteria in force (the instructor's file) and a trainee's
+                  runs scored with them
 
 It also passes on the core's rotations (``Rzyx``, ``quaternion_wxyz_from_rpy_radians``) and the
 wire's attachment point, so the view draws with the same geometry as the simulation.
 """
 
 from app import scores
-from app.console import commands
+from app.console import commands, criteria
 from app.console.alarms import ALARM_NAMES, Alarm
 from app.console.commands import SPEED_MAX, SPEED_MIN, Command
 from app.console.errors import ConsoleError
@@ -117,6 +119,7 @@ __all__ = [
     "compass_degrees",
     "compass_heading_deg",
     "counters_markdown",
+    "criteria",
     "heading_text",
     "initial_run",
     "is_loopback",

@@ -5,7 +5,8 @@ not open it, and opening it does not unlock the console's controls). Unlocked, i
 fault (kind, with its unit and range shown; value; thruster for the thruster kinds; now or at a
 simulation time; duration), lists the faults active and scheduled with the latest starts and
 ends and the instructor's own commands, and clears them. Its commands go to the loop like any
-other (``app.console.faults``); the trainee's operations log leaves them out.
+other (``app.console.faults``); the trainee's operations log leaves them out. Below, the
+assessment's criteria in force, which the unlocked instructor edits (``web.tabs.criteria``).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from app.console import (
     Snapshot,
     md_text,
 )
+from web.tabs.criteria import CriteriaEditor
 from web.widgets import Operator, masked_input_style
 
 STARTS = ("now", "at time")
@@ -99,6 +101,9 @@ class InstructorTab:
         self.clear_button.on_click(self._on_clear)
         self.message_md = gui.add_markdown("")
         self.faults_md = gui.add_markdown("")
+        self.criteria = CriteriaEditor(
+            gui, self.console.settings.recordings_dir, self._guard, lambda: self.unlocked
+        )
         self._set_enabled(False)
 
     def _guard(self, handle: Any) -> Any:
@@ -108,6 +113,7 @@ class InstructorTab:
     def _set_enabled(self, enabled: bool) -> None:
         for handle in self._guarded:
             handle.disabled = not enabled
+        self.criteria.set_enabled(enabled)
 
     def _say(self, text: str) -> None:
         self.message_md.content = text

@@ -4,39 +4,27 @@
 the latest runs (who flew them: autopilot, hand or mixed) and the best run of each mission,
 each with a link to its debrief when it was recorded. "Debrief" offers the debrief report
 (``app.report``, served by the API at ``/api/recordings/<name>/report``) of a finished
-recording. Reading the scores needs no token: nothing here changes the run; a report takes
-seconds of work, so its links open it only for a browser unlocked with the console or
-instructor token (they carry the console's debrief ticket).
+recording. "Trend over runs" (``web.tabs.trend``) plots a trainee's totals over their runs,
+scored with the assessment's criteria in force, with a run's table and logbook links. Reading
+the scores needs no token: nothing here changes the run; a report takes seconds of work, so
+its links open it only for a browser unlocked with the console or instructor token (they
+carry the console's debrief ticket).
 """
 
 from __future__ import annotations
 
-import html
 from collections.abc import Callable
 from typing import Any
-from urllib.parse import quote
 
 from app.console import SCORES_DB, Console, list_recordings, md_text
 from app.console import scores as store
+from web.tabs.links import new_tab_link, report_url
+from web.tabs.trend import TrendPanel
 from web.widgets import Operator
 
+__all__ = ["HISTORY_ROWS", "ScoresTab", "new_tab_link", "report_url", "scores_markdown"]
+
 HISTORY_ROWS = 10
-
-
-def report_url(api_base: str, name: str, ticket: str | None = None) -> str:
-    """The debrief's address; with the console's debrief ticket (``Console.debrief_ticket``)
-    for a browser that is unlocked: the report needs a token, and a link carries no header."""
-    url = f"{api_base}/api/recordings/{quote(name)}/report"
-    return url + (f"?ticket={quote(ticket)}" if ticket else "")
-
-
-def new_tab_link(url: str, text: str) -> str:
-    """A link that opens in a tab of its own (HTML in the Markdown, which viser renders): the
-    debrief replaced the console's tab, and coming back needed the token again."""
-    return (
-        f'<a href="{html.escape(url, quote=True)}" target="_blank" rel="noopener">'
-        f"{html.escape(text)}</a>"
-    )
 
 
 def _cell(v: float | None, fmt: str) -> str:
@@ -107,6 +95,13 @@ class ScoresTab:
         self.debrief_button = gui.add_button("Debrief")
         self.debrief_button.on_click(self._on_debrief)
         self.debrief_md = gui.add_markdown("")
+        self.trend = TrendPanel(
+            gui,
+            settings.recordings_dir,
+            self.api_base,
+            self._ticket,
+            lambda: str(self.operator.name_text.value),
+        )
 
     def _recording_names(self) -> tuple[str, ...]:
         names = [r["name"] for r in list_recordings(self.console.settings.recordings_dir)]
@@ -130,6 +125,7 @@ class ScoresTab:
 
     def _on_show(self, event: Any) -> None:
         self.show()
+        self.trend.refresh_trainees()
         names = self._recording_names()
         self.recording.options = names
         if self.recording.value not in names:
