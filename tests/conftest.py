@@ -32,6 +32,7 @@ BROWSER_MODULES = (
     "test_instructor_browser.py",
     "test_plots_page.py",
     "test_pilot_browser.py",
+    "test_review_browser.py",
 )
 LONGEST_FIRST = (
     "test_missions.py",

@@ -17,15 +17,18 @@ from here.
     alarms.py     operator alarms from the log rows
     texts.py      the page's Markdown for results and signal-check counters
     faults.py     the instructor's commands (InjectFault, ClearFaults)
-    criteria.py   the assessment's criteria in force (the instructor's file) and a trainee's
-                  runs scored with them
+
+It also passes on what reviewing a recording needs: its notes (``add_review_note``,
+``notes_of``, ``Note``) and the comparison of two runs (``compare``, ``Comparison``,
+``table_rows``, ``CompareError``).
 
 It also passes on the core's rotations (``Rzyx``, ``quaternion_wxyz_from_rpy_radians``) and the
 wire's attachment point, so the view draws with the same geometry as the simulation.
 """
 
 from app import scores
-from app.console import commands, criteria
+from app.compare import CompareError, Comparison, compare, table_rows
+from app.console import commands
 from app.console.alarms import ALARM_NAMES, Alarm
 from app.console.commands import SPEED_MAX, SPEED_MIN, Command
 from app.console.errors import ConsoleError
@@ -70,6 +73,7 @@ from app.console.texts import (
 from app.console.tokens import INSTRUCTOR_TOKEN_ENV
 from app.console.viewer_replay import ViewerReplay
 from app.console.water import VISIBILITY_MAX_M, VISIBILITY_MIN_M, Water
+from app.recording.notes import Note, add_review_note, notes_of
 from control.config import ALLOCATIONS, MODES, Gains
 from control.faults import FAULT_KINDS, THRUSTER_KINDS
 from missions.scoring import SATURATED
@@ -94,6 +98,8 @@ __all__ = [
     "Alarm",
     "ClearFaults",
     "Command",
+    "CompareError",
+    "Comparison",
     "Console",
     "ConsoleError",
     "ConsoleSettings",
@@ -102,6 +108,7 @@ __all__ = [
     "InjectFault",
     "LoopStats",
     "MissionStatus",
+    "Note",
     "PacedLoop",
     "PreparedRun",
     "ReplayStatus",
@@ -111,15 +118,16 @@ __all__ = [
     "Snapshot",
     "ViewerReplay",
     "Water",
+    "add_review_note",
     "alarm_meaning",
     "alarm_title",
     "allowed_hosts",
     "attachment_point_n",
     "commands",
+    "compare",
     "compass_degrees",
     "compass_heading_deg",
     "counters_markdown",
-    "criteria",
     "heading_text",
     "initial_run",
     "is_loopback",
@@ -127,6 +135,7 @@ __all__ = [
     "load_replay",
     "md_code",
     "md_text",
+    "notes_of",
     "origin_allowed",
     "prepare_run",
     "quaternion_wxyz_from_rpy_radians",
@@ -134,5 +143,6 @@ __all__ = [
     "result_markdown",
     "scores",
     "station_keeping_mission",
+    "table_rows",
     "trainee_view",
 ]

@@ -1,24 +1,36 @@
 """The "Record" tab: start and stop the console's recording, and replay a recording in this
 browser alone (on its own clock, in its own scope of the scene: the live run and the other
-browsers go on), with a scrub bar marked with the recording's events."""
+browsers go on), with a scrub bar marked with the recording's events and notes; add a note
+(live, or at the scrub bar's time of the replay); compare the replay with a second recording
+(its run drawn as a ghost, the table of differences)."""
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from typing import Any
 
 from app.console import (
+    CompareError,
     Console,
     ConsoleError,
+    Note,
     ReplayStatus,
+    SceneInfo,
     Snapshot,
     ViewerReplay,
+    add_review_note,
+    compare,
     list_recordings,
     load_replay,
     md_code,
     md_text,
+    notes_of,
+    recording_path,
 )
 from app.console import commands as cmd
+from web.ghost import Ghost
+from web.review import comparison_markdown, notes_markdown, with_notes
 from web.widgets import Operator
 
 REPLAY_SPEEDS = ("0.25", "1", "5", "20", "50")
@@ -27,7 +39,20 @@ NO_JUMP = "(choose an event)"
 REPLAY_HELP = (
     "Watch a recording in this browser alone (no token needed): the live run and the other "
     "browsers go on. On the scrub bar the dots are the recording's events (legs, runs, "
-    "landings, commands, alarms coming on): *Jump to event* names them."
+    "landings, commands, alarms coming on, notes): *Jump to event* names them."
+)
+NOTES_HELP = (
+    "A note marks a moment: what happened ('silt cloud, lost the view'). Live, it is at the "
+    "present time, an event of the recording being made; while this browser replays a "
+    "recording, it is at the scrub bar's time, kept in a side file beside the recording "
+    "(`NAME.mcap.notes.jsonl`: the recording itself is never rewritten). Needs the console "
+    "token or the instructor's."
+)
+NOTE_LOCKED = "locked: enter the console token under Access (or the instructor's token)"
+COMPARE_HELP = (
+    "Compare the replay (A) with a second recording (B): B's tree and ROV move with the "
+    "replay as a translucent purple ghost, the two aligned at the mission's start; the table has "
+    "each figure of both runs and the better one."
 )
 
 
@@ -58,6 +83,17 @@ class RecordTab:
         """This browser's replay (None: it shows the live run)."""
         self._replay_count = 0
         self._replay_name: str | None = None
+        self.may_note: Callable[[], bool] = lambda: operator.unlocked
+        """Whether this browser may add notes: unlocked with the console token (the panel
+        adds the instructor's)."""
+        self._notes: list[Note] = []
+        """The notes of the open replay (its events' and its side file's)."""
+        self._notes_changed = False
+        self._lock = threading.Lock()
+        """Guards the ghost and the notes: callbacks and the publisher thread touch both."""
+        self.ghost: Ghost | None = None
+        """The compared run's ghost in this browser's scene (None: no comparison)."""
+        self._scene_info: SceneInfo | None = None
         gui, op = operator.gui, operator
         self.record_label = op.guard(gui.add_text("Label", initial_value=""))
         start = op.guard(gui.add_button("Start recording"))
@@ -65,6 +101,14 @@ class RecordTab:
         stop = op.guard(gui.add_button("Stop recording"))
         stop.on_click(lambda event: self._on_record(False))
         self.record_md = gui.add_markdown("")
+        with gui.add_folder("Notes"):
+            gui.add_markdown(NOTES_HELP)
+            with gui.add_form(None) as note_form:
+                self.note_text = gui.add_text("Note", initial_value="")
+                add = gui.add_button("Add note")
+            add.on_click(self._on_add_note)
+            note_form.on_submit(self._on_add_note)
+            self.note_md = gui.add_markdown("")
         with gui.add_folder("Replay") as self.replay_folder:
             gui.add_markdown(REPLAY_HELP)
             self.recordings = gui.add_dropdown("Recording", self._recording_names())
@@ -90,6 +134,13 @@ class RecordTab:
             goto_form.on_submit(self._replay_action(self._go_to))
             self.jump = gui.add_dropdown("Jump to event", (NO_JUMP,), initial_value=NO_JUMP)
             self.jump.on_update(self._on_jump)
+            self.notes_md = gui.add_markdown("")
+            with gui.add_folder("Compare"):
+                gui.add_markdown(COMPARE_HELP)
+                self.compare_with = gui.add_dropdown("Compare with", self._recording_names())
+                gui.add_button("Compare runs").on_click(self._replay_action(self._compare))
+                gui.add_button("Clear comparison").on_click(self._replay_action(self._uncompare))
+                self.compare_md = gui.add_markdown("")
         self.replay_time: Any = None
         self._replay_jumps: tuple[tuple[float, str], ...] = ()
         self._make_replay_slider(0.0, 1.0, ())  # enters the folder itself
@@ -134,9 +185,102 @@ class RecordTab:
 
     def _refresh_recordings(self) -> None:
         names = self._recording_names()
-        self.recordings.options = names
-        if self.recordings.value not in names:
-            self.recordings.value = names[0]  # type: ignore[misc]  # settable at run time
+        for dropdown in (self.recordings, self.compare_with):
+            dropdown.options = names
+            if dropdown.value not in names:
+                dropdown.value = names[0]  # type: ignore[misc]  # settable at run time
+
+    # ------------------------------------------------------------------ notes
+    def _on_add_note(self, event: Any) -> None:
+        """A note: live at the present time (the ``AddNote`` command, through the loop, this
+        browser its sender), or at the scrub bar's time of this browser's replay (into the
+        recording's side file). A refused note keeps its text, to be corrected."""
+        if event.client is None:
+            return
+        if not self.may_note():
+            self._note_said(f"**{md_text(NOTE_LOCKED)}**")
+            return
+        text = str(self.note_text.value)
+        replay = self.replay
+        try:
+            if replay is None:
+                said = self._live_note(text)
+            else:
+                said = self._review_note(replay, text)
+        except (ConsoleError, ValueError, OSError) as err:
+            self._note_said(f"**note refused**: {md_text(err)}")
+            return
+        self.note_text.value = ""  # type: ignore[misc]  # settable at run time
+        self._note_said(said)
+
+    def _note_said(self, text: str) -> None:
+        self.note_md.content = text
+        self.operator.say(text)
+
+    def _live_note(self, text: str) -> str:
+        command = cmd.AddNote(text)  # ValueError: empty, too long, control characters
+        result = self.console.loop.call_blocking(command, timeout_s=15.0, who=self.operator.who)
+        assert isinstance(result, dict)
+        where = (
+            f"in the recording {md_code(result['recording'])}"
+            if result.get("recording")
+            else "on the live feed and in the operations log (no recording is being made)"
+        )
+        return f"note at t = {result['t_s']:.1f} s by {md_text(result['author'])}, {where}"
+
+    def _review_note(self, replay: ViewerReplay, text: str) -> str:
+        status = replay.status()
+        path = recording_path(self.console.settings.recordings_dir, replay.name)
+        note = add_review_note(path, status.t_s, self.operator.who, text, status.end_s)
+        with self._lock:
+            self._notes = sorted([*self._notes, note], key=lambda n: n.t_s)
+            self._notes_changed = True
+        return (
+            f"note at {replay.run_time_s(note.t_s):.1f} s of {md_code(replay.name)} by "
+            f"{md_text(note.author)}, in its side file {md_code(path.name + '.notes.jsonl')}"
+        )
+
+    # ------------------------------------------------------------------ compare
+    def _compare(self) -> None:
+        """Compare this browser's replay (A) with the recording picked (B): the table, and B
+        drawn as a ghost aligned at the mission's start."""
+        replay = self.replay
+        if replay is None:
+            return
+        other = str(self.compare_with.value)
+        directory = self.console.settings.recordings_dir
+        self.compare_md.content = f"comparing with {md_code(other)}..."
+        try:
+            c = compare(recording_path(directory, replay.name), recording_path(directory, other))
+        except (CompareError, ConsoleError, ValueError, FileNotFoundError) as err:
+            self.compare_md.content = f"**cannot compare**: {md_text(err)}"
+            return
+        log = c.b.log
+        info = self._scene_info
+        if log is None or info is None:
+            self.compare_md.content = "**cannot compare**: no rows of B, or no scene yet"
+            return
+        ghost = Ghost(
+            self.operator.client.scene,
+            info,
+            log.t_s,
+            log["tree_eta_n"],
+            log["rov_eta_n"],
+            c.aligned.b_s - c.aligned.a_s,
+        )
+        with self._lock:
+            old, self.ghost = self.ghost, ghost
+        if old is not None:
+            old.remove()
+        self.compare_md.content = comparison_markdown(c)
+        self.operator.say(f"compared with {md_code(other)}: its run is the purple ghost")
+
+    def _uncompare(self) -> None:
+        with self._lock:
+            old, self.ghost = self.ghost, None
+        if old is not None:
+            old.remove()
+        self.compare_md.content = ""
 
     # ------------------------------------------------------------------ replay
     def _on_open_replay(self, event: Any) -> None:
@@ -149,9 +293,16 @@ class RecordTab:
             replay = ViewerReplay(
                 name, data, self.console.loop.snapshot, self._replay_count, self._speed
             )
+            notes = notes_of(
+                recording_path(self.console.settings.recordings_dir, name), data.events
+            )
         except (ConsoleError, FileNotFoundError, ValueError) as err:
             say(f"**error**: {md_text(err)}")
             return
+        with self._lock:
+            self._notes = notes
+            self._notes_changed = True
+        self._uncompare()
         self.replay = replay  # the publisher thread draws it from its next frame
         self.on_replay()
         say(f"replay of {md_code(name)} in this browser; the live run goes on")
@@ -190,6 +341,7 @@ class RecordTab:
             self.operator.say("")
 
     def _close_replay(self) -> None:
+        self._uncompare()
         self.replay = None  # the publisher thread removes its scene
         self.on_replay()
         self.operator.say("replay closed: live")
@@ -232,14 +384,29 @@ class RecordTab:
             self._replay_name = None
             if self.replay_md.content:
                 self.replay_md.content = ""
+            if self.notes_md.content:
+                self.notes_md.content = ""
+            if self.ghost is not None:
+                self._uncompare()
             return
-        if rp.name != self._replay_name:
+        self._scene_info = snap.scene
+        with self._lock:
+            changed, self._notes_changed = self._notes_changed, False
+            notes, ghost = list(self._notes), self.ghost
+        if rp.name != self._replay_name or changed:
             self._replay_name = rp.name
-            self._make_replay_slider(rp.start_s, rp.end_s, rp.marks)
-            self._replay_jumps = rp.jumps
-            options = (NO_JUMP, *(self._jump_label(t, text) for t, text in rp.jumps))
+            marks, jumps = with_notes(rp.marks, rp.jumps, notes, rp.start_s, rp.end_s)
+            self._make_replay_slider(rp.start_s, rp.end_s, marks)
+            self._replay_jumps = jumps
+            options = (NO_JUMP, *(self._jump_label(t, text) for t, text in jumps))
             self.jump.options = options
             self.jump.value = NO_JUMP  # type: ignore[misc]  # settable at run time
+            replay = self.replay
+            self.notes_md.content = notes_markdown(
+                notes, replay.run_time_s if replay is not None else None
+            )
+        if ghost is not None:
+            ghost.show(snap.t_s)  # the replayed run's own clock, as the comparison's
         text = replay_text(rp, snap.speed)
         if self.replay_md.content != text:
             self.replay_md.content = text
