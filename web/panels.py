@@ -24,6 +24,7 @@ from web.tabs.plots import add_plots, plots_url
 from web.tabs.record import RecordTab
 from web.tabs.run import RunTab
 from web.tabs.scores import ScoresTab
+from web.water import WaterPanel
 from web.widgets import Operator
 
 STATUS_EVERY_S = 0.2
@@ -47,6 +48,7 @@ class ClientPanel:
         self.status = StatusHeader(gui)
         self.camera = Camera(client, console)
         self.operator = Operator(client, console, self.status.say)
+        self.water = WaterPanel(client, console, self.operator)
         self.operator.add_access()
         self.status.add_folders()
         # the plots above the tabs: below them, a long tab (the mission builder) pushed them
@@ -88,6 +90,9 @@ class ClientPanel:
         replay drawn in its own scene (the inputs follow the live run either way)."""
         view = self._shown(snap)
         self.camera.follow(view)
+        scene = self._replay_scene or self.shared_scene
+        if scene is not None:
+            self.water.update(view, self.camera.mode == "ROV camera", scene.silt.state)
         now = time.monotonic()
         if now >= self._status_wall:
             self._status_wall = next_due(self._status_wall, STATUS_EVERY_S, now)

@@ -17,6 +17,8 @@ from here.
     alarms.py     operator alarms from the log rows
     texts.py      the page's Markdown for results and signal-check counters
     faults.py     the instructor's commands (InjectFault, ClearFaults)
+    criteria.py   the assessment's criteria in force (the instructor's file) and a trainee's
+                  runs scored with them
 
 It also passes on what reviewing a recording needs: its notes (``add_review_note``,
 ``notes_of``, ``Note``) and the comparison of two runs (``compare``, ``Comparison``,
@@ -28,7 +30,7 @@ wire's attachment point, so the view draws with the same geometry as the simulat
 
 from app import scores
 from app.compare import CompareError, Comparison, compare, table_rows
-from app.console import commands
+from app.console import commands, criteria
 from app.console.alarms import ALARM_NAMES, Alarm
 from app.console.commands import SPEED_MAX, SPEED_MIN, Command
 from app.console.errors import ConsoleError
@@ -128,6 +130,7 @@ __all__ = [
     "compass_degrees",
     "compass_heading_deg",
     "counters_markdown",
+    "criteria",
     "heading_text",
     "initial_run",
     "is_loopback",
