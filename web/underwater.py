@@ -11,6 +11,7 @@ drops to ``SILT_VISIBILITY_SIZES`` tree sizes over the cloud's density.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -307,48 +308,81 @@ def sonar_targets_n(info: SceneInfo, tree_eta_n: FloatArray) -> tuple[FloatArray
     return points, strength
 
 
-def sonar_image(
+SONAR_BEARINGS = 180
+"""Bearing cells of the sonar's scan (2 deg each)."""
+SONAR_RANGES = 120
+"""Range cells out to its range."""
+SONAR_BEAM_WIDTH_RAD = math.radians(3.0)
+"""Horizontal beam width (between the half-power points of its Gaussian)."""
+
+
+@functools.lru_cache(maxsize=4)
+def _sonar_pixels(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per pixel of an n x n picture centred on the ROV, heading up: (range over the
+    picture's half width, bearing cell, starboard and ahead over the half width)."""
+    half = 0.5 * n
+    ys, xs = np.mgrid[0:n, 0:n]
+    starboard, ahead = (xs - half + 0.5) / half, (half - ys - 0.5) / half
+    bearing = np.arctan2(starboard, ahead)
+    cell = np.floor((bearing + math.pi) / (2.0 * math.pi) * SONAR_BEARINGS).astype(int)
+    return np.hypot(starboard, ahead), cell % SONAR_BEARINGS, starboard, ahead
+
+
+def sonar_scan(
     info: SceneInfo, rov_eta_n: FloatArray, tree_eta_n: FloatArray, rng: np.random.Generator
 ) -> np.ndarray:
-    """(SONAR_PX, SONAR_PX, 3) uint8: a scanning sonar's picture round the ROV, its heading
-    up, out to ``sonar_range_m``: echoes from the tree, the posts and the frame (range and
-    bearing with noise, the vertical beam's limits kept, each casting a shadow behind it), the
-    seabed's speckle from where the beam first meets it, range rings every quarter."""
+    """(SONAR_BEARINGS, SONAR_RANGES) echo strengths 0..1 of one scan round the ROV, bearing
+    cell 0 astern (-180 deg off the heading) and going clockwise, out to ``sonar_range_m``:
+    echoes of the tree, the posts and the frame (range and bearing with noise, within the
+    vertical beam; each shadows its bearing behind it), the seabed's speckle from where the
+    beam first meets it, and noise."""
     rov = np.asarray(rov_eta_n, float)
     reach = sonar_range_m(info)
-    n = SONAR_PX
-    half = 0.5 * n
-    px_m = reach / half
-    img = np.zeros((n, n))
-    ys, xs = np.mgrid[0:n, 0:n]
-    starboard, ahead = (xs - half + 0.5) * px_m, (half - ys - 0.5) * px_m
-    r = np.hypot(starboard, ahead)
-    bearing = np.arctan2(starboard, ahead)
+    dr = reach / SONAR_RANGES
+    r = (np.arange(SONAR_RANGES) + 0.5) * dr
+    scan = np.zeros((SONAR_BEARINGS, SONAR_RANGES))
     height = seabed_depth_m(info) - rov[2]
     if height > 0.0:
         first = height / math.tan(SONAR_TILT_RAD + 0.5 * SONAR_BEAM_RAD)
-        bottom = (r >= first) & (r <= reach)
-        img += bottom * 0.25 * np.exp(-(r - first) / reach) * rng.rayleigh(0.6, (n, n))
+        fade = np.where(r >= first, 0.25 * np.exp(-(r - first) / reach), 0.0)
+        scan += fade * rng.rayleigh(0.6, scan.shape)
     points, strength = sonar_targets_n(info, tree_eta_n)
     d = points - rov[0:3]
     rng_h = np.hypot(d[:, 0], d[:, 1])
     depression = np.arctan2(d[:, 2], np.maximum(rng_h, 1e-6))
     lo, hi = SONAR_TILT_RAD - SONAR_BEAM_RAD, SONAR_TILT_RAD + SONAR_BEAM_RAD
     seen = (rng_h <= reach) & (depression >= lo) & (depression <= hi)
-    brg = np.arctan2(d[:, 1], d[:, 0]) - rov[5]
-    brg = brg[seen] + rng.normal(0.0, SONAR_BEARING_NOISE_RAD, int(seen.sum()))
-    rr = rng_h[seen] + rng.normal(0.0, SONAR_RANGE_NOISE_M, int(seen.sum()))
-    for b, rho, a in zip(brg, rr, strength[seen], strict=True):
-        dbrg = np.angle(np.exp(1j * (bearing - b)))
-        beam = np.exp(-0.5 * (dbrg / math.radians(1.5)) ** 2)
-        img += a * beam * np.exp(-0.5 * ((r - rho) / (2.0 * px_m)) ** 2)
-        img *= 1.0 - 0.7 * beam * (r > rho + 3.0 * px_m)  # its shadow behind it
-    img += rng.rayleigh(0.04, (n, n))
-    img = np.clip(img, 0.0, 1.0) * (r <= reach)
+    k = int(seen.sum())
+    brg = np.arctan2(d[seen, 1], d[seen, 0]) - rov[5] + rng.normal(0.0, SONAR_BEARING_NOISE_RAD, k)
+    rho = rng_h[seen] + rng.normal(0.0, SONAR_RANGE_NOISE_M, k)
+    cell_rad = 2.0 * math.pi / SONAR_BEARINGS
+    sigma = SONAR_BEAM_WIDTH_RAD / 2.355
+    for b, rr, a in zip(brg, rho, strength[seen], strict=True):
+        centre = ((b + math.pi) % (2.0 * math.pi)) / cell_rad - 0.5
+        cells = np.arange(int(centre) - 3, int(centre) + 5)
+        beam = np.exp(-0.5 * ((cells - centre) * cell_rad / sigma) ** 2)
+        rows = cells % SONAR_BEARINGS
+        scan[rows] += a * np.outer(beam, np.exp(-0.5 * ((r - rr) / (1.5 * dr)) ** 2))
+        scan[rows] *= 1.0 - 0.7 * np.outer(beam, r > rr + 3.0 * dr)  # its shadow
+    scan += rng.rayleigh(0.04, scan.shape)
+    return np.clip(scan, 0.0, 1.0)
+
+
+def sonar_image(
+    info: SceneInfo, rov_eta_n: FloatArray, tree_eta_n: FloatArray, rng: np.random.Generator
+) -> np.ndarray:
+    """(SONAR_PX, SONAR_PX, 3) uint8: a scan (``sonar_scan``) drawn round the ROV, its
+    heading up, amber on black, with range rings every quarter of the range and the ROV
+    marked in the middle."""
+    scan = sonar_scan(info, rov_eta_n, tree_eta_n, rng)
+    r, cell, starboard, ahead = _sonar_pixels(SONAR_PX)
+    inside = r <= 1.0
+    img = scan[cell, np.minimum((r * SONAR_RANGES).astype(int), SONAR_RANGES - 1)] * inside
     rgb = np.stack([255 * img, 200 * img**1.3, 60 * img**2], axis=-1)
-    rings = np.zeros((n, n), bool)
+    px = 2.0 / SONAR_PX
+    rings = np.zeros(r.shape, bool)
     for k in (1, 2, 3, 4):
-        rings |= np.abs(r - k * reach / 4) < 0.6 * px_m
+        rings |= np.abs(r - 0.25 * k) < 0.6 * px
     rgb[rings] = (90, 110, 120)
-    rgb[(np.abs(starboard) < 1.5 * px_m) & (np.abs(ahead) < 3 * px_m)] = (230, 110, 30)
+    rgb[(np.abs(starboard) < 1.5 * px) & (np.abs(ahead) < 3 * px)] = (230, 110, 30)
     return rgb.astype(np.uint8)
