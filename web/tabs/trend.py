@@ -138,7 +138,7 @@ class TrendPanel:
                 height=220,
                 visible=False,
             )
-            self.run = gui.add_dropdown("Run", (NO_TRAINEE,), initial_value=NO_TRAINEE)
+            self.run = gui.add_dropdown("Assessed run", (NO_TRAINEE,), initial_value=NO_TRAINEE)
             self.run.on_update(lambda _: self.show_run())
             self.run_md = gui.add_markdown("")
         self.refresh_trainees()
