@@ -319,3 +319,14 @@ def comparison_html(c: Comparison, plot: Path | None = None) -> str:
     figure = f"<figure>{png_html(plot)}</figure>" if plot is not None else ""
     table = table_html(("figure", "A", "B", "better"), table_rows(c))
     return f"<h2>Compared with another run</h2>{aligned}{said}{table}{figure}"
+
+
+def comparison_image(c: Comparison) -> np.ndarray:
+    """``plot_comparison``'s figure as an RGB image (height, width, 3), for a page."""
+    import tempfile
+
+    from matplotlib import image
+
+    with tempfile.TemporaryDirectory() as tmp:
+        rgba = image.imread(plot_comparison(c, Path(tmp) / "comparison.png"))
+    return (np.clip(rgba[..., :3], 0.0, 1.0) * 255).astype(np.uint8)

@@ -7,9 +7,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from app.compare import compare
+from app.compare import compare, comparison_image
 from app.report import debrief
 from tests.test_cli import cli
 
@@ -92,3 +93,11 @@ def test_the_debrief_includes_the_comparison_and_its_plot(two_runs, tmp_path: Pa
     plot = tmp_path / "both.png"
     assert cli("compare", str(a), str(b), "--plot", str(plot)).returncode == 0
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_pages_plot_is_the_command_lines_figure_as_an_image(two_runs) -> None:
+    a, b = two_runs
+    image = comparison_image(compare(a, b, "start"))
+    assert image.dtype == np.uint8 and image.ndim == 3 and image.shape[2] == 3
+    assert image.shape[0] > 300 and image.shape[1] > 300
+    assert image.min() < 50 < 200 < image.max(), "lines drawn on a white figure"

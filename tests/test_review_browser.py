@@ -109,6 +109,8 @@ def test_notes_live_and_in_replay_and_compare(
     ghost = _panel(server).record.ghost
     assert ghost is not None
     assert ghost.tree_node.name == "/compare_ghost/tree"
+    plot = _panel(server).record.compare_plot
+    assert plot.visible and plot.image.shape[0] > 300, "both runs on one time axis"
     click(page, "Top-down")
     page.get_by_text("RMS north error").filter(visible=True).first.scroll_into_view_if_needed()
     time.sleep(2.0)  # a test page draws once a second (SLOW_FRAMES)

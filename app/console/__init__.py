@@ -22,14 +22,14 @@ from here.
 
 It also passes on what reviewing a recording needs: its notes (``add_review_note``,
 ``notes_of``, ``Note``) and the comparison of two runs (``compare``, ``Comparison``,
-``table_rows``, ``CompareError``).
+``table_rows``, ``comparison_image``, ``CompareError``).
 
 It also passes on the core's rotations (``Rzyx``, ``quaternion_wxyz_from_rpy_radians``) and the
 wire's attachment point, so the view draws with the same geometry as the simulation.
 """
 
 from app import scores
-from app.compare import CompareError, Comparison, compare, table_rows
+from app.compare import CompareError, Comparison, compare, comparison_image, table_rows
 from app.console import commands, criteria
 from app.console.alarms import ALARM_NAMES, Alarm
 from app.console.commands import SPEED_MAX, SPEED_MIN, Command
@@ -127,6 +127,7 @@ __all__ = [
     "attachment_point_n",
     "commands",
     "compare",
+    "comparison_image",
     "compass_degrees",
     "compass_heading_deg",
     "counters_markdown",

@@ -10,6 +10,8 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from app.console import (
     CompareError,
     Console,
@@ -21,6 +23,7 @@ from app.console import (
     ViewerReplay,
     add_review_note,
     compare,
+    comparison_image,
     list_recordings,
     load_replay,
     md_code,
@@ -32,6 +35,9 @@ from app.console import commands as cmd
 from web.ghost import Ghost
 from web.review import comparison_markdown, notes_markdown, with_notes
 from web.widgets import Operator
+
+ALIGN_AT = {"mission start": "mission", "first contact": "contact", "recordings' start": "start"}
+"""Where the page aligns two runs (``app.compare``'s choices, in words)."""
 
 REPLAY_SPEEDS = ("0.25", "1", "5", "20", "50")
 """A replay's own speeds (the live run keeps its own)."""
@@ -138,9 +144,15 @@ class RecordTab:
             with gui.add_folder("Compare"):
                 gui.add_markdown(COMPARE_HELP)
                 self.compare_with = gui.add_dropdown("Compare with", self._recording_names())
+                self.align = gui.add_dropdown(
+                    "Align at", tuple(ALIGN_AT), initial_value=next(iter(ALIGN_AT))
+                )
                 gui.add_button("Compare runs").on_click(self._replay_action(self._compare))
                 gui.add_button("Clear comparison").on_click(self._replay_action(self._uncompare))
                 self.compare_md = gui.add_markdown("")
+                self.compare_plot = gui.add_image(
+                    np.full((2, 2, 3), 255, dtype=np.uint8), format="png", visible=False
+                )
         self.replay_time: Any = None
         self._replay_jumps: tuple[tuple[float, str], ...] = ()
         self._make_replay_slider(0.0, 1.0, ())  # enters the folder itself
@@ -242,8 +254,8 @@ class RecordTab:
 
     # ------------------------------------------------------------------ compare
     def _compare(self) -> None:
-        """Compare this browser's replay (A) with the recording picked (B): the table, and B
-        drawn as a ghost aligned at the mission's start."""
+        """Compare this browser's replay (A) with the recording picked (B), aligned where the
+        page says: the table, both runs' errors on one time axis, and B drawn as a ghost."""
         replay = self.replay
         if replay is None:
             return
@@ -251,7 +263,12 @@ class RecordTab:
         directory = self.console.settings.recordings_dir
         self.compare_md.content = f"comparing with {md_code(other)}..."
         try:
-            c = compare(recording_path(directory, replay.name), recording_path(directory, other))
+            c = compare(
+                recording_path(directory, replay.name),
+                recording_path(directory, other),
+                ALIGN_AT.get(str(self.align.value), "mission"),
+            )
+            plot = comparison_image(c)
         except (CompareError, ConsoleError, ValueError, FileNotFoundError) as err:
             self.compare_md.content = f"**cannot compare**: {md_text(err)}"
             return
@@ -273,6 +290,8 @@ class RecordTab:
         if old is not None:
             old.remove()
         self.compare_md.content = comparison_markdown(c)
+        self.compare_plot.image = plot
+        self.compare_plot.visible = True
         self.operator.say(f"compared with {md_code(other)}: its run is the purple ghost")
 
     def _uncompare(self) -> None:
@@ -281,6 +300,7 @@ class RecordTab:
         if old is not None:
             old.remove()
         self.compare_md.content = ""
+        self.compare_plot.visible = False
 
     # ------------------------------------------------------------------ replay
     def _on_open_replay(self, event: Any) -> None:
