@@ -4,6 +4,7 @@ mission builder's inputs read from the leg models, and the alarms."""
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 import pytest
@@ -490,11 +491,18 @@ def test_a_seek_is_not_undone_by_a_frame_update_that_comes_before_its_callback()
         _replay_name="trial",
         _replay_shown=20.0,
         replay_md=SimpleNamespace(content=""),
+        notes_md=SimpleNamespace(content=""),
+        _lock=threading.Lock(),
+        _notes=[],
+        _notes_changed=False,
+        _scene_info=None,
+        ghost=None,
     )
 
     def frame(t_s: float) -> None:
         status = ReplayStatus("trial", t_s, 0.0, 60.0, False, True)
-        RecordTab.update(tab, SimpleNamespace(source="replay", replay=status, speed=1.0))
+        snap = SimpleNamespace(source="replay", replay=status, speed=1.0, scene=None, t_s=t_s)
+        RecordTab.update(tab, snap)
 
     frame(20.0)
     bar.value = 5.0  # the viewer's value, as viser sets it before the callback
