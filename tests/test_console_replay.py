@@ -18,6 +18,7 @@ from pathlib import Path
 
 import httpx
 import numpy as np
+import pytest
 from PIL import Image
 
 from app.server import RunningServer
@@ -83,10 +84,13 @@ def _scene_difference(a, b) -> float:
     return float(np.mean(np.abs(scene_part(image(a)) - scene_part(image(b)))))
 
 
+@pytest.mark.slow  # 134 s of screenshots on a fresh clone's CI: the default run's 10 minutes
 def test_replay_is_per_browser_while_the_live_run_goes_on(
     page, server: RunningServer, api: httpx.Client
 ) -> None:
-    """Defect: opening a replay took over every browser and held the live run."""
+    """Defect: opening a replay took over every browser and held the live run. Two browsers
+    compared by their screenshots; the default run keeps the faster checks of a browser's own
+    replay (test_console_usability_browser, test_review_browser)."""
     other = page.context.new_page()
     try:
         other.set_viewport_size({"width": 1400, "height": 900})
