@@ -136,6 +136,10 @@ class Camera:
                 cam.fov = float(fov)
         except AssertionError:
             return  # the browser has not reported its camera yet: try again next frame
+        except RuntimeError:
+            # viser wakes its event loop from this thread; rarely the loop is reading the same
+            # waiters ("deque mutated during iteration"): the pose goes again next frame
+            return
         # the poses sent lately, to tell the browser's echoes of them from a camera the user
         # moved (the in-between pose and the pose itself)
         now = time.monotonic()
