@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
@@ -48,6 +47,7 @@ from pydantic import Field
 from app.api.deps import ConsoleDep, SnapshotDep, run_command
 from app.api.guards import websocket_origin_allowed
 from app.api.schemas import CommandOut, Finite, _In
+from app.api.stations import COMMAND_TIMEOUT_S, Refused, read_hello, read_message, refuse, send
 from app.console import Console, ConsoleError
 from app.console.commands import (
     WINCH_DISTANCE_MAX_M,
@@ -72,10 +72,7 @@ from app.console.operations import ACTOR
 router = APIRouter(tags=["crew"])
 WINCH_PAGE = (Path(__file__).parent / "winch_page.html").read_text(encoding="utf-8")
 SUPERVISOR_PAGE = (Path(__file__).parent / "supervisor_page.html").read_text(encoding="utf-8")
-HELLO_TIMEOUT_S = 30.0
 STATUS_PERIOD_S = 0.2
-COMMAND_TIMEOUT_S = 5.0
-MAX_MESSAGE_CHARS = 1000
 PAGE_HEADERS = {
     "Content-Security-Policy": "default-src 'self'; script-src 'unsafe-inline'; "
     "style-src 'unsafe-inline'; connect-src 'self'; frame-ancestors 'self'",
@@ -96,10 +93,6 @@ def supervisor_page() -> HTMLResponse:
     """The supervisor's station: the state, the alarms, the crew and the operations log;
     pause and resume."""
     return HTMLResponse(SUPERVISOR_PAGE, headers=PAGE_HEADERS)
-
-
-class Refused(Exception):
-    """The page is told why and the socket closes."""
 
 
 def parse_winch(text: str) -> Command:
@@ -130,34 +123,16 @@ def parse_supervisor(text: str) -> Command:
 
 
 def _message(text: str) -> dict[str, Any]:
-    if len(text) > MAX_MESSAGE_CHARS:
-        raise ValueError(f"message longer than {MAX_MESSAGE_CHARS} characters")
-    try:
-        m = json.loads(text)
-    except ValueError:
-        raise ValueError("message is not JSON") from None
+    m = read_message(text)
     if not isinstance(m, dict):
         raise ValueError("message must be a JSON object with a type")
     return m
 
 
-async def _send(websocket: WebSocket, message: dict[str, Any]) -> None:
-    await asyncio.wait_for(websocket.send_json(message), COMMAND_TIMEOUT_S)
-
-
 async def _sign_in(websocket: WebSocket, console: Console, role: str) -> str:
     """The crew member's name once the hello checks out, else Refused with the reason."""
-    try:
-        hello = await asyncio.wait_for(websocket.receive_json(), HELLO_TIMEOUT_S)
-    except TimeoutError:
-        raise Refused(f"sign in within {HELLO_TIMEOUT_S:g} s of connecting") from None
-    except ValueError:
-        raise Refused("the first message must be JSON: {type: hello, token, name}") from None
-    if not isinstance(hello, dict) or hello.get("type") != "hello":
-        raise Refused("the first message must be {type: hello, token, name}")
-    client = f"ws:{websocket.client.host if websocket.client else '?'}"
-    token = hello.get("token")
-    verdict, wait = console.check_station(role, token if isinstance(token, str) else None, client)
+    hello, token, client = await read_hello(websocket)
+    verdict, wait = console.check_station(role, token, client)
     if wait > 0.0:
         raise Refused(f"too many wrong tokens from this client: try again in {wait:.0f} s")
     if verdict == "another":
@@ -168,12 +143,6 @@ async def _sign_in(websocket: WebSocket, console: Console, role: str) -> str:
         return station_name(hello.get("name"), role)
     except ValueError as err:
         raise Refused(str(err)) from None
-
-
-async def _refuse(websocket: WebSocket, why: str) -> None:
-    with contextlib.suppress(Exception):
-        await _send(websocket, {"type": "error", "message": why})
-        await websocket.close(code=1008, reason=why[:120])
 
 
 @router.websocket("/api/winch")
@@ -189,7 +158,7 @@ async def winch_socket(websocket: WebSocket) -> None:
         if state.winch_name is not None:
             raise Refused(f"{state.winch_name} is on the winch: one winch operator at a time")
     except Refused as err:
-        await _refuse(websocket, str(err))
+        await refuse(websocket, str(err))
         return
     except WebSocketDisconnect:
         return
@@ -214,7 +183,7 @@ async def supervisor_socket(websocket: WebSocket) -> None:
     try:
         name = await _sign_in(websocket, state.console, "supervisor")
     except Refused as err:
-        await _refuse(websocket, str(err))
+        await refuse(websocket, str(err))
         return
     except WebSocketDisconnect:
         return
@@ -239,11 +208,11 @@ async def _station(
 
     async def report() -> None:
         while True:
-            await _send(websocket, {"type": "status", "status": status(console.loop.snapshot)})
+            await send(websocket, {"type": "status", "status": status(console.loop.snapshot)})
             await asyncio.sleep(STATUS_PERIOD_S)
 
     try:
-        await _send(websocket, {"type": "welcome", "name": name, "role": role})
+        await send(websocket, {"type": "welcome", "name": name, "role": role})
     except (WebSocketDisconnect, RuntimeError, OSError, TimeoutError):
         return
     reporter = asyncio.create_task(report())
@@ -255,9 +224,9 @@ async def _station(
                 future = console.loop.submit(command, who)
                 result = await asyncio.wait_for(asyncio.wrap_future(future), COMMAND_TIMEOUT_S)
             except (ValueError, ConsoleError, TimeoutError) as err:
-                await _send(websocket, {"type": "error", "message": str(err) or "timed out"})
+                await send(websocket, {"type": "error", "message": str(err) or "timed out"})
                 continue
-            await _send(websocket, {"type": "done", "result": result})
+            await send(websocket, {"type": "done", "result": result})
     except (WebSocketDisconnect, RuntimeError, OSError, TimeoutError):
         pass
     finally:

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +30,7 @@ from fastapi import APIRouter, Request, WebSocket, WebSocketDisconnect
 from fastapi.responses import HTMLResponse
 
 from app.api.guards import websocket_origin_allowed
+from app.api.stations import COMMAND_TIMEOUT_S, Refused, read_hello, read_message, refuse, send
 from app.console import PILOT_VIEW_PATH, Console, ConsoleError
 from app.console.pilot import (
     DEMAND_TIMEOUT_S,
@@ -45,11 +45,7 @@ from app.console.pilot import (
 
 router = APIRouter(tags=["pilot"])
 PAGE = (Path(__file__).parent / "pilot_page.html").read_text(encoding="utf-8")
-HELLO_TIMEOUT_S = 30.0
-"""The page must sign in within this long after opening the socket."""
 STATUS_PERIOD_S = 0.1
-COMMAND_TIMEOUT_S = 5.0
-MAX_MESSAGE_CHARS = 1000
 
 
 @router.get("/pilot", response_class=HTMLResponse)
@@ -59,14 +55,6 @@ def pilot_page(request: Request) -> HTMLResponse:
     port = view.port if view is not None else 0  # 0: the page says the 3D view is off
     page = PAGE.replace("__VIEW_PORT__", str(port)).replace("__VIEW_PATH__", PILOT_VIEW_PATH)
     return HTMLResponse(page)
-
-
-class PilotRefused(Exception):
-    """The page is told why and the socket closes."""
-
-
-async def _send(websocket: WebSocket, message: dict[str, Any]) -> None:
-    await asyncio.wait_for(websocket.send_json(message), COMMAND_TIMEOUT_S)
 
 
 async def _command(console: Console, command: object, who: str) -> Any:
@@ -88,36 +76,22 @@ def _snapshot_status(console: Console, last: dict[str, Any]) -> dict[str, Any]:
 
 
 async def _sign_in(websocket: WebSocket, console: Console) -> str:
-    """The pilot's name once the hello checks out, else PilotRefused with the reason."""
-    try:
-        hello = await asyncio.wait_for(websocket.receive_json(), HELLO_TIMEOUT_S)
-    except TimeoutError:
-        raise PilotRefused(f"sign in within {HELLO_TIMEOUT_S:g} s of connecting") from None
-    except ValueError:
-        raise PilotRefused("the first message must be JSON: {type: hello, token, name}") from None
-    if not isinstance(hello, dict) or hello.get("type") != "hello":
-        raise PilotRefused("the first message must be {type: hello, token, name}")
-    client = f"ws:{websocket.client.host if websocket.client else '?'}"
-    token = hello.get("token")
-    ok, wait = console.check_token(token if isinstance(token, str) else None, client)
+    """The pilot's name once the hello checks out, else Refused with the reason."""
+    hello, token, client = await read_hello(websocket)
+    ok, wait = console.check_token(token, client)
     if wait > 0.0:
-        raise PilotRefused(f"too many wrong tokens from this client: try again in {wait:.0f} s")
+        raise Refused(f"too many wrong tokens from this client: try again in {wait:.0f} s")
     if not ok:
-        raise PilotRefused("wrong token: flying needs the console token (printed at start-up)")
+        raise Refused("wrong token: flying needs the console token (printed at start-up)")
     try:
         return pilot_name(hello.get("name"))
     except ValueError as err:
-        raise PilotRefused(str(err)) from None
+        raise Refused(str(err)) from None
 
 
 def _parse(text: str) -> object:
     """One message from the page as a command, or ValueError saying what is wrong."""
-    if len(text) > MAX_MESSAGE_CHARS:
-        raise ValueError(f"message longer than {MAX_MESSAGE_CHARS} characters")
-    try:
-        m = json.loads(text)
-    except ValueError:
-        raise ValueError("message is not JSON") from None
+    m: Any = read_message(text)
     kind = m.get("type") if isinstance(m, dict) else None
     if kind == "demand":
         return PilotDemand(*(m.get(axis, 0.0) for axis in ("surge", "sway", "heave", "yaw")))
@@ -141,11 +115,9 @@ async def pilot_socket(websocket: WebSocket) -> None:
         name = await _sign_in(websocket, console)
         flying = state.pilot_name
         if flying is not None:
-            raise PilotRefused(f"{flying} is flying: one pilot at a time")
-    except PilotRefused as err:
-        with contextlib.suppress(Exception):
-            await _send(websocket, {"type": "error", "message": str(err)})
-            await websocket.close(code=1008, reason=str(err)[:120])
+            raise Refused(f"{flying} is flying: one pilot at a time")
+    except Refused as err:
+        await refuse(websocket, str(err))
         return
     except WebSocketDisconnect:
         return
@@ -154,7 +126,7 @@ async def pilot_socket(websocket: WebSocket) -> None:
     reason = "page closed"
     try:
         last = await _command(console, PilotConnected(), who)
-        await _send(websocket, {"type": "welcome", "name": name, "status": last})
+        await send(websocket, {"type": "welcome", "name": name, "status": last})
         reason = await _fly(websocket, console, who, last)
     except (WebSocketDisconnect, RuntimeError, OSError, TimeoutError):
         reason = "connection lost"
@@ -187,7 +159,7 @@ async def _fly(websocket: WebSocket, console: Console, who: str, last: dict[str,
             while True:
                 await asyncio.sleep(STATUS_PERIOD_S)
                 snap_status = _snapshot_status(console, status)
-                await _send(websocket, {"type": "status", "status": snap_status})
+                await send(websocket, {"type": "status", "status": snap_status})
 
     async def read() -> None:
         while True:
@@ -244,13 +216,13 @@ async def _apply(
         try:
             commands.append(_parse(text))
         except ValueError as err:
-            await _send(websocket, {"type": "error", "message": str(err)})
+            await send(websocket, {"type": "error", "message": str(err)})
     applied = False
     for command in newest_stick_wins(commands):
         try:
             status.update(await _command(console, command, who))
             applied = True
         except (ValueError, ConsoleError) as err:
-            await _send(websocket, {"type": "error", "message": str(err)})
+            await send(websocket, {"type": "error", "message": str(err)})
     if applied:
-        await _send(websocket, {"type": "status", "status": status})
+        await send(websocket, {"type": "status", "status": status})
