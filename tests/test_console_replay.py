@@ -84,7 +84,7 @@ def _scene_difference(a, b) -> float:
     return float(np.mean(np.abs(scene_part(image(a)) - scene_part(image(b)))))
 
 
-@pytest.mark.slow  # 134 s of screenshots on a fresh clone's CI: the default run's 10 minutes
+@pytest.mark.slow  # many screenshot comparisons: too long for the default run's budget
 def test_replay_is_per_browser_while_the_live_run_goes_on(
     page, server: RunningServer, api: httpx.Client
 ) -> None:
