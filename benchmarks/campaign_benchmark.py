@@ -10,7 +10,7 @@ included (printed apart), as a user waits for it. On a shared machine the number
 load: the script prints the load average before and after.
 
 ``--plain N`` also runs the same runs, in the same blocks as the campaign tool makes for N
-workers (``runner.runs_per_task``, ``missions.campaign.run_block``), in N plain processes
+workers (``runner.shrinking_blocks``, ``missions.campaign.run_block``), in N plain processes
 without Dask (a ``ProcessPoolExecutor``), timed from starting the processes: what Dask itself
 costs the campaign, with the same runs and the same start-up (each process imports the
 packages and loads the compiled kernels).
@@ -74,17 +74,16 @@ def _plain_block(text: str, indices: list[int]) -> float:
 def plain_processes(text: str, runs: int, processes: int) -> dict:
     """The campaign's runs in ``processes`` plain processes (no Dask), in the campaign tool's
     blocks; wall time from starting the processes to the last block's end."""
-    size = runner.runs_per_task(runs, processes)
-    blocks = runner.blocks_of(list(range(runs)), size)
+    blocks = runner.shrinking_blocks(list(range(runs)), processes)
     t0 = time.perf_counter()
-    spawn = multiprocessing.get_context("spawn")  # as Dask's nannies start their workers
-    with ProcessPoolExecutor(processes, mp_context=spawn) as pool:
+    context = multiprocessing.get_context(runner.LOCAL_START_METHOD)  # as the nannies do
+    with ProcessPoolExecutor(processes, mp_context=context) as pool:
         simulated = sum(pool.map(_plain_block, [text] * len(blocks), blocks))
     wall = time.perf_counter() - t0
     return {
         "processes": processes,
         "runs": runs,
-        "runs_per_task": size,
+        "blocks": len(blocks),
         "simulated_s": simulated,
         "wall_s": wall,
         "simulated_s_per_wall_s": simulated / wall,
@@ -107,10 +106,8 @@ def main() -> None:
     text = CAMPAIGN.format(runs=args.runs)
     campaign, base = cm.parse_text(text, "<benchmark>")
     load_before = os.getloadavg()
-    one_run = one_run_in_process(campaign, base)
     if not args.json:
         print(f"{machine.text(machine.describe())}, load average before: {load_before}")
-        print(f"one run in this process: {one_run:.0f} simulated s/s")
         header = ("workers", "runs", "failed", "simulated s", "wall s", "sim s/s")
         print(" ".join(f"{h:>{w}}" for h, w in zip(header, (7, 5, 6, 12, 8, 8), strict=True)))
     results = []
@@ -141,10 +138,15 @@ def main() -> None:
                 f"{simulated / wall:8.0f}   (in the run loop {p.wall_s:.1f} s)"
             )
     plain = plain_processes(text, args.runs, args.plain) if args.plain > 0 else None
+    # after the campaigns: their workers are forked from this process, which has imported the
+    # packages but not loaded the compiled kernels, as ``rov-console campaign``'s has not
+    one_run = one_run_in_process(campaign, base)
+    if not args.json:
+        print(f"one run in this process: {one_run:.0f} simulated s/s")
     if plain is not None and not args.json:
         print(
-            f"the same runs in {plain['processes']} plain processes (no Dask, blocks of "
-            f"{plain['runs_per_task']}): {plain['wall_s']:.1f} s, "
+            f"the same runs in {plain['processes']} plain processes (no Dask, the same "
+            f"{plain['blocks']} blocks): {plain['wall_s']:.1f} s, "
             f"{plain['simulated_s_per_wall_s']:.0f} simulated s/s"
         )
     if args.json:

@@ -527,8 +527,8 @@ def render_campaign(res: Results) -> str:
                 "the benchmark's own process (best of three): "
                 f"{res['one_run_simulated_s_per_s']:,.0f} simulated s/s."
                 + (
-                    f" The last row runs the same {plain['runs']} runs in the same blocks of "
-                    f"{plain['runs_per_task']} (`missions.campaign.run_block`) in "
+                    f" The last row runs the same {plain['runs']} runs in the same "
+                    f"{plain.get('blocks', '')} blocks (`missions.campaign.run_block`) in "
                     f"{plain['processes']} plain processes, their start counted as the "
                     "cluster's is: what Dask's scheduler, nannies and client cost the campaign."
                     if plain

@@ -616,3 +616,36 @@ def test_the_embedded_clusters_workers_run_without_the_profiler_trim_threshold_o
     assert dask.config.get("distributed.worker.profile.enabled") is True
     assert dask.config.get("distributed.admin.tick.interval") == "20ms"
     assert dask.config.get("distributed.nanny.pre-spawn-environ")["MALLOC_TRIM_THRESHOLD_"] == 65536
+
+
+# the embedded cluster's blocks and workers
+
+
+def test_blocks_shrink_to_single_runs_so_the_workers_finish_together():
+    todo = list(range(200))
+    blocks = runner.shrinking_blocks(todo, 2)
+    assert [i for b in blocks for i in b] == todo  # every run once, in order
+    sizes = [len(b) for b in blocks]
+    assert sizes[0] == cm.MAX_RUNS_PER_TASK  # 200 / (2 x 2) = 50, capped
+    assert sizes == sorted(sizes, reverse=True)
+    # each block is the runs left over twice the workers, rounded up: 32, 32, 32, 26, ...
+    assert sizes[:6] == [32, 32, 32, 26, 20, 15]
+    assert sizes[-4:] == [1, 1, 1, 1]
+    # a few runs on many workers: one run a task
+    assert runner.shrinking_blocks([7, 8, 9], 4) == [[7], [8], [9]]
+    assert runner.shrinking_blocks([], 2) == []
+
+
+def _probe() -> object:
+    return getattr(cm, "_parent_only_probe", None)
+
+
+@pytest.mark.skipif(runner.LOCAL_START_METHOD != "fork", reason="no fork on this system")
+def test_embedded_cluster_workers_are_forked_from_the_calling_process(monkeypatch):
+    """A value set in this process at run time, never imported, reaches the workers only if
+    they are forks of it (a spawned worker imports ``missions.campaign`` afresh)."""
+    from distributed import Client
+
+    monkeypatch.setattr(cm, "_parent_only_probe", 4711, raising=False)
+    with runner.local_cluster(1) as address, Client(address) as client:
+        assert client.submit(_probe, pure=False).result() == 4711

@@ -72,8 +72,8 @@ def run_command(
         typer.Option(
             min=1,
             max=MAX_RUNS_PER_TASK,
-            help="runs stepped together in one batch per task (default: a quarter of the "
-            f"runs per worker, at most {MAX_RUNS_PER_TASK})",
+            help="runs per task, run one after another (default: tasks shrinking to one run "
+            f"towards the end, so that the workers finish together; at most {MAX_RUNS_PER_TASK})",
         ),
     ] = None,
     limit: Annotated[

@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import logging
+import multiprocessing
 import os
 import time
 from collections.abc import Callable, Collection, Iterator
@@ -36,13 +37,15 @@ LOST_RETRIES = 3
 LOCAL_WORKER_CONFIG: dict[str, Any] = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "5s",
+    "distributed.worker.memory.monitor-interval": "1s",
 }
 LOCAL_WORKER_ENVIRON: dict[str, Any] = {
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None
 }
 """Dask settings of the embedded cluster's workers (an existing cluster keeps its own). Dask's
 defaults suit workers holding large, changing data; a campaign worker steps small arrays in
-a tight loop, and three of them cost it time (some 10-20 % together, measured with
+a tight loop, and five of them cost it time (some 10-20 % together, measured with
 ``benchmarks/campaign_benchmark.py``): the statistical profiler (every 10 ms a thread takes
 the interpreter lock to sample the running task's stack, for the dashboard's profile page),
 ``MALLOC_TRIM_THRESHOLD_=65536`` (glibc hands freed memory back to the system above 64 KiB
@@ -50,8 +53,28 @@ and faults it in again for the next chunk's arrays; unset, glibc adapts its thre
 the event loop's tick (``distributed.admin.tick.interval``, 20 ms), the loop's check of its
 own responsiveness for a warning when it was stuck for 3 s or more, which takes the
 interpreter lock from the task 50 times a second: once a second is plenty for a 3 s warning.
+The system monitor (each process's CPU, memory, network and disk counters for the dashboard,
+every 0.5 s) and the nannies' memory monitor (each worker's memory against its limit, every
+0.1 s) run on the same two cores as the workers; every 5 s and every second leave the
+dashboard its graphs and a runaway worker's memory caught within a second (together about 1.5 %
+of a two-worker campaign). The nannies and the scheduler live in the calling process, so the
+settings apply there as well as in the workers.
 A threshold in the calling process's own environment still reaches the workers (they inherit
 it): the user's own, or one that a nanny with Dask's settings exported there earlier."""
+
+
+LOCAL_START_METHOD = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+"""How the embedded cluster's nannies start their workers: by forking this process where the
+system can (Linux), otherwise as Dask does by default (spawn, a fresh interpreter).
+
+A spawned worker starts an interpreter and imports Dask before the cluster is up, then on its
+first task this package, numba and scipy, and loads the compiled kernels: some 2 s before it
+steps, of a 200-docking campaign's 20 s on two workers. A forked one has what this process has
+imported already (``benchmarks/campaign_benchmark.py``; figures in ``docs/performance.md``).
+The process that forks is a command line's (``rov-console campaign``, ``operability``), whose
+only other thread is Dask's event loop, the one that forks; the console's server never starts
+a cluster. A worker that a nanny starts again after a crash is spawned: the setting holds while
+the cluster is made."""
 
 
 def blocks_of(todo: list[int], size: int) -> list[list[int]]:
@@ -59,12 +82,20 @@ def blocks_of(todo: list[int], size: int) -> list[list[int]]:
     return [todo[k : k + size] for k in range(0, len(todo), size)]
 
 
-def runs_per_task(todo: int, workers: int) -> int:
-    """Runs per task for ``todo`` runs on ``workers`` workers: ``todo / (2 workers)`` rounded
-    up (smaller blocks when there are few runs, so that the workers finish together: a worker
-    left with the last large block would run it alone), at least 1 and at most
-    ``missions.campaign.MAX_RUNS_PER_TASK``."""
-    return max(1, min(cm.MAX_RUNS_PER_TASK, -(-todo // (2 * max(1, workers)))))
+def shrinking_blocks(todo: list[int], workers: int) -> list[list[int]]:
+    """The runs ``todo`` cut into tasks that shrink towards the end (guided self-scheduling):
+    each takes the runs left divided by twice the workers, rounded up, at least 1 and at most
+    ``MAX_RUNS_PER_TASK``. The first tasks are large, sharing a task's overhead over many
+    runs; the last are single runs, so the workers finish within about one run of each other
+    instead of one waiting while the other runs a last large block alone (with equal blocks of
+    32, 200 runs on two workers left one core idle for a block's last 8 runs, about 1.3 s)."""
+    blocks: list[list[int]] = []
+    k = 0
+    while k < len(todo):
+        size = max(1, min(cm.MAX_RUNS_PER_TASK, -(-(len(todo) - k) // (2 * max(1, workers)))))
+        blocks.append(todo[k : k + size])
+        k += size
+    return blocks
 
 
 @dataclass
@@ -88,7 +119,8 @@ def _cluster_client(scheduler: str | None, workers: int | None) -> Any:
     # a nanny reads its workers' environment as it starts, and hands each worker it starts
     # (again, after a crash) its own copy of the config: a key given here, not one set
     # around it (the nanny's copy shares the nested settings that a context restores)
-    with dask.config.set(LOCAL_WORKER_ENVIRON):
+    start = {"distributed.worker.multiprocessing-method": LOCAL_START_METHOD}
+    with dask.config.set({**LOCAL_WORKER_CONFIG, **LOCAL_WORKER_ENVIRON, **start}):
         cluster = LocalCluster(
             n_workers=workers or os.cpu_count() or 1,
             threads_per_worker=1,
@@ -144,7 +176,7 @@ def run_campaign(
 ) -> CampaignProgress:
     """Run every run of the campaign that has no row in ``out`` yet; rows go to Parquet parts
     as they finish. ``on_row(row, client)`` is called after each row (tests use it).
-    ``per_task``: runs per task (None: ``runs_per_task`` for the cluster's workers).
+    ``per_task``: runs per task (None: ``shrinking_blocks`` for the cluster's workers).
     ``limit``: run at most this many runs for a quick look (``cm.quick_look_runs``: one of each
     point first); ``resume`` later runs the rest. ``only``: run just these runs (the
     operability table's second pass: more seeds where a cell is near a limit)."""
@@ -169,8 +201,7 @@ def run_campaign(
     t0 = time.perf_counter()
     try:
         n_workers = len(client.scheduler_info().get("workers", {})) or workers or 1
-        size = per_task or runs_per_task(len(todo), n_workers)
-        blocks = blocks_of(todo, size)
+        blocks = blocks_of(todo, per_task) if per_task else shrinking_blocks(todo, n_workers)
         with _progress_bar(show_progress, campaign.name, progress) as bar:
             futures = {
                 client.submit(
