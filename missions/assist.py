@@ -131,9 +131,7 @@ def frame_utilisation(
 ) -> landing.PoseLoad:
     """Holding the tree over ``frame`` at its heading, ``depth_m`` deep, in the present
     current, with the crane tip at ``crane_tip_n`` (NED, m)."""
-    env = landing._environment(
-        sim, depth_m, sim.current_speed_mps, sim.current_direction_rad, crane_tip_n
-    )
+    env = landing._environment(sim, depth_m, *sim.current_flowing(), crane_tip_n)
     n, e = float(frame.center_n[0]), float(frame.center_n[1])
     return landing.pose_load(sim, thrusters, n, e, frame.heading_rad, env, depth_m)
 
@@ -189,7 +187,7 @@ def _path_worst(
     crane tip moves in step from ``tip_start`` to ``tip_end`` (``skip_first``: from just
     after the start)."""
     loads = []
-    speed, direction = sim.current_speed_mps, sim.current_direction_rad
+    speed, direction = sim.current_flowing()
     for s in np.linspace(0.0, 1.0, PATH_SAMPLES)[1 if skip_first else 0 :]:
         tip = tip_start + s * (tip_end - tip_start)
         ne = start_ne + s * (end_ne - start_ne)
@@ -217,7 +215,7 @@ def _turn_worst(
     headings = psi0 + np.linspace(0.0, turn, steps)[1:]
     steps -= 1
     poses = np.column_stack([np.full(steps, ne[0]), np.full(steps, ne[1]), headings])
-    env = landing._environment(sim, depth_m, sim.current_speed_mps, sim.current_direction_rad, tip)
+    env = landing._environment(sim, depth_m, *sim.current_flowing(), tip)
     return _most(landing.pose_loads(sim, thrusters, poses, env, depth_m))
 
 
@@ -283,7 +281,7 @@ def plan_vessel(
 
 
 def _reason(sim: Simulation, frame: DockingFrame, plan: VesselPlan) -> str:
-    speed, direction = sim.current_speed_mps, sim.current_direction_rad
+    speed, direction = sim.current_flowing()
     current = f"{speed:.3f} m/s towards {math.degrees(direction) % 360:.0f} deg"
     limit = f"{100 * landing.FEASIBLE_UTILISATION:.0f} %"
     where = (
