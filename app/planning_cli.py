@@ -219,8 +219,8 @@ def window(
     alpha_table: Annotated[
         str,
         typer.Option(
-            help="alpha table: base (one forecast), meteorologist (one on site), monitoring "
-            "(and the waves measured), or a CSV file of your own"
+            help="alpha table: base (DNV's base case: one forecast source, no meteorologist "
+            "on site), or a CSV file of the table you work to (a better forecast's)"
         ),
     ] = "base",
     table: Annotated[
