@@ -15,7 +15,13 @@ never bumps the command; a change of K_p or K_d is made bumpless by moving the j
 
 Anti-windup (eq. 3.19): the integral part is moved to the ROV frame (eq. 3.7), saturated there
 at 90 % of what the thrusters can give in each DOF alone, and the surplus is taken off the
-integrator, moved back through the tree frame.
+integrator, moved back through the tree frame. With the feedforward on, the integral may go
+beyond that limit where the integral and the feedforward together stay within it: the
+feedforward counters the wire spring's pull towards the crane tip, and where the vessel has
+been moved upstream so that the current's drag (which no model term holds) balances that
+pull, the integral must cancel the feedforward, several kN; clamped alone it could not, and
+the tree rested 0.6 m downstream of the frame, never aligned. The integral is never clamped
+tighter than eq. 3.19 clamps it.
 """
 
 from __future__ import annotations
@@ -212,14 +218,27 @@ def tree_pid_into(
         e[k] = eta[k] - eta_d[k]
         de[k] = deta[k] - deta_d[k] if use_ff else deta[k]
     e[2] = ssa_scalar(e[2])
-    # anti-windup (eq. 3.19): clamp the integral part in the ROV frame
+    if use_ff:
+        feedforward_into(terms[3], psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq, work[4])
+    else:
+        for k in range(3):
+            terms[3, k] = 0.0
+    # anti-windup (eq. 3.19): clamp the integral part in the ROV frame, alone or, where that
+    # leaves it more room, with the feedforward (the integral may cancel a feedforward that a
+    # load the model lacks balances: a wire the vessel inclined against the current's drag)
     i_b[0] = c * i_n[0] + s * i_n[1]
     i_b[1] = -s * i_n[0] + c * i_n[1]
     i_b[2] = i_n[2]
     mv3_into(i_rov, A, i_b)
+    ff_rov = work[4]
+    if use_ff:
+        mv3_into(ff_rov, A, terms[3])
     changed = False
     for k in range(3):
-        clipped[k] = np.minimum(np.maximum(i_rov[k], -i_limit_rov[k]), i_limit_rov[k])
+        lo, hi = -i_limit_rov[k], i_limit_rov[k]
+        if use_ff:
+            lo, hi = min(lo, lo - ff_rov[k]), max(hi, hi - ff_rov[k])
+        clipped[k] = np.minimum(np.maximum(i_rov[k], lo), hi)
         changed = changed or clipped[k] != i_rov[k]
     if changed:
         # body_to_ned(A_inv @ clipped, psi)
@@ -242,11 +261,6 @@ def tree_pid_into(
     terms[2, 0] = c * d0 + s * d1
     terms[2, 1] = -s * d0 + c * d1
     terms[2, 2] = d2
-    if use_ff:
-        feedforward_into(terms[3], psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq, work[4])
-    else:
-        for k in range(3):
-            terms[3, k] = 0.0
     for k in range(3):
         tau[k] = terms[0, k] + terms[1, k] + terms[2, k] + terms[3, k]
         i_next[k] = i_use[k] - Ki[k] * e[k] * dt

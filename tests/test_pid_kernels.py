@@ -55,17 +55,21 @@ def _pid_vector(
     de = deta - deta_d if use_ff else deta.copy()
     p_n = -Kp * e
     d_n = -Kd * de
+    terms = np.zeros((4, 3))
+    if use_ff:
+        terms[3] = _ff_vector(psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq)
     i_rov = _mv3(A, pid.ned_to_body(i_n, psi))
-    clipped = np.minimum(np.maximum(i_rov, -i_limit_rov), i_limit_rov)
+    lo, hi = -i_limit_rov, i_limit_rov
+    if use_ff:  # alone or with the feedforward within the limit, whichever leaves more room
+        ff_rov = _mv3(A, terms[3])
+        lo, hi = np.minimum(lo, lo - ff_rov), np.maximum(hi, hi - ff_rov)
+    clipped = np.minimum(np.maximum(i_rov, lo), hi)
     i_use = i_n.copy()
     if np.any(clipped != i_rov):
         i_use = pid.body_to_ned(_mv3(A_inv, clipped), psi)
-    terms = np.zeros((4, 3))
     terms[0] = pid.ned_to_body(p_n, psi)
     terms[1] = pid.ned_to_body(i_use, psi)
     terms[2] = pid.ned_to_body(d_n, psi)
-    if use_ff:
-        terms[3] = _ff_vector(psi, eta_d, deta_d, ddeta_d, M, D_l, D_nl, k_h, p_eq)
     tau = terms[0] + terms[1] + terms[2] + terms[3]
     i_next = i_use - Ki * e * dt
     return tau, i_next, terms, e, de
@@ -107,6 +111,35 @@ def test_tree_pid_is_its_vector_form_to_the_bit(use_ff: bool) -> None:
         i_rov = A @ pid.ned_to_body(args[5], args[0][2])
         clipped_cases += int(np.any(np.abs(i_rov) > args[17]))
     assert clipped_cases > 10  # the anti-windup branch was taken
+
+
+def test_the_integral_may_cancel_an_opposing_feedforward_beyond_its_own_limit() -> None:
+    """Defect (issue 44's one failed landing of 200): with the vessel moved upstream, the
+    feedforward's wire spring asks some 4.3 kN that the current's drag balances, and the
+    integral must cancel it; clamped alone at the anti-windup's limit, it could not, and the
+    tree rested 0.6 m off the frame. Heading 0, A = I: body, ROV and NED axes coincide."""
+    zero = np.zeros(3)
+    lim = np.array([3000.0, 3000.0, 3000.0])
+    k_h = 1000.0
+    p_eq = np.array([0.0, 4.3])  # the crane tip's equilibrium 4.3 m east of the reference
+
+    def integral_term(i_sway: float) -> tuple[float, float]:
+        _, _, terms, _, _ = pid.tree_pid(
+            zero, zero, zero, zero, zero, np.array([0.0, i_sway, 0.0]), np.ones(3),
+            np.ones(3), np.ones(3), True, np.eye(3), np.ones(3), np.ones(3), k_h, p_eq,
+            np.eye(3), np.eye(3), lim, 0.01,
+        )  # fmt: skip
+        return float(terms[1, 1]), float(terms[3, 1])
+
+    used, ff = integral_term(4000.0)
+    assert ff == pytest.approx(-4300.0)  # k_h x 4.3 m, against the wire's pull east
+    assert used == 4000.0  # beyond 3 kN alone, but with the feedforward -300 N: not clipped
+    used, ff = integral_term(8000.0)
+    assert used == pytest.approx(lim[1] - ff)  # the pair clipped at +3 kN: 7.3 kN
+    used, _ = integral_term(-5000.0)
+    assert used == -lim[1]  # the same way as the feedforward: clipped as eq. 3.19 clips it
+    used, _ = integral_term(-2000.0)
+    assert used == -2000.0  # within the limit alone: never clipped tighter than eq. 3.19
 
 
 @given(
