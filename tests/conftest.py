@@ -33,6 +33,7 @@ BROWSER_MODULES = (
     "test_plots_page.py",
     "test_pilot_browser.py",
     "test_review_browser.py",
+    "test_console_vessel_advice_browser.py",
 )
 LONGEST_FIRST = (
     "test_missions.py",

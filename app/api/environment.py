@@ -16,7 +16,7 @@ from app.api.schemas import (
     VisibilityIn,
     VisibilityOut,
 )
-from app.console.commands import MoveVessel, SetCurrent
+from app.console.commands import ApplyVesselAdvice, MoveVessel, SetCurrent
 
 router = APIRouter(prefix="/api/environment", tags=["environment"])
 
@@ -48,6 +48,15 @@ async def move_vessel(body: VesselIn, console: ConsoleDep, _: TokenDep) -> Comma
     return CommandOut(
         result=await run_command(console, MoveVessel(body.north_m, body.east_m, body.speed_mps))
     )
+
+
+@router.post("/vessel/apply-advice", response_model=CommandOut)
+async def apply_vessel_advice(console: ConsoleDep, _: TokenDep) -> CommandOut:
+    """Follow the running dock leg's advice to move the vessel (``vessel = "advise"``; the
+    state's ``mission.vessel_advice``): the vessel goes to the advised crane tip at the
+    speed the leg itself moves it. 409 when there is no advice to apply or it is applied
+    already."""
+    return CommandOut(result=await run_command(console, ApplyVesselAdvice()))
 
 
 @router.get("/visibility", response_model=VisibilityOut)

@@ -15,6 +15,7 @@ from app.console import (
     MissionStatus,
     ReplayStatus,
     Snapshot,
+    VesselAdvice,
 )
 from app.console.commands import (
     CURRENT_MAX_MPS,
@@ -105,6 +106,23 @@ class PoseOut(BaseModel):
         return PoseOut(north_m=p[0], east_m=p[1], heading_deg=math.degrees(p[2]))
 
 
+class VesselAdviceOut(BaseModel):
+    """A dock leg's advice to move the vessel (``vessel = "advise"``), which the leg waits for
+    the operator to follow (POST /api/environment/vessel/apply-advice follows it)."""
+
+    text: str = Field(description="the leg's words: 'move the vessel 4.8 m towards 016 deg ...'")
+    crane_tip_ne_m: tuple[float, float] = Field(description="where the crane tip should go")
+    t_s: float = Field(description="run time when it was given [s]")
+    distance_m: float = Field(description="how far the vessel should move, from where it stood")
+    bearing_deg: float = Field(description="which way, as a compass bearing")
+    applied: bool = Field(description="the vessel is commanded to the advised place")
+    to_go_m: float = Field(description="the crane tip's distance from the advised place now")
+
+    @staticmethod
+    def of(a: VesselAdvice) -> VesselAdviceOut:
+        return VesselAdviceOut(**a.__dict__)
+
+
 class MissionStatusOut(BaseModel):
     name: str | None
     state: str = Field(
@@ -115,10 +133,18 @@ class MissionStatusOut(BaseModel):
     leg_type: str | None
     leg_name: str | None
     result: dict[str, Any] | None
+    vessel_advice: VesselAdviceOut | None = Field(
+        default=None,
+        description="the running dock leg's newest advice to move the vessel, until the leg "
+        "or the mission ends",
+    )
 
     @staticmethod
     def of(m: MissionStatus) -> MissionStatusOut:
-        return MissionStatusOut(**m.__dict__)
+        advice = m.vessel_advice
+        return MissionStatusOut(
+            **{**m.__dict__, "vessel_advice": VesselAdviceOut.of(advice) if advice else None}
+        )
 
 
 class AlarmOut(BaseModel):

@@ -60,6 +60,7 @@ from app.console.snapshot import (
     ReplayStatus,
     SceneInfo,
     Snapshot,
+    VesselAdvice,
 )
 from app.console.texts import (
     alarm_meaning,
@@ -118,6 +119,7 @@ __all__ = [
     "SceneInfo",
     "Session",
     "Snapshot",
+    "VesselAdvice",
     "ViewerReplay",
     "Water",
     "add_review_note",

@@ -20,6 +20,7 @@ from app.recording import SessionData
 from app.recording.notes import NOTE_KIND, note_author, note_text
 from control.config import Allocation, Gains, Mode
 from control.simulation import WINCH_RATE_MAX_MPS, WIRE_LENGTH_RANGE_M, Simulation
+from missions.assist import VESSEL_SPEED_MPS
 
 SPEED_MIN, SPEED_MAX = 0.25, 50.0
 """Simulated seconds per wall-clock second the loop can run at."""
@@ -287,6 +288,26 @@ class MoveVessel:
             {"north_m": self.north_m, "east_m": self.east_m, "speed_mps": self.speed_mps},
         )
         return {"north_m": self.north_m, "east_m": self.east_m}
+
+
+@dataclass(frozen=True)
+class ApplyVesselAdvice:
+    """Follow the running dock leg's advice to move the vessel (``vessel = "advise"``): a
+    ``MoveVessel`` to the advised crane tip at the speed the leg's "auto" moves the vessel,
+    ``missions.assist.VESSEL_SPEED_MPS``. Refused (ConsoleError) when there is no advice to
+    apply, or it is applied already."""
+
+    def apply(self, loop: LoopControls) -> object:
+        advice = loop.session.vessel_advice_to_apply()
+        north, east = advice.crane_tip_ne_m
+        MoveVessel(north, east, VESSEL_SPEED_MPS).apply(loop)
+        return {
+            "north_m": north,
+            "east_m": east,
+            "speed_mps": VESSEL_SPEED_MPS,
+            "advice": advice.text,
+            "advice_t_s": advice.t_s,
+        }
 
 
 # ---------------------------------------------------------------------- the winch station

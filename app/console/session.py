@@ -36,11 +36,14 @@ from app.console.snapshot import (
     SceneInfo,
     Snapshot,
     TrendBuffer,
+    VesselAdvice,
+    advice_now,
     default_docking_frame,
     fault_views,
     frozen_copy,
     row_view,
     scene_info,
+    vessel_advice,
     winch_view,
 )
 from app.console.texts import alarm_title
@@ -193,6 +196,10 @@ class Session:
         """Entries of ``sim.fault_events`` already written as events."""
         self._mission_events_written = 0
         """Entries of ``driver.events`` already written into the recording."""
+        self._advice: VesselAdvice | None = None
+        """The running leg's newest advice to move the vessel (``MissionStatus``)."""
+        self._advice_events_read = 0
+        """Entries of ``driver.events`` already read for advice."""
 
     def replace_run(self, run: PreparedRun) -> None:
         """Swap in a new simulation. A recording in progress goes on in the same file, its
@@ -246,6 +253,7 @@ class Session:
             assert self.driver is not None
             rows = self.driver.advance(remaining)
             self._follow_leg()
+            self._follow_vessel_advice()
             self._record_mission_events()
             if len(rows):
                 self._take_rows(rows)
@@ -284,10 +292,22 @@ class Session:
                 "mission", f"leg {index} ({leg.type}) started", {"leg": index, "type": leg.type}
             )
 
+    def _follow_vessel_advice(self) -> None:
+        """Keep the running leg's newest advice to move the vessel: a leg's start clears it,
+        an advice replaces the one before."""
+        assert self.driver is not None
+        events = self.driver.events
+        for event in events[self._advice_events_read :]:
+            if event["kind"] == "leg":
+                self._advice = None
+            self._advice = vessel_advice(event) or self._advice
+        self._advice_events_read = len(events)
+
     def _finish_mission(self, state: str) -> None:
         driver = self.driver
         if driver is None:
             return
+        self._advice = None
         if state == "aborted":
             driver.abort()
         s = self.mission_status
@@ -439,6 +459,25 @@ class Session:
         tip = self.sim.crane_tip_n
         self.sim.move_vessel(np.array([north_m, east_m, tip[2]]), speed_mps)
 
+    def vessel_advice_to_apply(self) -> VesselAdvice:
+        """The running leg's advice to move the vessel, not yet applied; ConsoleError saying
+        why there is none to apply."""
+        if not self._mission_running:
+            raise ConsoleError("no vessel advice to apply: no mission is running")
+        if self._advice is None:
+            raise ConsoleError(
+                "no vessel advice to apply: the running leg has given none (a dock leg with "
+                'vessel = "advise" gives one when the ROV alone cannot hold the tree over '
+                "the frame)"
+            )
+        advice = advice_now(self._advice, self.sim)
+        if advice.applied:
+            raise ConsoleError(
+                f"the vessel advice given at {advice.t_s:.0f} s is applied already: the vessel "
+                "is commanded there"
+            )
+        return advice
+
     # ------------------------------------------------------------------ recording
     def note(self, kind: str, text: str, data: dict) -> None:
         """An event in the recording (commands, alarms, mission progress); while the loop
@@ -581,6 +620,13 @@ class Session:
             self._result = None
         return self.mission_status
 
+    def _mission_view(self) -> MissionStatus:
+        """The mission's status with its pending vessel advice, applied or not as of now."""
+        status = self._mission_result()
+        if self._advice is None or not self._mission_running:
+            return status
+        return replace(status, vessel_advice=advice_now(self._advice, self.sim))
+
     def _trend(self) -> FloatArray:
         now = time.monotonic()
         if now - self._trend_wall > 0.1:
@@ -614,7 +660,7 @@ class Session:
             current_speed_mps=sim.current_speed_mps,
             current_direction_rad=sim.current_direction_rad,
             wire_drag_newton_per_m=float(sim.ps.wire.drag_per_length(sim.current_speed_mps)),
-            mission=self._mission_result(),
+            mission=self._mission_view(),
             alarms=self.monitor.state,
             recording=self.recording_name,
             replay=None if self.replay is None else self.replay.status(),

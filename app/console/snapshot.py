@@ -8,7 +8,7 @@ Angles are radians here (the core's unit); the API turns them into degrees at it
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -146,6 +146,57 @@ class SceneInfo:
         return self.frame.landing_depth_m - self.layout.post_height_m
 
 
+ADVICE_APPLIED_TOL_M = 0.05
+"""The vessel commanded within this of the advised crane tip counts as the advice applied
+[m] (the Control tab's vessel form shows the crane tip to 0.01 m)."""
+
+
+@dataclass(frozen=True)
+class VesselAdvice:
+    """A dock leg's advice to move the vessel (``vessel = "advise"``, ``missions.assist``),
+    which the leg waits for the operator to follow."""
+
+    text: str
+    """The leg's words: 'move the vessel 4.8 m towards 016 deg (crane tip to ...)'."""
+    crane_tip_ne_m: tuple[float, float]
+    """Where the crane tip should go (north, east) [m]."""
+    t_s: float
+    """Run time when it was given [s]."""
+    distance_m: float
+    """How far the vessel should move, from where it stood then [m]."""
+    bearing_deg: float
+    """Which way, as a compass bearing [deg]."""
+    applied: bool = False
+    """The vessel is commanded there (within ``ADVICE_APPLIED_TOL_M``)."""
+    to_go_m: float = 0.0
+    """The crane tip's distance from the advised place now [m]."""
+
+
+def vessel_advice(event: dict) -> VesselAdvice | None:
+    """The advice in a mission event (``missions.legs``' kind "vessel", mode "advise"); None
+    for any other event (a "vessel" event of mode "auto" is a move the leg made itself)."""
+    data = event.get("data", {})
+    if event.get("kind") != "vessel" or data.get("mode") != "advise":
+        return None
+    north, east = (float(v) for v in data["crane_tip_ne_m"])
+    return VesselAdvice(
+        str(event["text"]),
+        (north, east),
+        float(event["t_s"]),
+        float(data["distance_m"]),
+        float(data["bearing_deg"]),
+    )
+
+
+def advice_now(advice: VesselAdvice, sim: Simulation) -> VesselAdvice:
+    """``advice`` with where the vessel is commanded and stands now: applied or not, and how
+    far the crane tip still has to go."""
+    tip = np.asarray(advice.crane_tip_ne_m)
+    commanded = float(np.hypot(*(sim.crane_target_n[0:2] - tip)))
+    to_go = float(np.hypot(*(sim.crane_tip_n[0:2] - tip)))
+    return replace(advice, applied=commanded <= ADVICE_APPLIED_TOL_M, to_go_m=to_go)
+
+
 @dataclass(frozen=True)
 class MissionStatus:
     """The mission in progress or the last one run."""
@@ -160,6 +211,9 @@ class MissionStatus:
     leg_name: str | None = None
     result: dict | None = None
     """``MissionResult.summary()`` once the mission has ended."""
+    vessel_advice: VesselAdvice | None = None
+    """The running dock leg's advice to move the vessel, the newest (None: none, or the
+    mission has ended or the leg moved on)."""
 
 
 @dataclass(frozen=True)

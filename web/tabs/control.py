@@ -1,5 +1,6 @@
 """The "Control" tab: the control system's mode, allocation and grip, the controller's gains
-(each within its band, ``commands.gain_band``), the current, and the vessel's crane tip."""
+(each within its band, ``commands.gain_band``), the current, and the vessel's crane tip (with a
+dock leg's advice to move it, ``web.tabs.advice``)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ from typing import Any
 
 from app.console import MODES, Console, Gains, Snapshot, compass_heading_deg
 from app.console import commands as cmd
+from web.tabs.advice import AdvicePanel, advised_tip
 from web.widgets import Operator
 
 TERMS = ("kp", "ki", "kd")
@@ -89,7 +91,8 @@ class ControlTab:
                 form=current_form,
             )
         with gui.add_form("Vessel (crane tip)") as vessel_form:
-            ct = snap.crane_tip_n
+            self.advice = AdvicePanel(op)
+            ct = advised_tip(snap)
             lim = cmd.VESSEL_RANGE_M
             self.vessel_n, self.vessel_e = (
                 op.live_input("vessel", op.bounded(number, -lim, lim, "m"))
@@ -98,6 +101,10 @@ class ControlTab:
                     gui.add_number("East m", round(ct[1], 2), step=0.1),
                 )
             )
+            for tip_input in (self.vessel_n, self.vessel_e):
+                # to the centimetre they follow the crane tip: viser takes the digits it shows
+                # from the first value, and a crane tip at 1.0 m showed a later 5.68 as 5.7
+                tip_input.precision = 2
             op.action(
                 op.guard(gui.add_button("Move vessel")),
                 lambda: cmd.MoveVessel(op.number(self.vessel_n), op.number(self.vessel_e), 0.5),
@@ -166,10 +173,6 @@ class ControlTab:
                 (self.current_dir, compass_heading_deg(live.current_direction_rad)),
             ),
         )
-        op.follow(
-            "vessel",
-            (
-                (self.vessel_n, round(live.crane_tip_n[0], 2)),
-                (self.vessel_e, round(live.crane_tip_n[1], 2)),
-            ),
-        )
+        self.advice.update(live)
+        tip = advised_tip(live)
+        op.follow("vessel", ((self.vessel_n, round(tip[0], 2)), (self.vessel_e, round(tip[1], 2))))

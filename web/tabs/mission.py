@@ -1,5 +1,6 @@
 """The "Mission" tab: the missions to start (the library and those uploaded), abort, the
-running mission's progress and result, the signal checks' counters, and the mission builder
+running mission's progress and result, a dock leg's advice to move the vessel
+(``web.tabs.advice``), the signal checks' counters, and the mission builder
 (``web.builder_panel``)."""
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from app.console import (
 from app.console import commands as cmd
 from missions import schema
 from web.builder_panel import BuilderPanel
+from web.tabs.advice import AdvicePanel
 from web.widgets import Operator
 
 
@@ -71,6 +73,7 @@ class MissionTab:
         self.mission_start.on_click(self._on_start_library)
         op.action(op.guard(gui.add_button("Abort mission", color="red")), cmd.AbortMission)
         self.mission_md = gui.add_markdown("")
+        self.advice = AdvicePanel(op)
         self.counters_md = gui.add_markdown("")
         with gui.add_folder("Mission builder"):
             self.builder = BuilderPanel(
@@ -95,6 +98,7 @@ class MissionTab:
         text = mission_markdown(live)
         if self.mission_md.content != text:
             self.mission_md.content = text
+        self.advice.update(live)
         counters = counters_markdown(live.quality_counters)
         if self.counters_md.content != counters:
             self.counters_md.content = counters
