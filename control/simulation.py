@@ -288,11 +288,25 @@ class Simulation:
 
     @property
     def current_speed_mps(self) -> float:
+        """The current's set speed [m/s] (what the instructor or the mission set; injected
+        surges are not in it: ``current_flowing``)."""
         return float(self.site.current_state.speed_mps)
 
     @property
     def current_direction_rad(self) -> float:
+        """The direction the current's set speed flows towards [rad]."""
         return float(self.site.current_state.direction_rad)
+
+    def current_flowing(self) -> tuple[float, float]:
+        """The current as it flows now, (speed [m/s], direction it flows towards [rad]): the
+        set current with the injected surges and turns active at this time, what the plant's
+        next step gets. The landing's planners plan in it (the trial crew judged by what the
+        ROV had to hold against, not by the forecast)."""
+        t = np.array([self.t_s])
+        speeds, dirs = self.injector.current(
+            t, np.array([self.current_speed_mps]), np.array([self.current_direction_rad])
+        )
+        return float(speeds[0]), float(dirs[0])
 
     @property
     def winch_idle(self) -> bool:

@@ -229,7 +229,7 @@ def plan_landing(
     present target (north, east, heading), with the vessel where it stands
     (``missions.assist.plan_vessel`` moves it)."""
     thrusters = Thrusters(sim)
-    speed, direction = sim.current_speed_mps, sim.current_direction_rad
+    speed, direction = sim.current_flowing()
     env = _environment(sim, depth_m, speed, direction)
     north, east = float(frame.center_n[0]), float(frame.center_n[1])
     at_frame = pose_load(sim, thrusters, north, east, frame.heading_rad, env, depth_m)

@@ -386,7 +386,7 @@ class _VesselLoop:
             ):
                 return
             self.advised = plan.crane_tip_n
-        speed, direction = sim.current_speed_mps, sim.current_direction_rad
+        speed, direction = sim.current_flowing()
         now_in = f"in {speed:.3f} m/s towards {math.degrees(direction) % 360:.0f} deg now: "
         _send_vessel(self.ctx, plan, self.mode, now_in)
 

@@ -155,6 +155,30 @@ def test_outer_loop_moves_the_vessel_when_the_current_changes():
     assert len(ctx.events) == 1
 
 
+def test_outer_loop_plans_in_the_current_an_instructor_turned_and_surged():
+    """An instructor's fault is part of the current the ROV holds against: with the vessel
+    placed for 0.1 m/s, a surge of +0.4 m/s and a turn of -90 deg from the case's direction
+    make the same 0.5 m/s towards north as ``test_outer_loop_moves_the_vessel_...``'s set
+    current, and the loop moves the vessel upstream (south) for it. The set current is
+    still what the instructor's form shows."""
+    from control.faults import Fault
+
+    sim, ctx, loop = _over_the_frame(WEAK, "auto")
+    set_speed, set_dir = sim.current_speed_mps, sim.current_direction_rad
+    turn = (-math.degrees(set_dir) + 180.0) % 360.0 - 180.0
+    sim.inject_fault(Fault("current_surge", sim.t_s, 600.0, value=0.5 - set_speed))
+    sim.inject_fault(Fault("current_turn", sim.t_s, 600.0, value=turn))
+    speed, direction = sim.current_flowing()
+    assert speed == pytest.approx(0.5, abs=1e-12)
+    assert math.remainder(direction, 2.0 * math.pi) == pytest.approx(0.0, abs=1e-12)
+    assert (sim.current_speed_mps, sim.current_direction_rad) == (set_speed, set_dir)
+    loop.check()
+    (moved,) = ctx.events
+    assert moved["text"].startswith("in 0.500 m/s towards 0 deg now: moving the vessel ")
+    assert moved["data"]["bearing_deg"] == pytest.approx(180.0, abs=15.0)
+    assert moved["data"]["utilisation"] < 0.05
+
+
 def test_outer_loop_advises_once_per_place():
     """With ``"advise"`` the loop tells the operator, and does not repeat the same advice
     every period while they have not moved yet."""
