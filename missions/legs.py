@@ -407,7 +407,9 @@ def _send_vessel(ctx: MissionContext, plan: assist.VesselPlan, mode: str, why: s
     data = {
         "distance_m": round(plan.distance_m, 3),
         "bearing_deg": round(plan.bearing_deg, 1),
-        "crane_tip_ne_m": [round(float(x), 3) for x in plan.crane_tip_n[0:2]],
+        # to the micrometre: the console's form shows it to 2 decimals, as the text does, and a
+        # value rounded to 3 first could round the other way (5.675 -> "5.68" against 5.67)
+        "crane_tip_ne_m": [round(float(x), 6) for x in plan.crane_tip_n[0:2]],
         "utilisation": u,
         "mode": mode,
     }
