@@ -19,9 +19,9 @@ integrator, moved back through the tree frame. With the feedforward on, the inte
 beyond that limit where the integral and the feedforward together stay within it: the
 feedforward counters the wire spring's pull towards the crane tip, and where the vessel has
 been moved upstream so that the current's drag (which no model term holds) balances that
-pull, the integral must cancel the feedforward, several kN; clamped alone it could not, and
-the tree rested 0.6 m downstream of the frame, never aligned. The integral is never clamped
-tighter than eq. 3.19 clamps it.
+pull, the integral must cancel the feedforward; clamped alone it could not, and the tree
+rested downstream of the frame, short of its alignment tolerance. The integral is never
+clamped tighter than eq. 3.19 clamps it.
 """
 
 from __future__ import annotations

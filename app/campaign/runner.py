@@ -56,8 +56,8 @@ interpreter lock from the task 50 times a second: once a second is plenty for a 
 The system monitor (each process's CPU, memory, network and disk counters for the dashboard,
 every 0.5 s) and the nannies' memory monitor (each worker's memory against its limit, every
 0.1 s) run on the same two cores as the workers; every 5 s and every second leave the
-dashboard its graphs and a runaway worker's memory caught within a second (together about 1.5 %
-of a two-worker campaign). The nannies and the scheduler live in the calling process, so the
+dashboard its graphs and a runaway worker's memory caught within a second (what it saves:
+``docs/performance.md``). The nannies and the scheduler live in the calling process, so the
 settings apply there as well as in the workers.
 A threshold in the calling process's own environment still reaches the workers (they inherit
 it): the user's own, or one that a nanny with Dask's settings exported there earlier."""
@@ -68,9 +68,9 @@ LOCAL_START_METHOD = "fork" if "fork" in multiprocessing.get_all_start_methods()
 system can (Linux), otherwise as Dask does by default (spawn, a fresh interpreter).
 
 A spawned worker starts an interpreter and imports Dask before the cluster is up, then on its
-first task this package, numba and scipy, and loads the compiled kernels: some 2 s before it
-steps, of a 200-docking campaign's 20 s on two workers. A forked one has what this process has
-imported already (``benchmarks/campaign_benchmark.py``; figures in ``docs/performance.md``).
+first task this package, numba and scipy, and loads the compiled kernels, all before it
+steps. A forked one has what this process has imported already (measured with
+``benchmarks/campaign_benchmark.py``; figures in ``docs/performance.md``).
 The process that forks is a command line's (``rov-console campaign``, ``operability``), whose
 only other thread is Dask's event loop, the one that forks; the console's server never starts
 a cluster. A worker that a nanny starts again after a crash is spawned: the setting holds while
@@ -87,8 +87,8 @@ def shrinking_blocks(todo: list[int], workers: int) -> list[list[int]]:
     each takes the runs left divided by twice the workers, rounded up, at least 1 and at most
     ``MAX_RUNS_PER_TASK``. The first tasks are large, sharing a task's overhead over many
     runs; the last are single runs, so the workers finish within about one run of each other
-    instead of one waiting while the other runs a last large block alone (with equal blocks of
-    32, 200 runs on two workers left one core idle for a block's last 8 runs, about 1.3 s)."""
+    instead of one waiting while the other runs a last large block alone (equal blocks of 32
+    leave 200 runs on two workers ending with one core idle on a last block of 8)."""
     blocks: list[list[int]] = []
     k = 0
     while k < len(todo):
