@@ -11,6 +11,7 @@ static checks, so that the tests' first calls load rather than compile.
 
 from __future__ import annotations
 
+import argparse
 import os
 import subprocess
 import sys
@@ -24,16 +25,45 @@ if TYPE_CHECKING:
     from sim.plant import PlantArrays
 
 
-def main() -> None:
+PARTS = ("steps", "tools")
+"""The two halves of the work, each a process of its own when there are two cores: the
+chunk kernels with the units they link (``compile_steps``) and the kernels that tools, tests
+and the landing planner call from Python (``compile_tools``). They share few kernels, and a
+kernel both compile is cached twice over, the same code."""
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m app.precompile", description=__doc__)
+    parser.add_argument("--part", choices=PARTS, help="compile only this half, in this process")
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        default=min(2, os.cpu_count() or 1),
+        help="processes to share the work (1 or 2; default: 2 on two cores or more)",
+    )
+    args = parser.parse_args(argv)
     t0 = time.perf_counter()
-    compile_all()
+    if args.part == "steps":
+        compile_steps()
+        return
+    if args.part == "tools":
+        compile_tools()
+        return
+    if args.jobs >= 2:
+        tools = subprocess.Popen([sys.executable, "-m", "app.precompile", "--part", "tools"])
+        compile_steps()
+        if tools.wait() != 0:
+            raise SystemExit(f"precompile: the tools' half failed (exit code {tools.returncode})")
+    else:
+        compile_all()
     print(f"precompile: every kernel in the cache ({time.perf_counter() - t0:.0f} s)", flush=True)
 
 
 def start_in_background() -> subprocess.Popen[bytes]:
-    """``python -m app.precompile`` in a process of low priority, its output discarded."""
+    """``python -m app.precompile`` in a process of low priority (its halves one after the
+    other, so a serving console keeps a core), its output discarded."""
     return subprocess.Popen(
-        [sys.executable, "-m", "app.precompile"],
+        [sys.executable, "-m", "app.precompile", "--jobs", "1"],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
         preexec_fn=lambda: os.nice(10),
@@ -43,24 +73,46 @@ def start_in_background() -> subprocess.Popen[bytes]:
 def compile_all() -> None:
     """Run what fills the cache: every kernel the product calls, with the argument types it
     calls them with."""
-    from control.config import ALLOCATIONS, MODES, ControlSettings
+    compile_tools()
+    compile_steps()
+
+
+def _full_scale_arrays() -> PlantArrays:
     from control.simulation import Simulation
     from sim import params
 
-    ps = params.load("model-scale")
+    return Simulation(params.load("full-scale"), tree_depth_m=100.0).arrays
+
+
+def compile_tools() -> None:
+    """The plant's own kernels as tools, benchmarks and tests call them from Python, and the
+    small kernels Python calls directly (``compile_entry_points``)."""
     from sim import plant
 
-    arrays = Simulation(params.load("full-scale"), tree_depth_m=100.0).arrays
+    arrays = _full_scale_arrays()
     m = arrays.thr_T.shape[1]
     x, n, env = np.zeros(plant.N_STATE), np.zeros(m), np.zeros(plant.N_ENV)
     env[plant.E_LREST] = 100.0  # a 100 m wire; the values do not matter, the calls only compile
-    # the plant's own kernels as tools, benchmarks and tests call them from Python
-    plant.rk4_step_into(x.copy(), x, n, env, arrays, 0.01, plant.make_work(m))
     plant.rk4_step(x, n, env, arrays, 0.01)
     plant.rhs_into(np.zeros(plant.N_STATE), x, np.zeros(6), env, arrays, plant.make_work(m))
     plant.rhs(x, n, env, arrays)
     plant.advance(x, n, env[None, :], arrays, 0.01)
     compile_entry_points(arrays)
+
+
+def compile_steps() -> None:
+    """The chunk kernels, as every path runs them: each feedback, allocation and reference,
+    and what the console does to a running simulation."""
+    from control.config import ALLOCATIONS, MODES, ControlSettings
+    from control.simulation import Simulation
+    from sim import params, plant
+
+    ps = params.load("model-scale")
+    arrays = _full_scale_arrays()
+    m = arrays.thr_T.shape[1]
+    x, n, env = np.zeros(plant.N_STATE), np.zeros(m), np.zeros(plant.N_ENV)
+    env[plant.E_LREST] = 100.0
+    plant.rk4_step_into(x.copy(), x, n, env, arrays, 0.01, plant.make_work(m))
     for feedback in ("perfect", "ekf"):
         for allocation in ("pinv", "priority"):
             for reference in ("first", "third"):
