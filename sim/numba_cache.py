@@ -13,8 +13,9 @@ So the kernels of ``sim`` and ``control`` use ``CoreLocator``: their cache lives
 ``.numba-cache/`` beside the packages (or under ``NUMBA_CACHE_DIR`` when the user sets it),
 one index per kernel named after the kernel alone, and a kernel's stamp is a digest of what
 it reaches (``kernel_stamp``): its own code, the code of every function and kernel of the
-core it calls, directly or through others, and the values of the names they read (a module
-constant is frozen into the machine code). Code is read as its bytecode, names and
+core it calls, directly or through others, their options (``inline``, ``error_model``: they
+shape the callers' code too) and the values of the names they read (a module constant is
+frozen into the machine code). Code is read as its bytecode, names and
 constants, without line numbers or docstrings. An edit of a comment or a docstring therefore
 recompiles nothing; an edit of a formula recompiles, when they are next called, the kernels
 that reach it, and no others: an edit of the wire force recompiles the plant's step and the
@@ -116,6 +117,10 @@ def _function_part(func: FunctionType) -> tuple[str, tuple[FunctionType, ...]]:
     code = func.__code__
     names = _names(code)
     parts = [f"{func.__module__}.{func.__qualname__}", *_code_parts(code, True)]
+    kernel = func.__globals__.get(func.__name__)
+    if isinstance(kernel, Dispatcher) and kernel.py_func is func:
+        # its options (inline, error_model, fastmath) shape its code and its callers'
+        parts.append(f"options {sorted(kernel.targetoptions.items())!r}")
     functions: list[FunctionType] = []
     values: list[tuple[str, object]] = []
     for name in sorted(names):

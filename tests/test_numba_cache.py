@@ -118,6 +118,21 @@ def test_a_constant_edit_reaches_the_kernels_that_read_it(tmp_path: Path) -> Non
     assert "gnc.ssa" not in changed
 
 
+def test_a_kernels_options_reach_the_kernels_that_call_it(tmp_path: Path) -> None:
+    """Defect: a callee's options (``inline``, ``error_model``, ``fastmath``) shape its
+    callers' machine code but are not in its bytecode, so making the observer's unit
+    ``inline="always"`` left the chunk kernels' stamps as they were and they loaded the old,
+    called unit from the cache."""
+    _copy_sources(tmp_path)
+    before = _stamps(tmp_path)
+    _edit(
+        tmp_path / "control" / "loop.py",
+        "@njit(**JIT_NOALLOC)\ndef observe_into(",
+        '@njit(inline="always", **JIT_NOALLOC)\ndef observe_into(',
+    )
+    assert _changed(before, _stamps(tmp_path)) == ["loop.observe_into", "loop.run_chunk"]
+
+
 _RUN = """
 from sim import gnc
 print(gnc.ssa(7.0))
