@@ -961,7 +961,7 @@ def predict_with_input_into(
     )
 
 
-@njit(**JIT_NOALLOC)
+@njit(inline="always", **JIT_NOALLOC)
 def observe_into(
     x: np.ndarray,
     env_k: np.ndarray,

@@ -121,16 +121,16 @@ def test_a_constant_edit_reaches_the_kernels_that_read_it(tmp_path: Path) -> Non
 def test_a_kernels_options_reach_the_kernels_that_call_it(tmp_path: Path) -> None:
     """Defect: a callee's options (``inline``, ``error_model``, ``fastmath``) shape its
     callers' machine code but are not in its bytecode, so making the observer's unit
-    ``inline="always"`` left the chunk kernels' stamps as they were and they loaded the old,
-    called unit from the cache."""
+    ``inline="always"`` left the chunk kernels' stamps as they were and they loaded the old
+    kernel, which still called the unit, from the cache. Here the controller's unit."""
     _copy_sources(tmp_path)
     before = _stamps(tmp_path)
     _edit(
         tmp_path / "control" / "loop.py",
-        "@njit(**JIT_NOALLOC)\ndef observe_into(",
-        '@njit(inline="always", **JIT_NOALLOC)\ndef observe_into(',
+        "@njit(**JIT_NOALLOC)\ndef control_step_into(",
+        '@njit(inline="always", **JIT_NOALLOC)\ndef control_step_into(',
     )
-    assert _changed(before, _stamps(tmp_path)) == ["loop.observe_into", "loop.run_chunk"]
+    assert _changed(before, _stamps(tmp_path)) == ["loop.control_step_into", "loop.run_chunk"]
 
 
 _RUN = """
