@@ -37,11 +37,9 @@ CHROMIUM_ARGS = [
 ``pilot_latency.py``): the page drawn as a person's browser draws it."""
 TEST_CHROMIUM_ARGS = [
     *CHROMIUM_ARGS,
-    # no multisampling of the software-drawn WebGL scene: a live console page (frames at most
-    # every 400 ms then, SLOW_FRAMES) kept 1.02 of this machine's cores busy with it and 0.77
-    # without (10 s each, benchmarks/browser_cpu.py; 2026-11-27). Edges in the pictures
-    # are a little more jagged; the tests compare pages drawn the same way. The benchmarks keep
-    # the multisampling: they measure what a person's page costs.
+    # no multisampling of the software-drawn WebGL scene: a live page costs about a quarter
+    # less of a core (docs/performance.md); edges are a little more jagged, and the tests
+    # compare pages drawn the same way. The benchmarks keep it: they measure a person's page.
     "--webgl-antialiasing-mode=none",
 ]
 """Chromium as the tests launch it."""
@@ -118,9 +116,8 @@ WATCH_SHADERS = """
 """
 """Counts the WebGL programs a page links and notes when it last linked or asked after one.
 Chromium without a GPU compiles shaders in software, and the page's main thread waits on
-each: in this machine's measurements a fresh console page answered nothing for 7-8 s, three
-to ten seconds after its panel appeared, while it compiled the scene's programs (19 in all,
-arriving in three groups), and 20 s under load; a click sent then timed out (CI, 2026-11-26)."""
+each: a fresh console page answers nothing for seconds while it compiles its scene's programs,
+and a click sent then times out (docs/performance.md, "The tests' ten minutes")."""
 FRAME_EVERY_MS = 1000
 """The least time between two frames of a test page's 3D view (``SLOW_FRAMES``)."""
 SLOW_FRAMES = """
@@ -147,18 +144,11 @@ SLOW_FRAMES = """
 })()
 """.replace("FRAME_EVERY_MS", str(FRAME_EVERY_MS))
 """Draws the page's 3D view at most once a second instead of whenever the scene moves. Without a
-GPU, Chromium draws the console's live scene in software, each frame some 0.25-0.4 s of a core
-at 1400x900, as fast as the scene changes: one console page kept 1.5 of this machine's 2 cores
-busy (6.7 frames per second), which starved the other test worker and the page's own input
-(clicks and fills that timed out after 30 s in a full run). A live page's chromium CPU over 10 s
-(``benchmarks/browser_cpu.py``, 2026-11-27, with the multisampling off, see
-``TEST_CHROMIUM_ARGS``): 0.77 of a core at 400 ms, 0.56 at 600 ms; a full test run took 11 min
-04 s and 10 min 04 s of pytest. At 800 ms a full run took 9 min 34 s but the replay test's two
-replays once showed too alike (it compared its pages a fixed 2 s after a change), so 600 then.
-The replay test now waits for its pictures to differ (or agree) instead; at 1 000 ms a live page
-took 0.40-0.41 of a core against 0.58-0.62 at 600 ms (two rounds each, 2026-11-27), each frame
-some 0.3 s of a core. Playwright's own checks (an element is stable over two frames) run in its
-own isolated world and keep the browser's real frames."""
+GPU, Chromium draws the console's live scene in software, each frame some 0.3 s of a core, as
+fast as the scene changes: one page kept most of this machine's two cores busy, starving the
+other test worker and the page's own input. Playwright's own checks (an element is stable over
+two frames) run in its own isolated world and keep the browser's real frames. What each frame
+interval cost and bought is in docs/performance.md ("The tests' ten minutes")."""
 SHADERS_QUIET_S = 4.0
 """Seconds without a shader compile after which a page counts as settled: the groups of
 programs above came at most 2.5 s apart."""

@@ -15,14 +15,11 @@ settings.load_profile("default")
 
 # How the default run shares the modules between its two workers (``--dist loadfile
 # --no-loadscope-reorder`` in scripts/test.sh, and ``pytest_xdist_make_scheduler`` below): a
-# module goes whole to one worker, in the order below, and the console-in-Chromium modules go
-# together as one unit, so one worker runs them one after the other while the other worker
-# runs the rest. Two Chromiums drawing software WebGL at once slow each other down: with the
-# browser modules first on both workers, the sum of all modules' times went from 1 071 s to
-# 1 169 s (the replay module's from 98 s to 183 s) and the run took 10 min 04 s; before, a
-# long module taken last left one worker idle at the end (584 s busy against 487 s, 10 min
-# 00 s). The browser modules took 523 s in all, the rest 548 s
-# (``--durations=0``, 2026-11-27).
+# module goes whole to one worker, in the order below, and the console-in-Chromium modules
+# listed here go together as one unit, so one worker runs them one after the other while the
+# other worker runs the rest. Two Chromiums drawing software WebGL at once slow each other
+# down, and a long module taken last leaves a worker idle at the end; the measurements behind
+# this split are in docs/performance.md ("The tests' ten minutes").
 BROWSER_MODULES = (
     "test_console_replay.py",
     "test_console_scene.py",
