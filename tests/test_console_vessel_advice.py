@@ -24,6 +24,7 @@ from app.console import (
     prepare_run,
 )
 from app.console import commands as cmd
+from app.console.crew import supervisor_status
 from app.recording import load_session
 from app.server import RunningServer
 from missions import assist, landing_study, schema
@@ -50,6 +51,12 @@ def advise_mission(name: str = "advise-the-vessel", then_hold: bool = False) -> 
 
 def advice_of(session: Session) -> VesselAdvice | None:
     return session.snapshot(1, False, 1.0, STATS).mission.vessel_advice
+
+
+def supervisor_line(session: Session) -> object:
+    """The advice as the supervisor's station shows it."""
+    snap = session.snapshot(1, False, 1.0, STATS)
+    return supervisor_status(snap, {"pilot": None, "winch": None})["vessel_advice"]
 
 
 def _advance_until(session: Session, done: Callable[[], bool], limit_s: float) -> None:
@@ -82,6 +89,7 @@ def test_advice_is_shown_applied_and_followed_until_the_leg_moves_on(tmp_path: P
         assert not given.applied and given.to_go_m == pytest.approx(given.distance_m, abs=0.01)
         session.advance(1000)  # the leg waits for the operator: the advice stays
         assert advice() == given
+        assert supervisor_line(session) == f"Advice given at 15 s: {given.text}"
 
         session.actor = "viewer 1 (Vera)"
         answer = cmd.ApplyVesselAdvice().apply(loop)  # type: ignore[arg-type]
@@ -102,12 +110,17 @@ def test_advice_is_shown_applied_and_followed_until_the_leg_moves_on(tmp_path: P
             cmd.ApplyVesselAdvice().apply(loop)  # type: ignore[arg-type]
         session.advance(500)  # 5 s at 0.2 m/s
         assert advice().applied and advice().to_go_m == pytest.approx(given.distance_m - 1.0, 0.05)
+        assert supervisor_line(session) == (
+            f"Advice applied (given at 15 s): the vessel is on its way, {advice().to_go_m:.1f} m"
+            " to go"
+        )
 
         driver = session.driver
         assert driver is not None
         _advance_until(session, lambda: driver.leg_index == 2, 400.0)
         assert session.mission_status.state == "running", "leg 3 runs"
         assert advice_of(session) is None, "the advice went with its leg"
+        assert supervisor_line(session) is None
         assert driver.ctx.landings[0].success
         _advance_until(session, lambda: session.mission_status.state != "running", 10.0)
         assert session.mission_status.state == "completed"
@@ -161,7 +174,7 @@ def test_the_pages_words_for_the_advice() -> None:
     )
     moving = replace(given, applied=True, to_go_m=3.04)
     assert advice_markdown(moving, False) == (
-        "**Advice applied** (given at 15 s): the vessel is on its way, 3.0 m to go"
+        "**Advice applied** \\(given at 15 s\\): the vessel is on its way, 3\\.0 m to go"
     )
     assert advice_markdown(replace(moving, to_go_m=0.01), True).endswith("the vessel is there")
 

@@ -1,8 +1,10 @@
 """Issue 44's ``vessel = "advise"`` in a real headless Chromium: a dock leg's advice to move
 the vessel shows in the Mission tab (a locked page saying the token applies it), and the
 vessel form shows the advised crane tip; "Apply advice", clicked twice, moves the vessel once
-and the page shows it on its way; the advice goes when the mission ends. The page with the
-advice is saved as ``console-vessel-advice.png`` (``tests/browser.py``'s folder). (A second
+and the page shows it on its way; the advice goes when the mission ends. The supervisor's
+station (another tab) shows the advice as it goes. The page with the
+advice is saved as ``console-vessel-advice.png``, the supervisor's page with the advice applied
+as ``crew-supervisor-advice.png`` (``tests/browser.py``'s folder). (A second
 browser and a reload: each is a panel made from the state as it is then, as every page is;
 they were tried by hand.)"""
 
@@ -44,6 +46,12 @@ def advice_text(pg) -> str:
     return " ".join(texts[0].split()) if texts else ""
 
 
+def supervisor_advice(pg) -> str:
+    """The supervisor page's vessel advice ('' while its row is hidden)."""
+    row = pg.locator("#advice-row")
+    return " ".join(str(pg.locator("#advice").text_content()).split()) if row.is_visible() else ""
+
+
 def apply_button(pg):
     """The shown tab's "Apply advice" (the Mission tab and the Control tab have one each)."""
     return pg.locator("xpath=//button[normalize-space(.)='Apply advice']").filter(visible=True)
@@ -58,6 +66,17 @@ def test_the_advice_shown_and_applied_once(
     click(page, "Start mission")
     api.put("/api/run/speed", json={"speed": 50.0}).raise_for_status()
     _advice_in_the_page(page, server, api)
+    boss = page.context.new_page()  # the supervisor's station, signed in with the console token
+    boss.goto(f"{server.base_url}/supervisor")
+    boss.fill("#name", "Sam")
+    boss.fill("#token", server.token)
+    boss.click("#connect")
+    wait_for(
+        lambda: supervisor_advice(boss).startswith("Advice given at 15 s: move the vessel 4.9 m"),
+        15.0,
+        "the advice on the supervisor's page",
+    )
+    page.bring_to_front()
 
     apply = apply_button(page)
     apply.click(click_count=2)  # a double click: one move, the second refused
@@ -74,12 +93,22 @@ def test_the_advice_shown_and_applied_once(
     assert all("applied already" in o["outcome"] for o in applies[1:]), applies
     moving = api.get("/api/state").json()["mission"]["vessel_advice"]
     assert moving["applied"] and 0.0 < moving["to_go_m"] < moving["distance_m"]
+    wait_for(
+        lambda: supervisor_advice(boss).startswith(
+            "Advice applied (given at 15 s): the vessel is on its way"
+        ),
+        10.0,
+        "the advice applied on the supervisor's page",
+    )
+    save(boss.screenshot(), "crew-supervisor-advice.png")
 
     # it lands then (tests/test_console_vessel_advice.py); here the mission is aborted, and
     # the advice goes with it
     api.post("/api/missions/abort").raise_for_status()
     wait_for(lambda: advice_text(page) == "", 10.0, "the advice gone with the mission")
     assert apply_button(page).count() == 0
+    wait_for(lambda: supervisor_advice(boss) == "", 10.0, "the supervisor's advice row hidden")
+    boss.close()
 
 
 def _advice_in_the_page(page, server: RunningServer, api: httpx.Client) -> None:

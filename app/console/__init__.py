@@ -61,6 +61,7 @@ from app.console.snapshot import (
     SceneInfo,
     Snapshot,
     VesselAdvice,
+    advice_words,
 )
 from app.console.texts import (
     alarm_meaning,
@@ -123,6 +124,7 @@ __all__ = [
     "ViewerReplay",
     "Water",
     "add_review_note",
+    "advice_words",
     "alarm_meaning",
     "alarm_title",
     "allowed_hosts",

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 from app.console.operations import trainee_view
 from app.console.pilot import pilot_name
-from app.console.snapshot import Snapshot
+from app.console.snapshot import Snapshot, advice_words
 from app.console.texts import alarm_title
 
 WINCH_ALARMS = ("wire_slack", "wire_snap")
@@ -131,8 +131,9 @@ def winch_status(snap: Snapshot, slips: SlipWatch) -> dict[str, object]:
 
 
 def supervisor_status(snap: Snapshot, crew: dict[str, str | None]) -> dict[str, object]:
-    """What the supervisor's station shows: the state, every alarm, who is on which station
-    and the operations log as the trainees see it (the instructor's faults left out)."""
+    """What the supervisor's station shows: the state, every alarm, who is on which station,
+    the vessel advice of a dock leg, and the operations log as the trainees see it (the
+    instructor's faults left out)."""
     m = snap.mission
     w = snap.winch
     return {
@@ -156,4 +157,15 @@ def supervisor_status(snap: Snapshot, crew: dict[str, str | None]) -> dict[str, 
             for op in trainee_view(snap.operations)[-OPERATIONS_SHOWN:]
         ],
         "error": snap.error,
+        "vessel_advice": _advice_line(snap),
     }
+
+
+def _advice_line(snap: Snapshot) -> str | None:
+    """The running dock leg's advice to move the vessel, in the console's words (the console's
+    operator applies it; the supervisor sees it given, applied and followed)."""
+    advice = snap.mission.vessel_advice
+    if advice is None:
+        return None
+    heading, words = advice_words(advice)
+    return f"{heading} {words}"

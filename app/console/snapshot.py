@@ -188,6 +188,22 @@ def vessel_advice(event: dict) -> VesselAdvice | None:
     )
 
 
+ADVICE_THERE_M = 0.05
+"""The crane tip this close to the advised place counts as there [m]."""
+
+
+def advice_words(advice: VesselAdvice) -> tuple[str, str]:
+    """The advice as every station words it: a heading ("Advice", "Advice applied") and what
+    to do or, once applied, whether the vessel is on its way or there."""
+    given = f"given at {advice.t_s:.0f} s"
+    if not advice.applied:
+        return "Advice", f"{given}: {advice.text}"
+    if advice.to_go_m > ADVICE_THERE_M:
+        to_go = f"{advice.to_go_m:.1f} m to go"
+        return "Advice applied", f"({given}): the vessel is on its way, {to_go}"
+    return "Advice applied", f"({given}): the vessel is there"
+
+
 def advice_now(advice: VesselAdvice, sim: Simulation) -> VesselAdvice:
     """``advice`` with where the vessel is commanded and stands now: applied or not, and how
     far the crane tip still has to go."""

@@ -5,28 +5,18 @@ to go."""
 
 from __future__ import annotations
 
-from app.console import Snapshot, VesselAdvice, md_text
+from app.console import Snapshot, VesselAdvice, advice_words, md_text
 from app.console import commands as cmd
 from web.widgets import LOCKED_TEXT, Operator
 
-THERE_M = 0.05
-"""The crane tip this close to the advised place counts as there [m]."""
-
 
 def advice_markdown(advice: VesselAdvice | None, unlocked: bool) -> str:
-    """The advice in words: what to do (and, on a locked page, that the token applies it),
-    or, once applied, whether the vessel is on its way or there."""
+    """The advice in words (``advice_words``), and on a locked page that the token applies it."""
     if advice is None:
         return ""
-    given = f"given at {advice.t_s:.0f} s"
-    if not advice.applied:
-        lock = "" if unlocked else f" ({md_text(LOCKED_TEXT)} to apply it)"
-        return f"**Advice** {given}: {md_text(advice.text)}{lock}"
-    if advice.to_go_m > THERE_M:
-        return (
-            f"**Advice applied** ({given}): the vessel is on its way, {advice.to_go_m:.1f} m to go"
-        )
-    return f"**Advice applied** ({given}): the vessel is there"
+    heading, words = advice_words(advice)
+    lock = "" if advice.applied or unlocked else f" ({md_text(LOCKED_TEXT)} to apply it)"
+    return f"**{heading}** {md_text(words)}{lock}"
 
 
 class AdvicePanel:
