@@ -27,9 +27,10 @@ if TYPE_CHECKING:
 
 PARTS = ("steps", "tools")
 """The two halves of the work, each a process of its own when there are two cores: the
-chunk kernels with the units they link (``compile_steps``) and the kernels that tools, tests
-and the landing planner call from Python (``compile_tools``). They share few kernels, and a
-kernel both compile is cached twice over, the same code."""
+chunk kernels with the controller's unit they link (``compile_steps``), and the plant's
+step, which the chunk kernels load from the cache when they come to it, with the kernels
+that tools, tests and the landing planner call from Python (``compile_tools``). They share
+few kernels, and a kernel both compile is cached twice over, the same code."""
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -93,6 +94,9 @@ def compile_tools() -> None:
     m = arrays.thr_T.shape[1]
     x, n, env = np.zeros(plant.N_STATE), np.zeros(m), np.zeros(plant.N_ENV)
     env[plant.E_LREST] = 100.0  # a 100 m wire; the values do not matter, the calls only compile
+    # first: the chunk kernels of the other half link it (they come to it after the
+    # controller's unit, some 30 s in, and load it from the cache)
+    plant.rk4_step_into(x.copy(), x, n, env, arrays, 0.01, plant.make_work(m))
     plant.rk4_step(x, n, env, arrays, 0.01)
     plant.rhs_into(np.zeros(plant.N_STATE), x, np.zeros(6), env, arrays, plant.make_work(m))
     plant.rhs(x, n, env, arrays)
@@ -105,14 +109,9 @@ def compile_steps() -> None:
     and what the console does to a running simulation."""
     from control.config import ALLOCATIONS, MODES, ControlSettings
     from control.simulation import Simulation
-    from sim import params, plant
+    from sim import params
 
     ps = params.load("model-scale")
-    arrays = _full_scale_arrays()
-    m = arrays.thr_T.shape[1]
-    x, n, env = np.zeros(plant.N_STATE), np.zeros(m), np.zeros(plant.N_ENV)
-    env[plant.E_LREST] = 100.0
-    plant.rk4_step_into(x.copy(), x, n, env, arrays, 0.01, plant.make_work(m))
     for feedback in ("perfect", "ekf"):
         for allocation in ("pinv", "priority"):
             for reference in ("first", "third"):
