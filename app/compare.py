@@ -148,12 +148,19 @@ def _moment(d: Debrief, align: str, which: str) -> float:
         if not contacts:
             raise CompareError(f"run {which} ({d.name}) never touched the frame: align elsewhere")
         return t0 + min(contacts)
-    if align.startswith("event:") and align[6:].strip():
-        words = align[6:].strip()
-        t = _first_event(d, tuple({str(e.get("kind")) for e in d.events}), words)
-        if t is None:
-            raise CompareError(f"run {which} ({d.name}) has no event whose text holds {words!r}")
-        return t
+    check_align(align)
+    words = align[6:].strip()
+    t = _first_event(d, tuple({str(e.get("kind")) for e in d.events}), words)
+    if t is None:
+        raise CompareError(f"run {which} ({d.name}) has no event whose text holds {words!r}")
+    return t
+
+
+def check_align(align: str) -> None:
+    """CompareError unless ``align`` is one of ``ALIGN_CHOICES`` or event:WORDS: said before
+    either log is read."""
+    if align in ALIGN_CHOICES or (align.startswith("event:") and align[6:].strip()):
+        return
     raise CompareError(
         f"align must be one of {', '.join(ALIGN_CHOICES)} or event:WORDS, got {align!r}"
     )
@@ -249,6 +256,7 @@ def _differences(a: Debrief, b: Debrief) -> list[Difference]:
 def compare(a_path: str | Path, b_path: str | Path, align: str = "mission") -> Comparison:
     """Compare two recordings (ValueError naming the file when one cannot be read,
     CompareError when the alignment cannot be made)."""
+    check_align(align)
     a, b = debrief(a_path), debrief(b_path)
     aligned = Aligned(align, _moment(a, align, "A"), _moment(b, align, "B"))
     return Comparison(

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.compare import compare, comparison_image
+from app.compare import CompareError, compare, comparison_image
 from app.report import debrief
 from tests.test_cli import cli
 
@@ -70,6 +70,16 @@ def test_an_alignment_that_cannot_be_made_is_one_line(two_runs, align: str, word
     done = cli("compare", str(a), str(b), "--align", align)
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert done.stderr.startswith("error:") and words in done.stderr
+
+
+def test_a_malformed_alignment_is_refused_before_the_logs_are_read(tmp_path: Path) -> None:
+    """It took some 3 s to say: both logs were read and debriefed first."""
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(b"not a log at all")
+    with pytest.raises(CompareError, match="align must be one of mission, contact, start"):
+        compare(bad, bad, "halfway")
+    with pytest.raises(CompareError, match="or event:WORDS, got 'event: '"):
+        compare(bad, bad, "event: ")
 
 
 def test_a_missing_or_bad_second_file_is_one_line(two_runs, tmp_path: Path) -> None:
