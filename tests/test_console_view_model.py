@@ -623,3 +623,36 @@ def test_the_publisher_heals_a_viser_event_race_and_reports_other_errors(tmp_pat
         assert view.viser_event_races == 1 and len(redraws) == 1
         assert len(view.errors) == 1 and view.errors[0].startswith("RuntimeError: something else")
         assert len(updates_after) >= 3, "the publisher goes on after both"
+
+
+def test_a_browser_that_has_gone_gets_no_more_frames(tmp_path) -> None:
+    """Defect: the view's frame thread updated the panel of a browser whose socket had just
+    closed (viser drops the client, then calls the console's disconnect), and viser warned
+    "Queued a ... on a closed connection" in most full test runs. A panel whose client viser
+    no longer lists gets no update."""
+    import time
+    from types import SimpleNamespace
+
+    from app.console import ConsoleSettings
+    from app.server import serve_in_thread
+
+    settings = ConsoleSettings(port=0, viser_port=0, recordings_dir=tmp_path, speed=5.0)
+    with serve_in_thread(settings) as running:
+        view = running.app.state.view
+        gone: list[int] = []
+        frames: list[int] = []
+        update = view.scene.update
+
+        def counted_update(snap) -> None:
+            frames.append(snap.seq)
+            update(snap)
+
+        view.scene.update = counted_update
+        with view._lock:  # a panel left behind by a browser viser has dropped already
+            view._panels[987654] = SimpleNamespace(update=lambda snap: gone.append(snap.seq))
+        deadline = time.monotonic() + 20.0
+        while len(frames) < 3 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert len(frames) >= 3, "the view drew its frames"
+        assert gone == [], f"the gone browser's panel was updated {len(gone)} times"
+        assert view.errors == []

@@ -152,9 +152,14 @@ class ConsoleView:
                 self.scene.update(snap)
                 scene_done = time.perf_counter()
                 with self._lock:
-                    panels = list(self._panels.values())
-                for panel in panels:
-                    panel.update(snap)
+                    panels = list(self._panels.items())
+                # a browser that has gone: viser drops it from its clients before it calls
+                # ``_disconnect``, and its socket's buffer is closed then (a message queued
+                # on it is never sent, and viser warns)
+                connected = self.server.get_clients()
+                for client_id, panel in panels:
+                    if client_id in connected:
+                        panel.update(snap)
             except Exception as err:
                 if _viser_event_race(err):
                     self.viser_event_races += 1
