@@ -95,7 +95,7 @@ def compile_tools() -> None:
     x, n, env = np.zeros(plant.N_STATE), np.zeros(m), np.zeros(plant.N_ENV)
     env[plant.E_LREST] = 100.0  # a 100 m wire; the values do not matter, the calls only compile
     # first: the chunk kernels of the other half link it (they come to it after the
-    # controller's unit, some 30 s in, and load it from the cache)
+    # controller's unit, and load it from the cache)
     plant.rk4_step_into(x.copy(), x, n, env, arrays, 0.01, plant.make_work(m))
     plant.rk4_step(x, n, env, arrays, 0.01)
     plant.rhs_into(np.zeros(plant.N_STATE), x, np.zeros(6), env, arrays, plant.make_work(m))

@@ -37,8 +37,8 @@ CHROMIUM_ARGS = [
 ``pilot_latency.py``): the page drawn as a person's browser draws it."""
 TEST_CHROMIUM_ARGS = [
     *CHROMIUM_ARGS,
-    # no multisampling of the software-drawn WebGL scene: a live page costs about a quarter
-    # less of a core (docs/performance.md); edges are a little more jagged, and the tests
+    # no multisampling of the software-drawn WebGL scene: a live page costs less of a core
+    # (docs/performance.md); edges are a little more jagged, and the tests
     # compare pages drawn the same way. The benchmarks keep it: they measure a person's page.
     "--webgl-antialiasing-mode=none",
 ]
@@ -144,8 +144,8 @@ SLOW_FRAMES = """
 })()
 """.replace("FRAME_EVERY_MS", str(FRAME_EVERY_MS))
 """Draws the page's 3D view at most once a second instead of whenever the scene moves. Without a
-GPU, Chromium draws the console's live scene in software, each frame some 0.3 s of a core, as
-fast as the scene changes: one page kept most of this machine's two cores busy, starving the
+GPU, Chromium draws the console's live scene in software, at a high cost a frame, as fast
+as the scene changes: one page kept most of this machine's two cores busy, starving the
 other test worker and the page's own input. Playwright's own checks (an element is stable over
 two frames) run in its own isolated world and keep the browser's real frames. What each frame
 interval cost and bought is in docs/performance.md ("The tests' ten minutes")."""
