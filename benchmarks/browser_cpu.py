@@ -1,10 +1,12 @@
 """What one live console page costs the machine in the tests' headless Chromium: the chromium
 processes' CPU time over ``--seconds`` of a running console, in cores, with the test pages'
-frame limit (``tests.browser.SLOW_FRAMES``, ``--frame-ms``) and with or without WebGL
+frame limit (``tests.browser.SLOW_FRAMES``, ``--frame-ms``), with or without WebGL
 multisampling (``--multisampling``: the benchmarks' ``CHROMIUM_ARGS``; without, the tests'
-``TEST_CHROMIUM_ARGS``).
+``TEST_CHROMIUM_ARGS``), at a page size (``--viewport``) and a resolution of its 3D view
+(``--dpr``, the tests' ``SCENE_DPR`` unless given).
 
     .venv/bin/python benchmarks/browser_cpu.py [--frame-ms 1000] [--multisampling] [--seconds 10]
+        [--viewport 1400x900] [--dpr 0.5]
 
 The test suite's browser modules run beside another test worker on this 2-core machine; what
 a page takes from it is what this prints. Also the time of a screenshot (four, in seconds).
@@ -46,7 +48,12 @@ def main() -> None:
     parser.add_argument("--frame-ms", type=int, default=browser.FRAME_EVERY_MS)
     parser.add_argument("--multisampling", action="store_true")
     parser.add_argument("--seconds", type=float, default=10.0)
+    parser.add_argument("--viewport", default="1400x900", help="the page's WIDTHxHEIGHT [px]")
+    parser.add_argument(
+        "--dpr", type=float, default=browser.SCENE_DPR, help="the 3D view's pixels per CSS pixel"
+    )
     args = parser.parse_args()
+    width, height = (int(n) for n in args.viewport.split("x"))
     from playwright.sync_api import sync_playwright
 
     chromium_args = browser.CHROMIUM_ARGS if args.multisampling else browser.TEST_CHROMIUM_ARGS
@@ -61,13 +68,13 @@ def main() -> None:
             executable_path=str(browser.CHROMIUM),
             args=chromium_args,
             headless=True,
-            viewport={"width": 1400, "height": 900},
+            viewport={"width": width, "height": height},
         )
         context.add_init_script(browser.WATCH_SHADERS)
         context.add_init_script(frames)
         try:
             page = context.new_page()
-            browser.open_console(page, srv.view_url)
+            browser.open_console(page, srv.view_url, args.dpr)
             browser._dismiss_notifications(page)
             cpu0, t0 = chromium_cpu_s(), time.monotonic()
             time.sleep(args.seconds)
@@ -83,6 +90,8 @@ def main() -> None:
         json.dumps(
             {
                 "frame_ms": args.frame_ms,
+                "viewport": args.viewport,
+                "dpr": args.dpr,
                 "multisampling": args.multisampling,
                 "chromium_cores": round(cores, 2),
                 "screenshot_s": shots,

@@ -43,6 +43,12 @@ TEST_CHROMIUM_ARGS = [
     "--webgl-antialiasing-mode=none",
 ]
 """Chromium as the tests launch it."""
+SCENE_DPR = 1.0 if os.environ.get("ROV_SCREENSHOTS_DIR") else 0.5
+"""The pixels of a test page's 3D view per CSS pixel (viser's ``fixedDpr``): at 0.5 the scene
+is drawn at a quarter of its pixels and scaled up, its labels blurred; its colours and shapes,
+which the tests look at, are as at 1, and a live page takes less than half the CPU
+(docs/performance.md, "The tests' ten minutes"). The docs' pictures (``ROV_SCREENSHOTS_DIR``)
+are drawn sharp."""
 SCREENSHOTS = Path(
     os.environ.get("ROV_SCREENSHOTS_DIR") or Path(tempfile.gettempdir()) / "rov-console-screenshots"
 )
@@ -149,14 +155,21 @@ as the scene changes: one page kept most of this machine's two cores busy, starv
 other test worker and the page's own input. Playwright's own checks (an element is stable over
 two frames) run in its own isolated world and keep the browser's real frames. What each frame
 interval cost and bought is in docs/performance.md ("The tests' ten minutes")."""
+CONSOLE_PROGRAMS = 12
+"""The WebGL programs a fresh console page links for its scene: eleven at once, the twelfth
+(viser's label renderer) when its first label is drawn, some seconds later."""
 SHADERS_QUIET_S = 4.0
-"""Seconds without a shader compile after which a page counts as settled: the groups of
-programs above came at most 2.5 s apart."""
+"""Seconds without a shader compile after which a page with fewer programs than
+``CONSOLE_PROGRAMS`` counts as settled: its groups of programs came at most 2.5 s apart."""
+PROGRAMS_QUIET_S = 0.5
+"""Seconds without a compile after which a page that has linked ``CONSOLE_PROGRAMS`` programs
+counts as settled: its main thread is then free to take a click."""
 
 
 def settle(pg, timeout_s: float = 120.0) -> None:
     """Wait until the page has compiled its scene's shaders (see ``WATCH_SHADERS``), so that
-    what a test does next is not held behind them."""
+    what a test does next is not held behind them: all of a console page's programs and
+    ``PROGRAMS_QUIET_S`` after the last, or any other page's and ``SHADERS_QUIET_S``."""
 
     def quiet() -> bool:
         programs, quiet_ms = pg.evaluate(
@@ -164,14 +177,18 @@ def settle(pg, timeout_s: float = 120.0) -> None:
         )
         if programs < 0:
             raise AssertionError("the page was opened without WATCH_SHADERS")
-        return programs > 0 and quiet_ms > 1000 * SHADERS_QUIET_S
+        wait_s = PROGRAMS_QUIET_S if programs >= CONSOLE_PROGRAMS else SHADERS_QUIET_S
+        return programs > 0 and quiet_ms > 1000 * wait_s
 
-    wait_for(quiet, timeout_s, f"{SHADERS_QUIET_S:g} s without a shader compile")
+    wait_for(
+        quiet, timeout_s, f"the scene's shaders ({CONSOLE_PROGRAMS} or {SHADERS_QUIET_S:g} s quiet)"
+    )
 
 
-def open_console(pg, url: str) -> None:
-    """Load the console in ``pg`` and wait until its panel is there and its scene drawn."""
-    pg.goto(url)
+def open_console(pg, url: str, dpr: float = SCENE_DPR) -> None:
+    """Load the console in ``pg`` and wait until its panel is there and its scene drawn (its
+    3D view at ``dpr`` pixels per CSS pixel)."""
+    pg.goto(f"{url}{'&' if '?' in url else '?'}fixedDpr={dpr:g}")
     pg.get_by_text("Unlock controls").wait_for(timeout=60_000)
     settle(pg)
 

@@ -27,7 +27,7 @@ from app import scores
 from app.console import ConsoleSettings
 from app.logbook import CSV_COLUMNS
 from app.server import create_app
-from tests.test_cli import cli
+from tests.cli import cli
 
 TRAINEE = "Anna Berg"
 TOKEN = "assessment-test-console-1"

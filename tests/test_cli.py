@@ -7,12 +7,7 @@ import sys
 from importlib.metadata import version
 from pathlib import Path
 
-EXE = str(Path(sys.executable).parent / "rov-console")
-
-
-def cli(*args: str) -> subprocess.CompletedProcess[str]:
-    env = {"COLUMNS": "120", "PATH": "/usr/bin:/bin", "TERM": "dumb"}
-    return subprocess.run([EXE, *args], capture_output=True, text=True, timeout=120, env=env)
+from tests.cli import cli, cli_process
 
 
 def test_help_keeps_units_in_brackets():
@@ -21,7 +16,8 @@ def test_help_keeps_units_in_brackets():
 
 
 def test_version_prints_the_installed_version():
-    proc = cli("--version")
+    """The installed script itself, in a process of its own."""
+    proc = cli_process("--version")
     assert proc.returncode == 0 and proc.stdout.strip() == f"rov-console {version('rov-console')}"
 
 

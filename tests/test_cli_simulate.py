@@ -1,19 +1,14 @@
-"""`rov-console simulate` end to end, through the installed command."""
+"""`rov-console simulate` end to end, through the command line."""
 
 import json
-import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-EXE = shutil.which("rov-console", path=str(Path(sys.executable).parent)) or "rov-console"
+from tests.cli import cli
 
 
 def run_cli(*args, check=True):
-    proc = subprocess.run([EXE, *args], capture_output=True, text=True, cwd=ROOT, timeout=300)
+    proc = cli(*args)
     if check:
         assert proc.returncode == 0, proc.stderr
     return proc

@@ -12,7 +12,7 @@ import pytest
 
 from app.compare import CompareError, compare, comparison_image
 from app.report import debrief
-from tests.test_cli import cli
+from tests.cli import cli
 
 
 @pytest.fixture(scope="module")

@@ -1,18 +1,16 @@
 """Mission files, the runner's legs (docking above all), `rov-console run` and the studies."""
 
 import json
-import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from missions import runner, schema, studies
+from tests.cli import EXE, cli
 
 ROOT = Path(__file__).resolve().parents[1]
-EXE = shutil.which("rov-console", path=str(Path(sys.executable).parent)) or "rov-console"
 
 REQUIRED = [
     "full-rotation-400",
@@ -145,12 +143,8 @@ def test_sea_trial_sequence_hooks_up_and_lands_three_times():
     assert not r.failed
 
 
-def run_cli(*args):
-    return subprocess.run([EXE, *args], capture_output=True, text=True, cwd=ROOT, timeout=600)
-
-
 def test_run_command_json_plots_and_exit_codes(tmp_path):
-    proc = run_cli("run", "full-square-400", "--json", "--plots", str(tmp_path))
+    proc = cli("run", "full-square-400", "--json", "--plots", str(tmp_path))
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["rms_north_m"] < 0.10 and not out["failed"]
@@ -167,14 +161,14 @@ def test_run_command_json_plots_and_exit_codes(tmp_path):
     bad["legs"] = [{"type": "move", "north_m": 40.0, "east_m": 0.0, "timeout_s": 30.0}]
     path = tmp_path / "timeout.toml"
     path.write_text(schema.dump_mission(schema.parse_mission(bad)))
-    proc = run_cli("run", str(path), "--json")
+    proc = cli("run", str(path), "--json")
     assert proc.returncode == 1
     assert json.loads(proc.stdout)["legs"][0]["timed_out"] is True
 
 
 def test_run_list_names_every_library_mission():
     """`rov-console run --list` (formerly `scenario --list`) lists the library and exits 0."""
-    proc = run_cli("run", "--list")
+    proc = cli("run", "--list")
     assert proc.returncode == 0, proc.stderr
     listed = {line.split()[0] for line in proc.stdout.splitlines() if line.strip()}
     assert listed == set(schema.library_names())
@@ -184,7 +178,7 @@ def test_run_list_names_every_library_mission():
 def test_run_command_rejects_a_bad_file_with_exit_2(tmp_path):
     path = tmp_path / "bad.toml"
     path.write_text(BAD)
-    proc = run_cli("run", str(path))
+    proc = cli("run", str(path))
     assert proc.returncode == 2
     assert "angle_deg" in proc.stderr and "line 14" in proc.stderr
 
@@ -264,10 +258,10 @@ def test_run_log_makes_its_folder_and_refuses_to_overwrite(tmp_path):
         'depth_m = 100.0\n[[legs]]\ntype = "hold"\nduration_s = 2.0\n'
     )
     log = tmp_path / "out" / "deeper" / "x.mcap"
-    first = run_cli("run", str(mission), "--no-progress", "--log", str(log))
+    first = cli("run", str(mission), "--no-progress", "--log", str(log))
     assert first.returncode == 0, first.stderr
     assert log.is_file() and log.stat().st_size > 0
-    second = run_cli("run", str(mission), "--no-progress", "--log", str(log))
+    second = cli("run", str(mission), "--no-progress", "--log", str(log))
     assert second.returncode == 2
     assert "cannot write: File exists" in second.stderr and "Traceback" not in second.stderr
 
@@ -285,7 +279,7 @@ def test_every_malformed_file_is_one_line_of_error(tmp_path):
         (binary, "cannot read"),
         (huge, "larger than 262144 bytes"),
     ):
-        proc = run_cli("run", str(path), "--no-progress")
+        proc = cli("run", str(path), "--no-progress")
         assert proc.returncode == 2, path.name
         assert words in proc.stderr and "Traceback" not in proc.stderr
         assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr

@@ -19,7 +19,7 @@ from app.console import ConsoleSettings
 from app.recording.notes import read_notes, side_file
 from app.report import debrief, render_html
 from app.server import create_app
-from tests.test_cli import cli
+from tests.cli import cli
 
 TOKEN = "notes-token-0123456789"
 INSTRUCTOR = "teach-notes-8"

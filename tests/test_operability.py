@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -17,8 +15,8 @@ from app.scores import SATURATION_LIMIT
 from missions import campaign as cm
 from missions import operability as op
 from missions import schema
+from tests.cli import cli
 
-EXE = str(Path(sys.executable).parent / "rov-console")
 LIMITS = op.limits_for("full-scale")
 
 
@@ -158,10 +156,9 @@ def test_with_the_contact_speed_waived_slack_wire_limits_without_compensation(tm
 def test_operability_json_has_cells_and_allowable(tmp_path: Path):
     mission = tmp_path / "short.toml"
     mission.write_text(schema.dump_mission(short_mission()))
-    env = {"COLUMNS": "120", "PATH": "/usr/bin:/bin", "TERM": "dumb"}
-    args = [EXE, "operability", str(mission), "--hs", "1", "--tp", "8", "--heading", "180"]
+    args = ["operability", str(mission), "--hs", "1", "--tp", "8", "--heading", "180"]
     args += ["--in-process", "--json", "--out", str(tmp_path / "out")]
-    proc = subprocess.run(args, capture_output=True, text=True, timeout=300, env=env)
+    proc = cli(*args)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     (cell,) = out["cells"]
@@ -180,9 +177,7 @@ def test_operability_json_has_cells_and_allowable(tmp_path: Path):
 
 
 def test_operability_refuses_a_bad_grid_in_one_line():
-    env = {"COLUMNS": "120", "PATH": "/usr/bin:/bin", "TERM": "dumb"}
-    args = [EXE, "operability", "full-landing-seaway", "--hs", "1,x", "--json"]
-    proc = subprocess.run(args, capture_output=True, text=True, timeout=120, env=env)
+    proc = cli("operability", "full-landing-seaway", "--hs", "1,x", "--json")
     assert proc.returncode == 2 and "--hs takes numbers" in proc.stderr
     assert "Traceback" not in proc.stderr
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from app.report import debrief
-from tests.test_cli import cli
+from tests.cli import cli
 
 
 @pytest.fixture(scope="module")

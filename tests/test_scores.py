@@ -15,7 +15,7 @@ from app import scores
 from app.console import PacedLoop, Session, prepare_run, station_keeping_mission
 from missions import schema
 from missions.scoring import LandingResult, MissionResult
-from tests.test_cli import cli
+from tests.cli import cli
 from tests.test_console_loop import MOVE
 
 

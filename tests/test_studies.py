@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from missions import schema, studies
+from tests.cli import cli
 
 
 def test_rms_about_running_mean_ignores_a_drift_and_keeps_the_oscillation():
@@ -66,18 +67,7 @@ def test_table_4_2_windows_are_labelled_and_differ_as_the_thesis_explains():
 
 
 def _study_cli(*args: str):
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parents[1]
-    return subprocess.run(
-        [sys.executable, "-m", "app.cli", "study", *args],
-        capture_output=True,
-        text=True,
-        cwd=root,
-        timeout=300,
-    )
+    return cli("study", *args)
 
 
 def test_study_cli_rejects_an_unknown_variant_naming_the_choices():

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -13,10 +12,10 @@ from pathlib import Path
 import pytest
 
 from missions import weather_window as ww
+from tests.cli import cli
 
 CORPUS = Path(__file__).parent / "corpus"
 FORECASTS = CORPUS / "forecasts"
-EXE = str(Path(sys.executable).parent / "rov-console")
 HEADER = "time,hs_m,tp_s,wave_dir_deg,current_mps,current_dir_deg"
 
 
@@ -152,10 +151,7 @@ def test_headings_and_periods_outside_the_table_are_no_go(tmp_path: Path):
 
 
 def window_cli(*args: str) -> subprocess.CompletedProcess[str]:
-    env = {"COLUMNS": "120", "PATH": "/usr/bin:/bin", "TERM": "dumb"}
-    return subprocess.run(
-        [EXE, "window", *args], capture_output=True, text=True, timeout=120, env=env
-    )
+    return cli("window", *args)
 
 
 def test_window_json_has_alpha_hours_and_windows(tmp_path: Path):
