@@ -13,7 +13,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from app import assessment_cli, headless, shadow_cli
+from app import assessment_cli, headless, shadow_cli, software_version
 from app.campaign.cli import campaign_app
 from app.log_cli import log_app
 from app.planning_cli import operability, window
@@ -29,8 +29,6 @@ app = typer.Typer(
 
 def _print_version(value: bool) -> None:
     if value:
-        from app.recording import software_version
-
         typer.echo(f"rov-console {software_version()}")
         raise typer.Exit()
 

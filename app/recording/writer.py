@@ -58,6 +58,7 @@ import numpy as np
 from mcap.writer import CompressionType, Writer
 from numpy.typing import NDArray
 
+from app import software_version
 from app.recording.channels import (
     COLUMNS,
     FORMAT_VERSION,
@@ -84,13 +85,6 @@ batch, so that a row's messages are always in one chunk (a cut file holds whole 
 
 class RecordingError(RuntimeError):
     """The recorder was used wrongly (closed, bad input)."""
-
-
-def software_version() -> str:
-    try:
-        return importlib_metadata.version("rov-console")
-    except importlib_metadata.PackageNotFoundError:
-        return "unknown"
 
 
 def _crane_tip(value: Sequence[float] | FloatArray) -> FloatArray:
