@@ -6,6 +6,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import time
+from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
@@ -32,10 +33,30 @@ def served(tmp_path_factory: pytest.TempPathFactory):
         yield running
 
 
-async def _send_raw(port: int, messages: list[dict]) -> None:
-    """A client that never entered the token, speaking viser's own wire format."""
+@contextlib.asynccontextmanager
+async def _raw_viewer(port: int) -> AsyncIterator[Any]:
+    """A socket to the 3D view speaking viser's own wire format, which reads what the view
+    sends as a browser does: a socket left unread fills its buffer, and its close then waits
+    out the 10 s close timeout behind the unread messages."""
     uri = f"ws://127.0.0.1:{port}"
     async with websockets.connect(uri, subprotocols=[f"viser-v{viser.__version__}"]) as ws:
+
+        async def drain() -> None:
+            with contextlib.suppress(websockets.ConnectionClosed):
+                async for _ in ws:
+                    pass
+
+        reading = asyncio.create_task(drain())
+        try:
+            yield ws
+        finally:
+            await ws.close()
+            await reading
+
+
+async def _send_raw(port: int, messages: list[dict]) -> None:
+    """A client that never entered the token."""
+    async with _raw_viewer(port) as ws:
         for message in messages:
             await ws.send(msgspec.msgpack.encode(message))
         await asyncio.sleep(1.0)
@@ -338,10 +359,8 @@ def test_one_viewers_wrong_tokens_lock_only_that_viewer(served) -> None:
     view = served.app.state.view
 
     async def two_viewers() -> None:
-        uri = f"ws://127.0.0.1:{view.port}"
-        proto = [f"viser-v{viser.__version__}"]
-        async with websockets.connect(uri, subprotocols=proto) as first:
-            async with websockets.connect(uri, subprotocols=proto) as second:
+        async with _raw_viewer(view.port) as first:
+            async with _raw_viewer(view.port) as second:
                 guessing = await _viewer(view, first)
                 operating = await _viewer(view, second)
                 guesser, operator = guessing.operator, operating.operator
@@ -442,8 +461,7 @@ def test_unfinished_uploads_from_the_view_are_capped_before_the_token(served) ->
     refused = view.uploads.refused
 
     async def scenario() -> None:
-        uri = f"ws://127.0.0.1:{view.port}"
-        async with websockets.connect(uri, subprotocols=[f"viser-v{viser.__version__}"]) as ws:
+        async with _raw_viewer(view.port) as ws:
             panel = await _viewer(view, ws)
             button = panel.mission.builder.upload_button._impl.uuid
             states = panel.client.gui._current_file_upload_states
