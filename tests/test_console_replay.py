@@ -7,9 +7,9 @@ B opens another recording at the same time; both go back to live.
 
 Its own server and browser (the module fixtures of ``tests/browser.py``). The status lines say
 what each page shows; a few pictures say what each page's scene draws, each page against the
-other and against itself before the other opened its replay. It took 83 s on a quiet machine
-(134 s in CI) with both pages at 1400x900, two PNGs for each comparison, the recordings made at
-10x and the page behind taking seconds a click; 27-31 s now (2026-11-29).
+other and against itself before the other opened its replay. What made it cheap (smaller
+pages, JPEG pictures polled until a condition holds, recordings made at 50x, the page to click
+brought to the front) and what each cost before: docs/performance.md, "The tests' ten minutes".
 """
 
 from __future__ import annotations
@@ -48,8 +48,7 @@ LIVE_SPEED = 5.0
 are to show going on, in a fifth of a second."""
 VIEWPORT = {"width": 1100, "height": 660}
 """Both pages' size, the control panel (some 400 px) clear of ``scene_part``'s 660 px: a page's
-software-drawn frames cost about its pixels, and with the test's other changes it took 126 s
-at 1400x900 and 45-59 s at 1000x640, the machine's load 4-6 in both."""
+software-drawn frames cost about its pixels."""
 
 
 def _status(pg) -> tuple[str, float]:
@@ -158,8 +157,8 @@ class Picture(NamedTuple):
 def _picture(pg) -> Picture:
     """The page's picture, without viser's notices (the software-WebGL notice can come back
     over the view and was the only difference between two identical live scenes in a failed
-    CI run). A JPEG: 0.04 s a picture against 0.12-0.35 s for a PNG (median of 12, 1100x660),
-    and the same picture of the same page."""
+    CI run). A JPEG: several times quicker to take than a PNG (docs/performance.md), and the
+    same picture of the same page."""
     _dismiss_notifications(pg)
     frame = _frames(pg)
     jpeg = pg.screenshot(type="jpeg", quality=90)
