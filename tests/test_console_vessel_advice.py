@@ -16,6 +16,7 @@ from types import SimpleNamespace
 import httpx
 import pytest
 
+from app.api.pilot import snapshot_status
 from app.console import (
     ConsoleError,
     LoopStats,
@@ -53,10 +54,12 @@ def advice_of(session: Session) -> VesselAdvice | None:
     return session.snapshot(1, False, 1.0, STATS).mission.vessel_advice
 
 
-def supervisor_line(session: Session) -> object:
-    """The advice as the supervisor's station shows it."""
+def stations_line(session: Session) -> object:
+    """The advice as the supervisor's station shows it, which the pilot page shows too."""
     snap = session.snapshot(1, False, 1.0, STATS)
-    return supervisor_status(snap, {"pilot": None, "winch": None})["vessel_advice"]
+    line = supervisor_status(snap, {"pilot": None, "winch": None})["vessel_advice"]
+    assert snapshot_status(snap, {})["vessel_advice"] == line, "the pilot's line is the same"
+    return line
 
 
 def _advance_until(session: Session, done: Callable[[], bool], limit_s: float) -> None:
@@ -89,7 +92,7 @@ def test_advice_is_shown_applied_and_followed_until_the_leg_moves_on(tmp_path: P
         assert not given.applied and given.to_go_m == pytest.approx(given.distance_m, abs=0.01)
         session.advance(1000)  # the leg waits for the operator: the advice stays
         assert advice() == given
-        assert supervisor_line(session) == f"Advice given at 15 s: {given.text}"
+        assert stations_line(session) == f"Advice given at 15 s: {given.text}"
 
         session.actor = "viewer 1 (Vera)"
         answer = cmd.ApplyVesselAdvice().apply(loop)  # type: ignore[arg-type]
@@ -110,7 +113,7 @@ def test_advice_is_shown_applied_and_followed_until_the_leg_moves_on(tmp_path: P
             cmd.ApplyVesselAdvice().apply(loop)  # type: ignore[arg-type]
         session.advance(500)  # 5 s at 0.2 m/s
         assert advice().applied and advice().to_go_m == pytest.approx(given.distance_m - 1.0, 0.05)
-        assert supervisor_line(session) == (
+        assert stations_line(session) == (
             f"Advice applied (given at 15 s): the vessel is on its way, {advice().to_go_m:.1f} m"
             " to go"
         )
@@ -120,7 +123,7 @@ def test_advice_is_shown_applied_and_followed_until_the_leg_moves_on(tmp_path: P
         _advance_until(session, lambda: driver.leg_index == 2, 400.0)
         assert session.mission_status.state == "running", "leg 3 runs"
         assert advice_of(session) is None, "the advice went with its leg"
-        assert supervisor_line(session) is None
+        assert stations_line(session) is None
         assert driver.ctx.landings[0].success
         _advance_until(session, lambda: session.mission_status.state != "running", 10.0)
         assert session.mission_status.state == "completed"

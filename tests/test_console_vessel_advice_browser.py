@@ -2,9 +2,10 @@
 the vessel shows in the Mission tab (a locked page saying the token applies it), and the
 vessel form shows the advised crane tip; "Apply advice", clicked twice, moves the vessel once
 and the page shows it on its way; the advice goes when the mission ends. The supervisor's
-station (another tab) shows the advice as it goes. The page with the
-advice is saved as ``console-vessel-advice.png``, the supervisor's page with the advice applied
-as ``crew-supervisor-advice.png`` (``tests/browser.py``'s folder). (A second
+station and the pilot page (other tabs) show the advice as it goes. The page with the
+advice is saved as ``console-vessel-advice.png``, the supervisor's and the pilot's pages with
+the advice applied as ``crew-supervisor-advice.png`` and ``pilot-advice.png`` (the pilot
+page's own panel; its embedded view is the console's), in ``tests/browser.py``'s folder. (A second
 browser and a reload: each is a panel made from the state as it is then, as every page is;
 they were tried by hand.)"""
 
@@ -46,10 +47,36 @@ def advice_text(pg) -> str:
     return " ".join(texts[0].split()) if texts else ""
 
 
-def supervisor_advice(pg) -> str:
-    """The supervisor page's vessel advice ('' while its row is hidden)."""
+def station_advice(pg) -> str:
+    """The vessel advice on the supervisor's or the pilot's page ('' while its row is
+    hidden)."""
     row = pg.locator("#advice-row")
     return " ".join(str(pg.locator("#advice").text_content()).split()) if row.is_visible() else ""
+
+
+def open_station(page, server: RunningServer, path: str, name: str, connect: str):
+    """A station's page (``/supervisor``, ``/pilot``) in a new tab, signed in as ``name`` with
+    the console token."""
+    station = page.context.new_page()
+    station.goto(f"{server.base_url}{path}")
+    station.fill("#name", name)
+    station.fill("#token", server.token)
+    station.click(connect)
+    return station
+
+
+def _stations_show(stations: dict, start: str, what: str) -> None:
+    """Wait until each station's advice starts with ``start`` ('': its row hidden)."""
+    for whose, station in stations.items():
+        wait_for(
+            lambda station=station: (
+                station_advice(station).startswith(start)
+                if start
+                else station_advice(station) == ""
+            ),
+            15.0,
+            f"{what} on the {whose} page",
+        )
 
 
 def apply_button(pg):
@@ -66,49 +93,34 @@ def test_the_advice_shown_and_applied_once(
     click(page, "Start mission")
     api.put("/api/run/speed", json={"speed": 50.0}).raise_for_status()
     _advice_in_the_page(page, server, api)
-    boss = page.context.new_page()  # the supervisor's station, signed in with the console token
-    boss.goto(f"{server.base_url}/supervisor")
-    boss.fill("#name", "Sam")
-    boss.fill("#token", server.token)
-    boss.click("#connect")
-    wait_for(
-        lambda: supervisor_advice(boss).startswith("Advice given at 15 s: move the vessel 4.9 m"),
-        15.0,
-        "the advice on the supervisor's page",
-    )
+    boss = open_station(page, server, "/supervisor", "Sam", "#connect")
+    pilot = open_station(page, server, "/pilot", "Pia", "#fly")
+    stations = {"supervisor's": boss, "pilot's": pilot}
+    _stations_show(stations, "Advice given at 15 s: move the vessel 4.9 m", "the advice")
     page.bring_to_front()
 
     apply = apply_button(page)
     apply.click(click_count=2)  # a double click: one move, the second refused
-    wait_for(
-        lambda: advice_text(page).startswith(
-            "Advice applied (given at 15 s): the vessel is on its way"
-        ),
-        10.0,
-        "the advice applied",
-    )
+    applied = "Advice applied (given at 15 s): the vessel is on its way"
+    wait_for(lambda: advice_text(page).startswith(applied), 10.0, "the advice applied")
     assert apply.count() == 0
     applies = [o for o in api.get("/api/operations").json() if o["action"] == "apply vessel advice"]
     assert [o["outcome"] for o in applies][:1] == ["done"]
     assert all("applied already" in o["outcome"] for o in applies[1:]), applies
     moving = api.get("/api/state").json()["mission"]["vessel_advice"]
     assert moving["applied"] and 0.0 < moving["to_go_m"] < moving["distance_m"]
-    wait_for(
-        lambda: supervisor_advice(boss).startswith(
-            "Advice applied (given at 15 s): the vessel is on its way"
-        ),
-        10.0,
-        "the advice applied on the supervisor's page",
-    )
+    _stations_show(stations, applied, "the advice applied")
     save(boss.screenshot(), "crew-supervisor-advice.png")
+    save(pilot.locator("#side").screenshot(), "pilot-advice.png")  # its panel
 
     # it lands then (tests/test_console_vessel_advice.py); here the mission is aborted, and
     # the advice goes with it
     api.post("/api/missions/abort").raise_for_status()
     wait_for(lambda: advice_text(page) == "", 10.0, "the advice gone with the mission")
     assert apply_button(page).count() == 0
-    wait_for(lambda: supervisor_advice(boss) == "", 10.0, "the supervisor's advice row hidden")
+    _stations_show(stations, "", "no advice row")
     boss.close()
+    pilot.close()
 
 
 def _advice_in_the_page(page, server: RunningServer, api: httpx.Client) -> None:

@@ -31,7 +31,7 @@ from fastapi.responses import HTMLResponse
 
 from app.api.guards import websocket_origin_allowed
 from app.api.stations import COMMAND_TIMEOUT_S, Refused, read_hello, read_message, refuse, send
-from app.console import PILOT_VIEW_PATH, Console, ConsoleError
+from app.console import PILOT_VIEW_PATH, Console, ConsoleError, Snapshot
 from app.console.pilot import (
     DEMAND_TIMEOUT_S,
     PilotConnected,
@@ -42,6 +42,7 @@ from app.console.pilot import (
     compass_heading_deg,
     pilot_name,
 )
+from app.console.snapshot import advice_line
 
 router = APIRouter(tags=["pilot"])
 PAGE = (Path(__file__).parent / "pilot_page.html").read_text(encoding="utf-8")
@@ -62,9 +63,10 @@ async def _command(console: Console, command: object, who: str) -> Any:
     return await asyncio.wait_for(asyncio.wrap_future(future), COMMAND_TIMEOUT_S)
 
 
-def _snapshot_status(console: Console, last: dict[str, Any]) -> dict[str, Any]:
-    """The latest published state, with the holds and demand the loop last confirmed."""
-    snap = console.loop.snapshot
+def snapshot_status(snap: Snapshot, last: dict[str, Any]) -> dict[str, Any]:
+    """The published state ``snap``, with the holds and demand the loop last confirmed, and
+    a dock leg's advice to move the vessel (the pilot cannot apply it: the console's operator
+    does, as the sea trial's crew asked the captain)."""
     rov = snap.rov_eta_n
     return {
         **last,
@@ -72,6 +74,7 @@ def _snapshot_status(console: Console, last: dict[str, Any]) -> dict[str, Any]:
         "heading_deg": compass_heading_deg(float(rov[5])),
         "depth_m": rov[2],
         "t_s": snap.t_s,
+        "vessel_advice": advice_line(snap),
     }
 
 
@@ -158,7 +161,7 @@ async def _fly(websocket: WebSocket, console: Console, who: str, last: dict[str,
         with contextlib.suppress(WebSocketDisconnect, RuntimeError, OSError, TimeoutError):
             while True:
                 await asyncio.sleep(STATUS_PERIOD_S)
-                snap_status = _snapshot_status(console, status)
+                snap_status = snapshot_status(console.loop.snapshot, status)
                 await send(websocket, {"type": "status", "status": snap_status})
 
     async def read() -> None:

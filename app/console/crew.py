@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 from app.console.operations import trainee_view
 from app.console.pilot import pilot_name
-from app.console.snapshot import Snapshot, advice_words
+from app.console.snapshot import Snapshot, advice_line
 from app.console.texts import alarm_title
 
 WINCH_ALARMS = ("wire_slack", "wire_snap")
@@ -157,15 +157,5 @@ def supervisor_status(snap: Snapshot, crew: dict[str, str | None]) -> dict[str, 
             for op in trainee_view(snap.operations)[-OPERATIONS_SHOWN:]
         ],
         "error": snap.error,
-        "vessel_advice": _advice_line(snap),
+        "vessel_advice": advice_line(snap),
     }
-
-
-def _advice_line(snap: Snapshot) -> str | None:
-    """The running dock leg's advice to move the vessel, in the console's words (the console's
-    operator applies it; the supervisor sees it given, applied and followed)."""
-    advice = snap.mission.vessel_advice
-    if advice is None:
-        return None
-    heading, words = advice_words(advice)
-    return f"{heading} {words}"

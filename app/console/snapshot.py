@@ -204,6 +204,17 @@ def advice_words(advice: VesselAdvice) -> tuple[str, str]:
     return "Advice applied", f"({given}): the vessel is there"
 
 
+def advice_line(snap: Snapshot) -> str | None:
+    """The running dock leg's advice to move the vessel as one line in the console's words,
+    for the stations that show it beside the console (the supervisor's, the pilot's); the
+    console's operator applies it. None without advice."""
+    advice = snap.mission.vessel_advice
+    if advice is None:
+        return None
+    heading, words = advice_words(advice)
+    return f"{heading} {words}"
+
+
 def advice_now(advice: VesselAdvice, sim: Simulation) -> VesselAdvice:
     """``advice`` with where the vessel is commanded and stands now: applied or not, and how
     far the crane tip still has to go."""
