@@ -875,19 +875,39 @@ def main(argv: list[str] | None = None) -> int:
     if missing:
         print(f"no file has a block for {', '.join(missing)}", file=sys.stderr)
         return 1
-    stored: dict[str, Results] = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+    measured: dict[str, Results] = {}
     if not args.render:
         for name in args.only or list(BLOCKS):
             print(f"running {name} ...", flush=True)
-            stored[name] = BLOCKS[name][0]()
+            measured[name] = BLOCKS[name][0]()
+    # the files as they are now, not as they were at the start: the studies take minutes, and
+    # an edit of a page or another run's results stored meanwhile must stay
+    stored = {**_stored_results(), **measured}
+    if measured:
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
         RESULTS.write_text(json.dumps(stored, indent=1, sort_keys=True) + "\n")
-    for path in sorted(set(where.values())):
-        path.write_text(render_blocks(texts[path], stored))
-        print(f"wrote {path.relative_to(ROOT)}")
-    if not args.render:
         print(f"wrote {RESULTS.relative_to(ROOT)}")
+    texts = {path: path.read_text() for path in figure_files()}
+    try:
+        where = homes(texts)
+    except ValueError as err:
+        print(f"{err} (the results are stored: --render writes the blocks)", file=sys.stderr)
+        return 1
+    changed = 0
+    for path in sorted(set(where.values())):
+        text = render_blocks(texts[path], stored)
+        if text != texts[path]:
+            path.write_text(text)
+            print(f"wrote {path.relative_to(ROOT)}")
+            changed += 1
+    if not changed:
+        print("every block already says what its results give")
     return 0
+
+
+def _stored_results() -> dict[str, Results]:
+    """The results on disk now (none before the first run)."""
+    return json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
 
 
 if __name__ == "__main__":

@@ -195,3 +195,36 @@ def test_campaign_block_names_the_machine_its_figures_were_measured_on():
     )
     del res["machine"]
     assert "on this 2-core machine (load average" in " ".join(rf.render_campaign(res).split())
+
+
+def test_an_edit_made_while_the_studies_run_is_kept(tmp_path, monkeypatch):
+    """Defect: the script read every figure file at its start and wrote them back at its end,
+    so an edit made meanwhile (its studies take minutes) was undone, and so were the results
+    another run stored meanwhile. Each file is read again when its blocks are written."""
+    readme, docs = tmp_path / "README.md", tmp_path / "docs"
+    docs.mkdir()
+    page = docs / "page.md"
+    results = docs / "figures" / "readme_figures.json"
+    results.parent.mkdir()
+    results.write_text(json.dumps({"fake": {"n": 1}, "other": {"n": 7}}))
+    readme.write_text("# title\n")
+    page.write_text("before\n<!-- figures:fake -->\nn = 1\n<!-- /figures:fake -->\nafter\n")
+
+    def study() -> dict:
+        # meanwhile: a person edits the page, another run stores its results
+        page.write_text(page.read_text().replace("after", "after, edited meanwhile"))
+        stored = json.loads(results.read_text())
+        results.write_text(json.dumps({**stored, "other": {"n": 8}}))
+        return {"n": 2}
+
+    monkeypatch.setattr(rf, "ROOT", tmp_path)
+    monkeypatch.setattr(rf, "README", readme)
+    monkeypatch.setattr(rf, "DOCS", docs)
+    monkeypatch.setattr(rf, "RESULTS", results)
+    monkeypatch.setattr(rf, "BLOCKS", {"fake": (study, lambda r: f"n = {r['n']}\n")})
+    assert rf.main(["--only", "fake"]) == 0
+    assert page.read_text() == (
+        "before\n<!-- figures:fake -->\nn = 2\n<!-- /figures:fake -->\nafter, edited meanwhile\n"
+    )
+    assert json.loads(results.read_text()) == {"fake": {"n": 2}, "other": {"n": 8}}
+    assert readme.read_text() == "# title\n"
