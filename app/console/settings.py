@@ -16,6 +16,7 @@ from app.console.tokens import (
     MIN_INSTRUCTOR_TOKEN_CHARS,
     MIN_TOKEN_CHARS,
     check_crew_tokens,
+    check_token,
 )
 
 
@@ -93,21 +94,10 @@ class ConsoleSettings:
                 raise ValueError(
                     f"foxglove_port must differ from port and viser_port, got {self.foxglove_port}"
                 )
-        if self.token is not None and (
-            len(self.token) < MIN_TOKEN_CHARS or not self.token.isprintable() or " " in self.token
-        ):
-            raise ValueError(
-                f"token must have at least {MIN_TOKEN_CHARS} printable characters and no spaces"
-            )
-        if self.instructor_token is not None:
-            t = self.instructor_token
-            if len(t) < MIN_INSTRUCTOR_TOKEN_CHARS or not t.isprintable() or " " in t:
-                raise ValueError(
-                    f"instructor_token must have at least {MIN_INSTRUCTOR_TOKEN_CHARS} "
-                    f"printable characters and no spaces"
-                )
-            if t == self.token:
-                raise ValueError("instructor_token must differ from the console token")
+        check_token("token", self.token, MIN_TOKEN_CHARS)
+        check_token("instructor_token", self.instructor_token, MIN_INSTRUCTOR_TOKEN_CHARS)
+        if self.instructor_token is not None and self.instructor_token == self.token:
+            raise ValueError("instructor_token must differ from the console token")
         check_crew_tokens(
             {n: getattr(self, n) for n in ("token", "instructor_token", *CREW_TOKEN_FIELDS)}
         )

@@ -63,19 +63,21 @@ class GuessLimit:
         return failures
 
 
+def check_token(field: str, token: str | None, min_chars: int) -> None:
+    """ValueError naming ``field`` when ``token`` (None: not set) is shorter than
+    ``min_chars`` or has spaces or unprintable characters."""
+    if token is not None and (len(token) < min_chars or not token.isprintable() or " " in token):
+        raise ValueError(
+            f"{field} must have at least {min_chars} printable characters and no spaces"
+        )
+
+
 def check_crew_tokens(tokens: dict[str, str | None]) -> None:
     """ValueError naming the field when a crew token (``{role}_token``) is too short, has
     spaces or unprintable characters, or equals another of the console's ``tokens`` (each
     token must open one thing only)."""
     for role in CREW_ROLES:
-        t = tokens.get(f"{role}_token")
-        if t is not None and (
-            len(t) < MIN_INSTRUCTOR_TOKEN_CHARS or not t.isprintable() or " " in t
-        ):
-            raise ValueError(
-                f"{role}_token must have at least {MIN_INSTRUCTOR_TOKEN_CHARS} printable "
-                "characters and no spaces"
-            )
+        check_token(f"{role}_token", tokens.get(f"{role}_token"), MIN_INSTRUCTOR_TOKEN_CHARS)
     given = [(name, t) for name, t in tokens.items() if t is not None]
     for i, (name, t) in enumerate(given):
         for other, u in given[i + 1 :]:
