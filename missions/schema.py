@@ -226,7 +226,7 @@ class Setup(_Model):
         description="lift wire in the plant: quasi-static (spring on the tree's inertia), "
         "elastic (with the wire's first axial mode: a third of its mass at the tree and "
         "axial damping; resonance, slack and snap loads) or moordyn (a lumped-mass line "
-        "through MoorDyn, all its axial modes; about 40 times slower)",
+        "through MoorDyn, all its axial modes; tens of times slower)",
     )
     feedback: Feedback = "perfect"
     allocation: Allocation = "priority"
