@@ -100,3 +100,41 @@ def test_the_scores_tab_shows_the_pilots_runs_with_a_debrief_link(page, server: 
     assert httpx.get(href, timeout=10.0).status_code == 404
     assert httpx.get(plain, timeout=10.0).status_code == 401
     assert page.get_by_text("dock-drill").count() >= 2, "in the latest runs and the best"
+
+
+def thruster_state(pg, number: int) -> str:
+    """What the page's *Thrusters* panel says of thruster ``number`` ('on' or 'killed')."""
+    row = pg.locator(f"[data-thruster='{number}']").first
+    return str(row.get_attribute("data-state"))
+
+
+def test_a_replay_shows_the_thruster_the_instructor_killed(
+    page, server: RunningServer, api
+) -> None:
+    """Left open since issue 47's wave: a replay showed every thruster on, faults being
+    events of the recording and not its state. T2 lost while recording: the replay of that
+    recording reads it killed, the live run (its faults cleared) all on."""
+    instructor = {"Authorization": f"Bearer {INSTRUCTOR}"}
+    name = api.post("/api/recordings/start", json={"label": "t2-lost"}).json()["name"]
+    lost = {"kind": "thruster_lost", "duration_s": 600.0, "thruster": 2}
+    api.post("/api/faults", json=lost, headers=instructor).raise_for_status()
+    wait_for(lambda: thruster_state(page, 2) == "killed", 15.0, "T2 killed, live")
+    t0 = api.get("/api/state").json()["t_s"]
+    wait_for(lambda: api.get("/api/state").json()["t_s"] > t0 + 2.0, 30.0, "2 s of the run")
+    api.post("/api/recordings/stop").raise_for_status()
+    api.delete("/api/faults", headers=instructor).raise_for_status()
+    wait_for(lambda: thruster_state(page, 2) == "on", 15.0, "T2 on again, live")
+
+    tab(page, "Record")
+    click(page, "Refresh list")
+    choose(page, "Recording", name)
+    click(page, "Open replay")
+    page.get_by_text(f"REPLAY {name}").first.wait_for(timeout=30_000)
+    assert thruster_state(page, 2) == "on", "at the recording's start, before the fault"
+    click(page, "Play replay")
+    wait_for(lambda: thruster_state(page, 2) == "killed", 15.0, "T2 killed in the replay")
+    assert thruster_state(page, 1) == "on"
+    page.locator("[data-thruster='2']").first.scroll_into_view_if_needed()
+    save(page.screenshot(), "console-replay-thruster-lost.png")
+    click(page, "Close replay")
+    wait_for(lambda: thruster_state(page, 2) == "on", 15.0, "T2 on, live again")

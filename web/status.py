@@ -37,8 +37,8 @@ WEAKENED_KIND = "thruster_weakened"
 
 def thruster_states(snap: Snapshot) -> dict[int, str]:
     """What the instructor did to each thruster now (1-based number -> 'killed' or
-    'weakened to 40 %'), from the active faults (none in a replay: they are not recorded as
-    a state, only as events)."""
+    'weakened to 40 %'), from the active faults (in a replay, those the recording's events
+    say were active then: ``app.console.replay.recorded_faults``)."""
     states: dict[int, str] = {}
     for f in snap.faults:
         if f.state != "active":

@@ -88,6 +88,7 @@ class InjectFault:
                 "duration_s": fault.duration_s,
                 "value": fault.value,
                 "thruster": fault.thruster,
+                "direction_deg": fault.direction_deg,
             },
         )
         return {
@@ -103,7 +104,7 @@ class InjectFault:
 def check_room_for_a_fault(sim: Simulation) -> None:
     """ConsoleError (409) with the limit when another fault would pass ``MAX_LIVE_FAULTS``
     active or scheduled, or ``MAX_RUN_FAULTS`` in this run."""
-    live = len(fault_views(sim))
+    live = len(fault_views(sim.faults, sim.t_s))
     if live >= MAX_LIVE_FAULTS:
         raise ConsoleError(
             f"{live} faults are active or scheduled, the most at once is {MAX_LIVE_FAULTS}: "
@@ -125,7 +126,7 @@ class ClearFaults:
     def apply(self, loop: LoopControls) -> object:
         session = loop.session
         session.require_live("clear faults")
-        n = len(fault_views(session.sim))
+        n = len(fault_views(session.sim.faults, session.sim.t_s))
         if n == 0 and not session.sim.faults:
             raise ConsoleError("no fault is active or scheduled")
         session.sim.clear_faults()

@@ -24,8 +24,10 @@ from numpy.typing import NDArray
 from app.console.alarms import ALARM_NAMES, Alarm
 from app.console.errors import ConsoleError
 from app.console.snapshot import (
+    FaultView,
     ReplayStatus,
     SceneInfo,
+    fault_views,
     frame_below_tree,
     frozen_copy,
     trend_rows,
@@ -37,6 +39,7 @@ from app.recording import (
     recorded_mission_name,
 )
 from control.columns import LAYOUT, N_LOG
+from control.faults import Fault
 
 FloatArray = NDArray[np.float64]
 RECORDING_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,120}\.mcap$")
@@ -232,6 +235,40 @@ def recorded_alarms(events: list[dict], start_s: float, t_s: float) -> tuple[Ala
     return tuple(last.get(n, Alarm(n, False, "")) for n in ALARM_NAMES)
 
 
+def recorded_faults(data: SessionData, t_s: float) -> tuple[FaultView, ...]:
+    """The instructor's faults as the console listed them at recording time ``t_s``: those
+    injected in the run going on then (the ``instructor`` events of ``InjectFault``, which
+    hold the fault's kind, value, thruster and its start and duration on the run's clock) and
+    not cleared since (``ClearFaults``' event), active or still to come. An event that does not
+    make a fault (another tool's, or damaged) is passed over."""
+    index = data.run_index_at(t_s)
+    start = _run_start_s(data, index)
+    faults: list[Fault] = []
+    for e in data.events:
+        t, values = e.get("t_s"), e.get("data") or {}
+        if e.get("kind") != "instructor" or not isinstance(t, int | float):
+            continue
+        if not start <= t <= t_s + TIME_SLACK_S or not isinstance(values, dict):
+            continue
+        if "cleared" in values:
+            faults.clear()
+            continue
+        try:
+            faults.append(
+                Fault(
+                    str(values["kind"]),
+                    float(values["start_s"]),
+                    float(values["duration_s"]),
+                    float(values.get("value", 0.0)),
+                    float(values.get("direction_deg", 0.0)),
+                    int(values.get("thruster", 0)),
+                )
+            )
+        except (KeyError, TypeError, ValueError):
+            continue
+    return fault_views(faults, data.run_time_s(t_s)) if faults else ()
+
+
 class Replay:
     """A recorded session played back against simulation time (the recorder keeps rows at its
     numeric rate, e.g. 20 Hz: the replay shows the last row at or before its clock), with the
@@ -266,6 +303,7 @@ class Replay:
         self.current = recorded_current(self.data, t)
         start = _run_start_s(self.data, self.run_index)
         self.alarms = recorded_alarms(self.data.events, start, t)
+        self.faults = recorded_faults(self.data, t)
 
     @property
     def scene(self) -> SceneInfo:

@@ -672,7 +672,7 @@ class Session:
             target=tuple(float(v) for v in sim.target),  # type: ignore[arg-type]
             quality_counters=tuple(tuple(int(c) for c in row) for row in sim.quality_counters),
             trend=self._trend(),
-            faults=fault_views(sim) if sim.faults else (),
+            faults=fault_views(sim.faults, sim.t_s) if sim.faults else (),
             fault_log=tuple(sim.fault_events[-FAULT_LOG_KEEP:]),
             winch=winch_view(sim),
         )

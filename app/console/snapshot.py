@@ -8,6 +8,7 @@ Angles are radians here (the core's unit); the API turns them into degrees at it
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
@@ -18,7 +19,7 @@ from app.console.alarms import Alarm
 from app.console.operations import Operation
 from control.columns import LogRows
 from control.config import MODES, Gains
-from control.faults import FAULT_KINDS
+from control.faults import FAULT_KINDS, Fault
 from sim.docking import DockingFrame, DockingLayout
 from sim.drawing import rov_drawing_box_m
 from sim.gnc import Rzyx
@@ -56,11 +57,12 @@ class FaultView:
     """In words: 'compass bias 20 deg from 30 s for 60 s'."""
 
 
-def fault_views(sim: Simulation) -> tuple[FaultView, ...]:
-    """The faults active now or still to come (past ones are left out), by start."""
-    t = sim.t_s + 1e-9
+def fault_views(faults: Sequence[Fault], t_s: float) -> tuple[FaultView, ...]:
+    """Of ``faults``, those active at run time ``t_s`` or still to come (past ones are left
+    out), by start: the live run's (``sim.faults`` at ``sim.t_s``) or a replayed moment's."""
+    t = t_s + 1e-9
     out = []
-    for f in sorted(sim.faults, key=lambda f: f.start_s):
+    for f in sorted(faults, key=lambda f: f.start_s):
         if f.end_s <= t:
             continue
         out.append(

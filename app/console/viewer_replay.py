@@ -90,6 +90,7 @@ def replay_snapshot(rp: Replay, live: Snapshot, speed: float | None = None) -> S
         wire_drag_newton_per_m=0.0,
         mission=MissionStatus(name=rp.mission, state="replay"),
         alarms=rp.alarms,
+        faults=rp.faults,
         recording=live.recording,
         replay=rp.status(),
         scene=rp.scene,
