@@ -93,10 +93,38 @@ def _panel_shot(page, top_text: str, name: str) -> None:
     save(page.screenshot(clip=PANEL_CLIP), name)
 
 
-def _fill(page, values: dict[str, str]) -> None:
-    for label, text in values.items():
-        field(page, label).fill(text)
-    time.sleep(0.3)
+def _criterion_form(page, server: RunningServer, name: str, values: dict[str, float]) -> None:
+    """Pick criterion ``name`` and type ``values`` (by the fields' labels), each until the
+    console holds it. Picking a criterion makes the console fill in that criterion's values,
+    which under load can come after the typing and undo it, and viser sends a typed value at
+    most every 50 ms: of two fields typed at once, the first one's value was lost (a fixed
+    wait before *Apply criteria* failed in a loaded run)."""
+    choose(page, "Criterion", name)
+    (editor,) = [
+        p.instructor.criteria
+        for p in server.app.state.view._panels.values()
+        if p.instructor.unlocked
+    ]
+    handles = {
+        "Criterion limit": editor.limit,
+        "Score 0 at": editor.zero_at,
+        "Criterion weight": editor.weight,
+    }
+    wait_for(lambda: editor.name.value == name, 10.0, f"the console to show {name}")
+    for label, value in values.items():
+        handle = handles[label]
+        # the same number spelt anew each try, so that the page sends it again
+        for text in (f"{value:g}", f"{value:.1f}", f"{value:.2f}"):
+            field(page, label).fill(text)
+            try:
+                wait_for(
+                    lambda h=handle, v=value: h.value == v, 5.0, f"{label} {value:g} in the console"
+                )
+                break
+            except AssertionError:
+                continue
+        else:
+            raise AssertionError(f"{label}: the console never held {value:g}: {handle.value}")
 
 
 def test_a_criterion_out_of_range_is_refused_with_its_range_and_nothing_changes(
@@ -104,8 +132,7 @@ def test_a_criterion_out_of_range_is_refused_with_its_range_and_nothing_changes(
 ) -> None:
     before = _totals(api)
     _unlock_instructor(page)
-    choose(page, "Criterion", "time_saturated")
-    _fill(page, {"Criterion weight": "500"})
+    _criterion_form(page, server, "time_saturated", {"Criterion weight": 500.0})
     click(page, "Apply criteria")
     page.get_by_text("criteria.time_saturated.weight: 500 is outside 0 to 100").wait_for(
         timeout=10_000
@@ -126,8 +153,8 @@ def test_a_valid_criterion_rescores_the_stored_runs_as_the_api_reports_them(
     before = _totals(api)
     assert before[3] == 100.0 and before[0] < before[1] < 100.0, before
     _unlock_instructor(page)
-    choose(page, "Criterion", "time_saturated")
-    _fill(page, {"Criterion limit": "10", "Score 0 at": "40", "Criterion weight": "4"})
+    values = {"Criterion limit": 10.0, "Score 0 at": 40.0, "Criterion weight": 4.0}
+    _criterion_form(page, server, "time_saturated", values)
     click(page, "Apply criteria")
     page.get_by_text("applied", exact=False).first.wait_for(timeout=10_000)
     c = _criterion(api, "time_saturated")
