@@ -266,7 +266,7 @@ def recorded_faults(data: SessionData, t_s: float) -> tuple[FaultView, ...]:
             )
         except (KeyError, TypeError, ValueError):
             continue
-    return fault_views(faults, data.run_time_s(t_s)) if faults else ()
+    return fault_views(faults, data.run_time_s(t_s))
 
 
 class Replay:
